@@ -1,0 +1,72 @@
+// The deformation tool (§1, Pauly et al. 2003): a zero region F0 that never moves, a
+// one region F1 that moves fully, and a smooth blend in between, scaled by
+//   lambda = d0 / (d0 + d1),  s = beta(lambda),
+//   F(p, s) = R(axis, s * angle) (p - c) + c + s * t.
+// Normals and tangent axes follow the Jacobian J = dF/dp.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "surfeledit/core/types.hpp"
+
+namespace surfeledit {
+
+// Region label of one surfel.
+enum class Region : std::uint8_t {
+  Zero = 0,   // F0: rigid, never displaced
+  Blend = 1,  // deformable, neither F0 nor F1
+  One = 2,    // F1: fully displaced
+};
+
+enum class Blend : std::uint8_t { Smooth = 0, Quadratic = 1, Linear = 2 };
+
+// Parses "smooth" | "quadratic" | "linear"; throws InvalidArgument naming `field` otherwise.
+Blend parse_blend(const std::string& name, const std::string& field = "blend");
+const char* to_string(Blend blend);
+// beta(lambda) and its derivative d beta / d lambda, for lambda in [0, 1].
+double blend_value(Blend blend, double lambda);
+double blend_derivative(Blend blend, double lambda);
+
+// One deformation step.
+struct DeformParams {
+  Vec3 translation = Vec3::Zero();  // t, model units
+  Vec3 axis = Vec3::UnitZ();        // rotation axis (normalised internally; must be non-zero when angle != 0)
+  double angle = 0.0;               // rotation angle alpha, radians
+  std::optional<Vec3> center;       // c; default: centroid of F1's current positions
+  Blend blend = Blend::Smooth;      // beta
+};
+
+// Throws InvalidArgument (naming the field) on non-finite values or a zero axis with angle != 0.
+void validate(const DeformParams& params);
+
+// Per-surfel blend fields, computed once when regions are set (from the positions at that time).
+struct DeformationFields {
+  std::vector<Region> regions;  // #P
+  Values lambda;                // #P, d0 / (d0 + d1); 0 on F0, 1 on F1
+  Points grad_lambda;           // #P by 3, gradient of lambda (zero on F0 and F1)
+  IndexList deformable;         // rows with region != Zero, ascending
+
+  std::size_t memory_bytes() const;
+};
+
+// Computes lambda and its gradient with nearest-neighbour queries to F0 and F1 (k-d trees
+// over each region). Throws Conflict when a surfel has d0 + d1 == 0 (it lies in both),
+// InvalidArgument when F0 or F1 is empty or sizes disagree.
+DeformationFields compute_fields(const Points& positions, const std::vector<Region>& regions,
+                                 int threads = 0);
+
+// What one step changed.
+struct DeformResult {
+  IndexList moved;   // rows whose position changed (s > 0), ascending
+  Vec3 center;       // the rotation centre used
+};
+
+// Applies one step in place to `positions`, `normals` (#P by 3) and, when non-empty,
+// the tangent axes `tangent_u`, `tangent_v` (#P by 3, lengths = radii along them).
+// Validates everything before touching any array.
+DeformResult apply_step(const DeformationFields& fields, const DeformParams& params,
+                        Points& positions, Points& normals, Points* tangent_u = nullptr,
+                        Points* tangent_v = nullptr, int threads = 1);
+
+}  // namespace surfeledit

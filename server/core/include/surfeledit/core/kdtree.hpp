@@ -1,0 +1,67 @@
+// k-d tree over 3-D points for kNN and radius queries (nanoflann inside, hidden here).
+//
+// The tree keeps its own copy of the points in a local frame (relative to their
+// centroid) so that precision does not depend on where the model sits in space.
+// Results are row indices into the point array it was built from (or, when built
+// over a subset, into that same full array).
+#pragma once
+
+#include <memory>
+
+#include "surfeledit/core/types.hpp"
+
+namespace surfeledit {
+
+struct KdTreeParams {
+  int leaf_size = 10;  // max points per leaf ("bucket size"; the thesis found ~10 best for small k)
+  int threads = 0;     // worker threads for batch queries; 0 = all hardware threads
+};
+
+// kNN result for #Q queries: #Q by k, row-major. Rows with fewer than k hits
+// (fewer points than k) are padded with index -1 and dist2 = +inf.
+struct KnnResult {
+  Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> indices;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dist2;  // squared distances
+};
+
+// Radius result for #Q queries in CSR form: hits of query q are
+// indices[offsets[q] .. offsets[q+1]), sorted by increasing dist2.
+struct RadiusResult {
+  std::vector<std::int64_t> offsets;  // #Q + 1
+  IndexList indices;
+  std::vector<double> dist2;  // squared distances
+};
+
+class KdTree {
+ public:
+  // Builds over all rows of `points` (#P by 3). Throws InvalidArgument on non-finite input.
+  explicit KdTree(const Points& points, KdTreeParams params = {});
+  // Builds over the rows listed in `subset` only; results still index rows of `points`.
+  KdTree(const Points& points, const IndexList& subset, KdTreeParams params = {});
+  ~KdTree();
+  KdTree(KdTree&&) noexcept;
+  KdTree& operator=(KdTree&&) noexcept;
+
+  Index size() const;  // number of points in the tree
+  const KdTreeParams& params() const;
+
+  // Nearest point to q; returns -1 when the tree is empty. `dist2` gets the squared distance.
+  Index nearest(const Vec3& q, double* dist2 = nullptr) const;
+  // k nearest to q (fewer if the tree holds fewer), ascending by distance.
+  void knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const;
+  // All points within real distance `radius` (inclusive) of q, ascending by distance.
+  void radius(const Vec3& q, double radius, IndexList& indices, std::vector<double>& dist2) const;
+
+  // Batch versions, multithreaded over queries (`params().threads`); thread-safe, const.
+  KnnResult knn(const Points& queries, int k) const;
+  RadiusResult radius(const Points& queries, double radius) const;
+
+  // Bytes held by the tree (points copy, index map, nodes).
+  std::size_t memory_bytes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace surfeledit

@@ -1,0 +1,24 @@
+// Loading and saving surfel models through PCL (hidden here).
+//
+// Load: .ply, .pcd (point clouds, with or without normals/radii/colours) and .obj
+// (triangle meshes become surfels at their vertices with area-weighted normals;
+// point-only files are loaded as clouds). Clouds without normals get them estimated
+// and oriented outward consistently; missing radii are estimated from neighbour spacing.
+// Save: .ply and .pcd with positions, normals, radii (and colours when present).
+#pragma once
+
+#include <string>
+
+#include "surfeledit/core/surfel_model.hpp"
+
+namespace surfeledit {
+
+struct LoadParams {
+  int normal_k = 16;  // neighbours for normal estimation when the file has no normals
+};
+
+// Throws Error(Io | InvalidArgument | NotFound) naming the file and the problem.
+SurfelArrays load_surfels(const std::string& path, LoadParams params = {});
+void save_surfels(const std::string& path, const SurfelArrays& arrays);
+
+}  // namespace surfeledit

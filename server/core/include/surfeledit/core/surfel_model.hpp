@@ -1,0 +1,88 @@
+// A surfel model: dense per-surfel arrays plus stable ids.
+//
+// Rows are kept in ascending id order: inserted surfels get fresh, larger ids and are
+// appended; removal compacts the arrays and keeps the order. An id is never reused.
+#pragma once
+
+#include <optional>
+
+#include "surfeledit/core/types.hpp"
+
+namespace surfeledit {
+
+using Colors = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+// Plain per-surfel arrays, as loaded or sent by a client. Optional arrays are empty (0 rows).
+struct SurfelArrays {
+  Points positions;  // #P by 3, model units
+  Points normals;    // #P by 3, outward; normalised on load (zero normals are rejected)
+  Values radii;      // #P disc radii (> 0); empty -> estimated from neighbour spacing
+  Points tangent_u;  // #P by 3 or empty: first tangent axis, length = radius along it
+  Points tangent_v;  // #P by 3 or empty: second tangent axis, length = radius along it
+  Colors colors;     // #P by 3 RGB or empty
+};
+
+class SurfelModel {
+ public:
+  SurfelModel() = default;
+  // Validates (shapes, finite values, non-zero normals, positive radii), normalises
+  // normals, estimates missing radii, and assigns ids 0..#P-1. Throws Error naming the
+  // field and row. An empty model is rejected (InvalidArgument).
+  static SurfelModel from_arrays(SurfelArrays arrays);
+
+  Index size() const { return static_cast<Index>(ids_.size()); }
+  bool empty() const { return ids_.empty(); }
+
+  const Points& positions() const { return a_.positions; }
+  const Points& normals() const { return a_.normals; }
+  const Values& radii() const { return a_.radii; }
+  const Points& tangent_u() const { return a_.tangent_u; }
+  const Points& tangent_v() const { return a_.tangent_v; }
+  const Colors& colors() const { return a_.colors; }
+  bool has_tangents() const { return a_.tangent_u.rows() == size(); }
+  bool has_colors() const { return a_.colors.rows() == size(); }
+  // Mutable access for in-place updates that keep the row count (deformation).
+  SurfelArrays& arrays() { return a_; }
+  const SurfelArrays& arrays() const { return a_; }
+
+  // Row -> id (ascending).
+  const IdList& ids() const { return ids_; }
+  // Id -> row, or -1 if the id is unknown or removed.
+  Index row_of(SurfelId id) const;
+  // Rows of `ids`; throws NotFound naming `field` and the first unknown id,
+  // InvalidArgument on a repeated id.
+  IndexList rows_of(const IdList& ids, const std::string& field) const;
+  // Next id that insert() will assign.
+  SurfelId next_id() const { return next_id_; }
+
+  // Appends validated surfels (same optional arrays as the model); returns their new ids.
+  IdList insert(SurfelArrays added);
+  // Removes the given ids (validated first: unknown ids throw, nothing changes);
+  // the model may not become empty.
+  void remove(const IdList& ids);
+
+  // Content hash over ids, positions, normals and radii (bitwise), for "unchanged" checks.
+  std::uint64_t hash() const;
+  std::size_t memory_bytes() const;
+  // Axis-aligned bounds and their diagonal length.
+  Vec3 min_corner() const;
+  Vec3 max_corner() const;
+  double diagonal() const;
+
+ private:
+  SurfelArrays a_;
+  IdList ids_;
+  std::vector<Index> row_of_id_;  // indexed by id, -1 when absent
+  SurfelId next_id_ = 0;
+};
+
+// Validates arrays as from_arrays() does (without estimating radii). `expect_tangents`,
+// `expect_colors`: whether those arrays must be present (nullopt: either).
+void validate_arrays(const SurfelArrays& a, std::optional<bool> expect_tangents = std::nullopt,
+                     std::optional<bool> expect_colors = std::nullopt);
+
+// Radii from neighbour spacing: per surfel, the mean distance to its k nearest neighbours
+// (k = 6), which makes neighbouring discs overlap. A lone surfel gets radius 1.
+Values estimate_radii(const Points& positions, int k = 6);
+
+}  // namespace surfeledit
