@@ -1,0 +1,377 @@
+#include "surfeledit/core/model_io.hpp"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/PolygonMesh.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/io/obj_io.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <queue>
+#include <sstream>
+
+#include "surfeledit/core/kdtree.hpp"
+
+namespace surfeledit {
+namespace {
+
+namespace fs = std::filesystem;
+
+Error io_error(const std::string& path, const std::string& what) {
+  return Error(ErrorCode::Io, "path", "'" + path + "': " + what);
+}
+
+std::string extension_of(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+const pcl::PCLPointField* find_field(const pcl::PCLPointCloud2& c, const std::string& name) {
+  for (const auto& f : c.fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+double read_scalar(const std::uint8_t* p, std::uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: { std::int8_t v; std::memcpy(&v, p, 1); return v; }
+    case pcl::PCLPointField::UINT8: { std::uint8_t v; std::memcpy(&v, p, 1); return v; }
+    case pcl::PCLPointField::INT16: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::UINT16: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::INT32: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::UINT32: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::FLOAT64: { double v; std::memcpy(&v, p, 8); return v; }
+    default: return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+// Reads named scalar fields into an n by k matrix; false if any is missing.
+bool read_fields(const pcl::PCLPointCloud2& c, const std::vector<std::string>& names,
+                 Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& out) {
+  std::vector<const pcl::PCLPointField*> fields;
+  for (const auto& n : names) {
+    const auto* f = find_field(c, n);
+    if (!f) return false;
+    fields.push_back(f);
+  }
+  const std::size_t n = static_cast<std::size_t>(c.width) * c.height;
+  out.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(names.size()));
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* base = c.data.data() + i * c.point_step;
+    for (std::size_t k = 0; k < fields.size(); ++k)
+      out(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) =
+          read_scalar(base + fields[k]->offset, fields[k]->datatype);
+  }
+  return true;
+}
+
+// Packed "rgb"/"rgba" (float or uint32 bit pattern) -> #P by 3 colours; empty if absent.
+Colors read_colors(const pcl::PCLPointCloud2& c) {
+  const pcl::PCLPointField* f = find_field(c, "rgb");
+  if (!f) f = find_field(c, "rgba");
+  if (!f || (f->datatype != pcl::PCLPointField::FLOAT32 && f->datatype != pcl::PCLPointField::UINT32)) return {};
+  const std::size_t n = static_cast<std::size_t>(c.width) * c.height;
+  Colors out(static_cast<Eigen::Index>(n), 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t v;
+    std::memcpy(&v, c.data.data() + i * c.point_step + f->offset, 4);
+    out(i, 0) = (v >> 16) & 0xff;
+    out(i, 1) = (v >> 8) & 0xff;
+    out(i, 2) = v & 0xff;
+  }
+  return out;
+}
+
+// Orients estimated normals consistently: a minimum spanning tree over the kNN graph
+// with weight 1 - |ni . nj| (Hoppe et al. 1992), propagated from the highest point,
+// whose normal is made to point up (+z), i.e. out of the model.
+void orient_normals(const Points& p, Points& n, int k) {
+  const Index count = static_cast<Index>(p.rows());
+  if (count == 0) return;
+  const KdTree tree(p);
+  const int kk = std::min<int>(k + 1, count);
+  const KnnResult nb = tree.knn(p, kk);
+  Index root = 0;
+  for (Index i = 1; i < count; ++i)
+    if (p(i, 2) > p(root, 2)) root = i;
+  if (n(root, 2) < 0) n.row(root) *= -1.0;
+
+  std::vector<bool> done(count, false);
+  using Item = std::tuple<double, Index, Index>;  // weight, node, parent
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  Index visited = 0;
+  auto push_neighbours = [&](Index i) {
+    for (int j = 0; j < kk; ++j) {
+      const Index o = nb.indices(i, j);
+      if (o < 0 || done[o]) continue;
+      queue.emplace(1.0 - std::abs(n.row(i).dot(n.row(o))), o, i);
+    }
+  };
+  // Several components: each new component starts from its highest remaining point.
+  while (visited < count) {
+    Index start = -1;
+    for (Index i = 0; i < count; ++i)
+      if (!done[i] && (start < 0 || p(i, 2) > p(start, 2))) start = i;
+    if (start != root && n(start, 2) < 0.0) n.row(start) *= -1.0;
+    done[start] = true;
+    ++visited;
+    push_neighbours(start);
+    while (!queue.empty()) {
+      const auto [w, i, parent] = queue.top();
+      queue.pop();
+      if (done[i]) continue;
+      if (n.row(i).dot(n.row(parent)) < 0) n.row(i) *= -1.0;
+      done[i] = true;
+      ++visited;
+      push_neighbours(i);
+    }
+  }
+}
+
+Points estimate_normals(const Points& p, int k, const std::string& path) {
+  if (p.rows() < 3) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': too few points to estimate normals");
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  // PCL works in float: estimate in a local frame around the centroid to keep precision.
+  const Eigen::RowVector3d c = p.colwise().mean();
+  cloud->resize(p.rows());
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const Eigen::RowVector3d q = p.row(i) - c;
+    (*cloud)[i] = pcl::PointXYZ(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+  }
+  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
+  ne.setInputCloud(cloud);
+  ne.setKSearch(std::min<int>(k, static_cast<int>(p.rows())));
+  pcl::PointCloud<pcl::Normal> normals;
+  ne.compute(normals);
+  Points n(p.rows(), 3);
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const auto& q = normals[i];
+    n.row(i) << q.normal_x, q.normal_y, q.normal_z;
+    if (!n.row(i).allFinite() || n.row(i).squaredNorm() < 1e-12) n.row(i) << 0, 0, 1;
+  }
+  orient_normals(p, n, k);
+  return n;
+}
+
+SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, const LoadParams& params) {
+  SurfelArrays a;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
+  if (!read_fields(c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
+  a.positions = m;
+  if (a.positions.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
+  require_finite(a.positions, "path '" + path + "' positions");
+  if (read_fields(c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(c, {"nx", "ny", "nz"}, m)) {
+    a.normals = m;
+  } else {
+    a.normals = estimate_normals(a.positions, params.normal_k, path);
+  }
+  if (read_fields(c, {"radius"}, m)) a.radii = m.col(0);
+  a.colors = read_colors(c);
+  return a;
+}
+
+// Mesh: one surfel per referenced vertex, normal = sum of the incident faces' unnormalised
+// normals (area-weighted), triangulating polygons as fans.
+SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
+  if (!read_fields(mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
+  const Points v = m;
+  require_finite(v, "path '" + path + "' vertices");
+  Points acc = Points::Zero(v.rows(), 3);
+  std::vector<bool> used(v.rows(), false);
+  for (std::size_t fi = 0; fi < mesh.polygons.size(); ++fi) {
+    const auto& idx = mesh.polygons[fi].vertices;
+    for (auto i : idx) {
+      if (i < 0 || static_cast<Eigen::Index>(i) >= v.rows()) {
+        std::ostringstream msg;
+        msg << "face " << fi << " refers to vertex " << i << " but there are only " << v.rows();
+        throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': " + msg.str());
+      }
+    }
+    for (std::size_t k = 1; k + 1 < idx.size(); ++k) {
+      const Vec3 a = v.row(idx[0]), b = v.row(idx[k]), c = v.row(idx[k + 1]);
+      const Eigen::RowVector3d fn = (b - a).cross(c - a).transpose();
+      acc.row(idx[0]) += fn;
+      acc.row(idx[k]) += fn;
+      acc.row(idx[k + 1]) += fn;
+    }
+    for (auto i : idx) used[i] = true;
+  }
+  IndexList keep;
+  for (Eigen::Index i = 0; i < v.rows(); ++i)
+    if (used[i] && acc.row(i).squaredNorm() > 0.0) keep.push_back(static_cast<Index>(i));
+  if (keep.empty()) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the mesh has no usable vertex");
+  SurfelArrays a;
+  a.positions.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  a.normals.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    a.positions.row(k) = v.row(keep[k]);
+    a.normals.row(k) = acc.row(keep[k]).normalized();
+  }
+  return a;
+}
+
+// PCL's OBJ reader mishandles some files (texture coordinates, face formats); this small
+// reader of "v" and "f" lines is used for .obj files: position-only, polygons as fans.
+pcl::PolygonMesh read_obj(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw io_error(path, "cannot open");
+  std::vector<double> xyz;
+  pcl::PolygonMesh mesh;
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v") {
+      double x, y, z;
+      if (!(s >> x >> y >> z)) throw io_error(path, "line " + std::to_string(line_no) + ": bad vertex");
+      xyz.insert(xyz.end(), {x, y, z});
+    } else if (tag == "f") {
+      pcl::Vertices poly;
+      std::string tok;
+      const long nv = static_cast<long>(xyz.size() / 3);
+      while (s >> tok) {
+        long i = 0;
+        try {
+          i = std::stol(tok.substr(0, tok.find('/')));
+        } catch (const std::exception&) {
+          throw io_error(path, "line " + std::to_string(line_no) + ": bad face index '" + tok + "'");
+        }
+        if (i < 0) i = nv + i + 1;  // relative index
+        if (i < 1 || i > nv)
+          throw io_error(path, "line " + std::to_string(line_no) + ": face index " + tok + " out of range");
+        poly.vertices.push_back(static_cast<pcl::index_t>(i - 1));
+      }
+      if (poly.vertices.size() < 3) throw io_error(path, "line " + std::to_string(line_no) + ": face with fewer than 3 vertices");
+      mesh.polygons.push_back(std::move(poly));
+    }
+  }
+  // Store vertices as float64 x, y, z in the mesh's cloud.
+  auto& c = mesh.cloud;
+  c.width = static_cast<std::uint32_t>(xyz.size() / 3);
+  c.height = 1;
+  c.point_step = 24;
+  c.row_step = c.point_step * c.width;
+  for (int k = 0; k < 3; ++k) {
+    pcl::PCLPointField f;
+    f.name = std::string(1, "xyz"[k]);
+    f.offset = 8 * k;
+    f.datatype = pcl::PCLPointField::FLOAT64;
+    f.count = 1;
+    c.fields.push_back(f);
+  }
+  c.data.resize(xyz.size() * sizeof(double));
+  std::memcpy(c.data.data(), xyz.data(), c.data.size());
+  return mesh;
+}
+
+}  // namespace
+
+SurfelArrays load_surfels(const std::string& path, LoadParams params) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(ErrorCode::NotFound, "path", "'" + path + "': no such file");
+  if (fs::is_directory(path, ec)) throw io_error(path, "is a directory");
+  const std::string ext = extension_of(path);
+  SurfelArrays a;
+  if (ext == ".obj") {
+    const pcl::PolygonMesh mesh = read_obj(path);
+    if (mesh.polygons.empty()) {
+      a = from_cloud(mesh.cloud, path, params);
+    } else {
+      a = from_mesh(mesh, path);
+    }
+  } else if (ext == ".ply") {
+    pcl::PolygonMesh mesh;
+    pcl::PLYReader reader;
+    if (reader.read(path, mesh) < 0) throw io_error(path, "not a readable PLY file");
+    a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
+  } else if (ext == ".pcd") {
+    pcl::PCLPointCloud2 cloud;
+    pcl::PCDReader reader;
+    if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
+    a = from_cloud(cloud, path, params);
+  } else {
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply, .pcd or .obj)");
+  }
+  try {
+    validate_arrays(a);
+  } catch (const Error& e) {
+    throw Error(e.code(), "path", "'" + path + "': " + e.what());
+  }
+  return a;
+}
+
+void save_surfels(const std::string& path, const SurfelArrays& a) {
+  validate_arrays(a);
+  const std::string ext = extension_of(path);
+  if (ext != ".ply" && ext != ".pcd") {
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply or .pcd)");
+  }
+  const Eigen::Index n = a.positions.rows();
+  const bool radii = a.radii.size() == n;
+  const bool colors = a.colors.rows() == n;
+  // Layout: x y z (float64, full precision), normal_x..z (float32), radius (float32), rgb.
+  pcl::PCLPointCloud2 c;
+  std::uint32_t offset = 0;
+  auto add = [&](const std::string& name, std::uint8_t type, std::uint32_t size) {
+    pcl::PCLPointField f;
+    f.name = name;
+    f.offset = offset;
+    f.datatype = type;
+    f.count = 1;
+    c.fields.push_back(f);
+    offset += size;
+  };
+  for (const char* f : {"x", "y", "z"}) add(f, pcl::PCLPointField::FLOAT64, 8);
+  for (const char* f : {"normal_x", "normal_y", "normal_z"}) add(f, pcl::PCLPointField::FLOAT32, 4);
+  if (radii) add("radius", pcl::PCLPointField::FLOAT32, 4);
+  if (colors) add("rgb", pcl::PCLPointField::UINT32, 4);
+  c.width = static_cast<std::uint32_t>(n);
+  c.height = 1;
+  c.point_step = offset;
+  c.row_step = offset * c.width;
+  c.is_dense = true;
+  c.data.resize(static_cast<std::size_t>(c.row_step));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    std::uint8_t* p = c.data.data() + i * offset;
+    for (int k = 0; k < 3; ++k) {
+      const double v = a.positions(i, k);
+      std::memcpy(p + 8 * k, &v, 8);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const float v = static_cast<float>(a.normals(i, k));
+      std::memcpy(p + 24 + 4 * k, &v, 4);
+    }
+    std::uint32_t o = 36;
+    if (radii) {
+      const float v = static_cast<float>(a.radii[i]);
+      std::memcpy(p + o, &v, 4);
+      o += 4;
+    }
+    if (colors) {
+      const std::uint32_t v = (std::uint32_t(a.colors(i, 0)) << 16) | (std::uint32_t(a.colors(i, 1)) << 8) | a.colors(i, 2);
+      std::memcpy(p + o, &v, 4);
+    }
+  }
+  int rc = 0;
+  if (ext == ".ply") {
+    pcl::PLYWriter w;
+    rc = w.writeBinary(path, c);
+  } else {
+    pcl::PCDWriter w;
+    rc = w.writeBinary(path, c);
+  }
+  if (rc < 0) throw io_error(path, "could not be written");
+}
+
+}  // namespace surfeledit
