@@ -1,0 +1,76 @@
+"""Topic names, QoS and the generated topic types (``proto``) of the surfeledit protocol.
+
+``proto`` is the module ``surfeledit._proto`` generated from ``proto/surfeledit.idl`` by
+``proto/idl2py.py`` (the CMake build writes it). When it is missing (a source checkout that was not
+built yet) it is generated in memory from the repository's IDL, so the client still works.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import logging
+import sys
+import types
+from pathlib import Path
+
+from cyclonedds.qos import Policy, Qos
+from cyclonedds.util import duration
+
+__all__ = ["proto", "TOPIC_REQUEST", "TOPIC_REPLY", "TOPIC_UPDATE", "request_qos", "reply_qos", "update_qos",
+           "REPO_ROOT"]
+
+_log = logging.getLogger("surfeledit")
+
+TOPIC_REQUEST = "surfeledit_request"
+TOPIC_REPLY = "surfeledit_reply"
+TOPIC_UPDATE = "surfeledit_update"
+
+#: Repository root when running from a source checkout (client_py/surfeledit/_protocol.py -> ../..).
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+
+def _qos() -> Qos:
+    # PROTOCOL.md: reliable (max blocking 10 s), keep-all, volatile, for all three topics.
+    return Qos(Policy.Reliability.Reliable(max_blocking_time=duration(seconds=10)),
+               Policy.History.KeepAll,
+               Policy.Durability.Volatile)
+
+
+def request_qos() -> Qos:
+    return _qos()
+
+
+def reply_qos() -> Qos:
+    return _qos()
+
+
+def update_qos() -> Qos:
+    return _qos()
+
+
+def _generate_in_memory() -> types.ModuleType:
+    """Builds ``surfeledit._proto`` from ``<repo>/proto/surfeledit.idl`` with ``<repo>/proto/idl2py.py``."""
+    gen = REPO_ROOT / "proto" / "idl2py.py"
+    idl = REPO_ROOT / "proto" / "surfeledit.idl"
+    if not gen.is_file() or not idl.is_file():
+        raise ImportError("surfeledit._proto is missing: build the project (cmake) or run "
+                          "'python proto/idl2py.py proto/surfeledit.idl -o client_py/surfeledit/_proto.py'")
+    spec = importlib.util.spec_from_file_location("_surfeledit_idl2py", gen)
+    assert spec is not None and spec.loader is not None
+    idl2py = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = idl2py  # dataclasses look their module up in sys.modules
+    spec.loader.exec_module(idl2py)
+    source = idl2py.generate_file(idl)
+    module = types.ModuleType("surfeledit._proto")
+    module.__file__ = str(Path(__file__).with_name("_proto.py"))
+    # cyclonedds resolves member types through sys.modules[cls.__module__]; register before executing.
+    sys.modules["surfeledit._proto"] = module
+    exec(compile(source, "<surfeledit._proto>", "exec", dont_inherit=True), module.__dict__)
+    _log.info("surfeledit._proto not built; generated it in memory from %s", idl)
+    return module
+
+
+try:
+    from . import _proto as proto
+except ImportError:  # pragma: no cover - depends on whether the build ran
+    proto = _generate_in_memory()

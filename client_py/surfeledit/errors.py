@@ -1,0 +1,110 @@
+"""Typed exceptions for server errors.
+
+Every non-OK ``Reply.status`` becomes one subclass of :class:`SurfelEditError`; the mapping follows
+the ``Status`` enum of ``proto/surfeledit.idl`` (whose numbers equal the core's ``ErrorCode``)::
+
+    1 STATUS_INVALID_ARGUMENT -> InvalidArgumentError (also a ValueError)
+    2 STATUS_NOT_FOUND        -> NotFoundError
+    3 STATUS_CONFLICT         -> ConflictError
+    4 STATUS_TOO_LARGE        -> TooLargeError
+    5 STATUS_IO               -> ServerIOError
+    6 STATUS_INTERNAL         -> InternalServerError
+
+:class:`RequestTimeoutError` is raised by the client itself when no reply arrives in time.
+"""
+
+from __future__ import annotations
+
+from typing import Dict, Optional, Type
+
+__all__ = [
+    "SurfelEditError", "InvalidArgumentError", "NotFoundError", "ConflictError", "TooLargeError",
+    "ServerIOError", "InternalServerError", "RequestTimeoutError", "ServerStartError", "error_for_status",
+]
+
+
+class SurfelEditError(Exception):
+    """Base of every surfeledit error.
+
+    Attributes:
+        status: the ``Status`` number of the reply (0 for client-side errors such as timeouts
+            or argument checks done before sending).
+        field: the offending input as the server (or the client-side check) named it, e.g.
+            ``"load_chunk.positions[12]"``, ``"deform.axis"``; empty when not applicable.
+        message: human-readable explanation.
+    """
+
+    status: int = 0
+
+    def __init__(self, message: str, field: str = "", status: Optional[int] = None) -> None:
+        super().__init__(f"{message} (field: {field})" if field else message)
+        self.message = message
+        self.field = field
+        if status is not None:
+            self.status = status
+
+
+class InvalidArgumentError(SurfelEditError, ValueError):
+    """A value is malformed (NaN, wrong shape, zero normal, bad enum string, ...). Status 1."""
+
+    status = 1
+
+
+class NotFoundError(SurfelEditError):
+    """Unknown session, id or file. Status 2."""
+
+    status = 2
+
+
+class ConflictError(SurfelEditError):
+    """Well-formed but contradicts the state (overlapping regions, no regions set, not attached). Status 3."""
+
+    status = 3
+
+
+class TooLargeError(SurfelEditError):
+    """Beyond a size limit of the server (``max_chunk_surfels``, ``max_model_surfels``). Status 4."""
+
+    status = 4
+
+
+class ServerIOError(SurfelEditError):
+    """A file could not be read on the server. Status 5."""
+
+    status = 5
+
+
+class InternalServerError(SurfelEditError):
+    """A server bug; the request changed nothing. Status 6."""
+
+    status = 6
+
+
+class RequestTimeoutError(SurfelEditError, TimeoutError):
+    """No reply arrived in time (after one retry with the same request id)."""
+
+    status = 0
+
+
+class ServerStartError(SurfelEditError, RuntimeError):
+    """No server answered and none could be started (spawn=True) or found (spawn=False)."""
+
+    status = 0
+
+
+_BY_STATUS: Dict[int, Type[SurfelEditError]] = {
+    1: InvalidArgumentError,
+    2: NotFoundError,
+    3: ConflictError,
+    4: TooLargeError,
+    5: ServerIOError,
+    6: InternalServerError,
+}
+
+
+def error_for_status(status: int, message: str, field: str = "") -> SurfelEditError:
+    """Returns the exception for a reply status number (an unknown number gives the base class)."""
+    cls = _BY_STATUS.get(int(status))
+    if cls is None:
+        return SurfelEditError(f"unknown status {int(status)}: {message}", field, status=int(status))
+    return cls(message, field)
