@@ -1,0 +1,29 @@
+// Shared declarations of the pybind11 module surfeledit.core: one bind_* function per
+// core concept (one file each), and numpy conversion helpers.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "surfeledit/core/types.hpp"
+
+namespace surfeledit::py {
+
+namespace pyb = pybind11;
+
+// (N, 3) float64 array -> Points, with a clear error naming `field` on a wrong shape.
+Points to_points(const pyb::handle& a, const char* field);
+// (N,) float64 array -> Values.
+Values to_values(const pyb::handle& a, const char* field);
+
+void bind_errors(pyb::module_& m);
+void bind_kdtree(pyb::module_& m);
+void bind_inside_outside(pyb::module_& m);
+void bind_scene(pyb::module_& m);
+void bind_deformation(pyb::module_& m);
+void bind_model_io(pyb::module_& m);
+void bind_edit_session(pyb::module_& m);
+
+}  // namespace surfeledit::py
