@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Installs whatever is missing (Debian packages, the .venv Python environment with the
+# client and its compiled module) and builds. Idempotent: a second run only rebuilds
+# what changed. Run as root on a fresh Debian 12 machine (or with sudo available).
+#   SURFELEDIT_BUILD_DIR  build directory (default: build)
+#   SURFELEDIT_JOBS       parallel build jobs (default: nproc)
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
+JOBS="${SURFELEDIT_JOBS:-$(nproc)}"
+VENV="$ROOT/.venv"
+log() { printf '[setup] %s\n' "$*"; }
+
+# 1. Debian packages.
+APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev
+  libeigen3-dev libpcl-dev libnanoflann-dev cyclonedds-dev cyclonedds-tools
+  pybind11-dev libgtest-dev libspdlog-dev libcli11-dev)
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  log "installing Debian packages: ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q "${missing[@]}" >/tmp/surfeledit-apt.log 2>&1 \
+    || { tail -n 30 /tmp/surfeledit-apt.log; exit 1; }
+fi
+
+# 2. Python environment (re-installed when scripts/requirements.txt changes).
+if [ ! -x "$VENV/bin/python" ]; then
+  log "creating $VENV"
+  python3 -m venv "$VENV"
+fi
+stamp="$VENV/.requirements.sha256"
+want="$(sha256sum "$ROOT/scripts/requirements.txt" "$ROOT/client_py/pyproject.toml" | sha256sum | cut -d' ' -f1)"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  log "installing Python packages into $VENV"
+  "$VENV/bin/pip" install -q --disable-pip-version-check -r "$ROOT/scripts/requirements.txt"
+  "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps -e "$ROOT/client_py"
+  echo "$want" >"$stamp"
+fi
+
+# 3. Build: core library, server, pybind11 module (into client_py/surfeledit), C++ tests.
+if [ ! -f "$BUILD/CMakeCache.txt" ]; then
+  log "configuring $BUILD"
+  cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE="$VENV/bin/python" \
+    -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON >"$BUILD.configure.log" 2>&1 \
+    || { tail -n 40 "$BUILD.configure.log"; exit 1; }
+fi
+log "building ($JOBS jobs)"
+cmake --build "$BUILD" -j "$JOBS" >"$BUILD.build.log" 2>&1 || { grep -E "error|Error" "$BUILD.build.log" | head -n 40; exit 1; }
+
+# The client finds the server on PATH inside the venv.
+ln -sf "$BUILD/server/app/surfeledit-server" "$VENV/bin/surfeledit-server"
+log "ready: $BUILD, $VENV"
