@@ -1,0 +1,91 @@
+#include "dds_handles.hpp"
+
+#include <stdexcept>
+
+namespace surfeledit::service::dds {
+
+dds_return_t check(dds_return_t rc, const char* what) {
+  if (rc < 0) throw std::runtime_error(std::string(what) + ": " + dds_strretcode(rc));
+  return rc;
+}
+
+void Entity::reset() {
+  if (handle_ > 0) (void)dds_delete(handle_);
+  handle_ = 0;
+}
+
+Qos::Qos() : qos_(dds_create_qos()) {
+  if (!qos_) throw std::runtime_error("dds_create_qos: out of memory");
+}
+
+Qos::~Qos() {
+  if (qos_) dds_delete_qos(qos_);
+}
+
+Qos& Qos::reliable(dds_duration_t max_blocking) {
+  dds_qset_reliability(qos_, DDS_RELIABILITY_RELIABLE, max_blocking);
+  return *this;
+}
+
+Qos& Qos::keep_all() {
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_ALL, 0);
+  return *this;
+}
+
+Qos& Qos::volatile_durability() {
+  dds_qset_durability(qos_, DDS_DURABILITY_VOLATILE);
+  return *this;
+}
+
+Qos protocol_qos() {
+  Qos qos;
+  qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();
+  return qos;
+}
+
+Entity make_participant(dds_domainid_t domain) {
+  return Entity(dds_create_participant(domain, nullptr, nullptr), "dds_create_participant");
+}
+
+Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type, const std::string& name,
+                  const Qos& qos) {
+  const std::string what = "dds_create_topic(" + name + ")";
+  return Entity(dds_create_topic(participant.get(), type, name.c_str(), qos.get(), nullptr), what.c_str());
+}
+
+Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos) {
+  return Entity(dds_create_reader(participant.get(), topic.get(), qos.get(), nullptr), "dds_create_reader");
+}
+
+Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos) {
+  return Entity(dds_create_writer(participant.get(), topic.get(), qos.get(), nullptr), "dds_create_writer");
+}
+
+Entity make_read_condition(const Entity& reader) {
+  return Entity(dds_create_readcondition(reader.get(), DDS_ANY_STATE), "dds_create_readcondition");
+}
+
+GuardCondition::GuardCondition(const Entity& participant)
+    : entity_(dds_create_guardcondition(participant.get()), "dds_create_guardcondition") {}
+
+void GuardCondition::trigger() { check(dds_set_guardcondition(entity_.get(), true), "dds_set_guardcondition"); }
+
+void GuardCondition::clear() { check(dds_set_guardcondition(entity_.get(), false), "dds_set_guardcondition"); }
+
+WaitSet::WaitSet(const Entity& participant) : entity_(dds_create_waitset(participant.get()), "dds_create_waitset") {}
+
+void WaitSet::attach(const Entity& condition, dds_attach_t tag) {
+  check(dds_waitset_attach(entity_.get(), condition.get(), tag), "dds_waitset_attach");
+}
+
+std::vector<dds_attach_t> WaitSet::wait(dds_duration_t timeout) {
+  std::vector<dds_attach_t> triggered(8);
+  const dds_return_t n = check(dds_waitset_wait(entity_.get(), triggered.data(), triggered.size(), timeout),
+                               "dds_waitset_wait");
+  triggered.resize(std::min<std::size_t>(static_cast<std::size_t>(n), triggered.size()));
+  return triggered;
+}
+
+void write(const Entity& writer, const void* sample, const char* what) { check(dds_write(writer.get(), sample), what); }
+
+}  // namespace surfeledit::service::dds

@@ -1,0 +1,129 @@
+// RAII wrappers over the Cyclone DDS C API. Every call's return code is checked; a failure
+// throws std::runtime_error("<what>: <dds_strretcode>"). Private to the service library.
+#pragma once
+
+#include <dds/dds.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace surfeledit::service::dds {
+
+// Returns `rc` when it is not an error, throws std::runtime_error naming `what` otherwise.
+dds_return_t check(dds_return_t rc, const char* what);
+
+// Owns one DDS entity handle (participant, topic, reader, writer, waitset, condition) and
+// deletes it on destruction. Move-only.
+class Entity {
+ public:
+  Entity() = default;
+  Entity(dds_entity_t handle, const char* what) : handle_(check(handle, what)) {}
+  ~Entity() { reset(); }
+  Entity(Entity&& other) noexcept : handle_(std::exchange(other.handle_, 0)) {}
+  Entity& operator=(Entity&& other) noexcept {
+    if (this != &other) {
+      reset();
+      handle_ = std::exchange(other.handle_, 0);
+    }
+    return *this;
+  }
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+
+  dds_entity_t get() const { return handle_; }
+  // Deletes the entity now (and its children); errors are ignored (e.g. already deleted with its parent).
+  void reset();
+
+ private:
+  dds_entity_t handle_ = 0;
+};
+
+// Owns a QoS object.
+class Qos {
+ public:
+  Qos();
+  ~Qos();
+  Qos(Qos&& other) noexcept : qos_(std::exchange(other.qos_, nullptr)) {}
+  Qos(const Qos&) = delete;
+  Qos& operator=(const Qos&) = delete;
+  Qos& operator=(Qos&&) = delete;
+  const dds_qos_t* get() const { return qos_; }
+
+  Qos& reliable(dds_duration_t max_blocking);
+  Qos& keep_all();
+  Qos& volatile_durability();
+
+ private:
+  dds_qos_t* qos_;
+};
+
+// The QoS of all three surfeledit topics (PROTOCOL.md): reliable (max blocking 10 s),
+// history keep-all, volatile.
+Qos protocol_qos();
+
+Entity make_participant(dds_domainid_t domain);
+Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type, const std::string& name,
+                  const Qos& qos);
+Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos);
+Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos);
+// A read condition on every sample of the reader (any sample, view and instance state).
+Entity make_read_condition(const Entity& reader);
+
+// A guard condition another thread can trigger to wake a waitset.
+class GuardCondition {
+ public:
+  explicit GuardCondition(const Entity& participant);
+  void trigger();
+  void clear();
+  const Entity& entity() const { return entity_; }
+
+ private:
+  Entity entity_;
+};
+
+class WaitSet {
+ public:
+  explicit WaitSet(const Entity& participant);
+  // Attaches a condition (or entity); `tag` is returned by wait() when it triggers.
+  void attach(const Entity& condition, dds_attach_t tag);
+  // Blocks until a condition triggers (or the timeout elapses); returns the triggered tags.
+  std::vector<dds_attach_t> wait(dds_duration_t timeout = DDS_INFINITY);
+
+ private:
+  Entity entity_;
+};
+
+// Samples taken on loan from a reader (dds_take without buffers); the loan is returned on destruction.
+template <typename T>
+class Loan {
+ public:
+  // Takes up to `max` samples (fewer when fewer are available; possibly none).
+  Loan(dds_entity_t reader_or_condition, std::size_t max)
+      : reader_(reader_or_condition), samples_(max, nullptr), infos_(max) {
+    const dds_return_t n = check(dds_take(reader_, samples_.data(), infos_.data(), max, static_cast<uint32_t>(max)),
+                                 "dds_take");
+    count_ = static_cast<std::size_t>(n);
+  }
+  ~Loan() {
+    if (count_ > 0) (void)dds_return_loan(reader_, samples_.data(), static_cast<int32_t>(count_));
+  }
+  Loan(const Loan&) = delete;
+  Loan& operator=(const Loan&) = delete;
+
+  std::size_t size() const { return count_; }
+  const T& sample(std::size_t i) const { return *static_cast<const T*>(samples_[i]); }
+  const dds_sample_info_t& info(std::size_t i) const { return infos_[i]; }
+
+ private:
+  dds_entity_t reader_;
+  std::vector<void*> samples_;
+  std::vector<dds_sample_info_t> infos_;
+  std::size_t count_ = 0;
+};
+
+// Writes one sample; throws on failure (e.g. a timeout after the reliable max blocking time).
+void write(const Entity& writer, const void* sample, const char* what);
+
+}  // namespace surfeledit::service::dds
