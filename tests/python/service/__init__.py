@@ -1,0 +1,1 @@
+"""Python tests against real surfeledit-server processes (see conftest.py)."""

@@ -1,0 +1,91 @@
+"""Client-side pieces that need no server: error mapping, argument checks, cache merge, reassembly."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from surfeledit import errors, proto
+from surfeledit.client import Changes, Session, State, Watcher, _merge
+
+
+@pytest.mark.parametrize("status, cls", [(1, errors.InvalidArgumentError), (2, errors.NotFoundError),
+                                         (3, errors.ConflictError), (4, errors.TooLargeError),
+                                         (5, errors.ServerIOError), (6, errors.InternalServerError)])
+def test_status_mapping(status: int, cls: type) -> None:
+    e = errors.error_for_status(status, "bad thing", "deform.axis")
+    assert type(e) is cls and e.status == status == getattr(proto.Status, list(proto.Status)[status].name).value
+    assert e.field == "deform.axis" and e.message == "bad thing"
+    assert isinstance(e, errors.SurfelEditError)
+    assert isinstance(e, ValueError) == (status == 1)
+
+
+class _NoServer:
+    """Stands in for a Client: any request is a test failure (checks must happen before sending)."""
+
+    closed = False
+
+    def request(self, *a: Any, **k: Any) -> Any:
+        raise AssertionError("a request was sent")
+
+    max_chunk_surfels = 10
+
+
+def make_session() -> Session:
+    return Session(_NoServer(), "s", proto.Reply())  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("positions, normals, radii, field", [
+    (np.zeros((4, 2)), np.zeros((4, 3)), None, "positions"),
+    (np.zeros(12), np.zeros((4, 3)), None, "positions"),
+    (np.zeros((4, 3)), np.zeros((3, 3)), None, "normals"),
+    (np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((4, 1)), "radii"),
+    (np.zeros((4, 3)), np.zeros((4, 3)), np.zeros(5), "radii"),
+    ([["a", "b", "c"]], [[0, 0, 1]], None, "positions"),
+])
+def test_load_points_shape_checks(positions: Any, normals: Any, radii: Any, field: str) -> None:
+    with pytest.raises(errors.InvalidArgumentError) as info:
+        make_session().load_points(positions, normals, radii)
+    assert info.value.field == field
+    assert isinstance(info.value, ValueError)
+
+
+def test_selector_and_deform_checks() -> None:
+    s = make_session()
+    with pytest.raises(errors.InvalidArgumentError, match="shape"):
+        s.set_regions(zero=[1], one_sphere=((0.0, 0.0), 1.0))
+    with pytest.raises(errors.InvalidArgumentError, match="integer"):
+        s.set_regions(zero=[1.5], one=[2])
+    with pytest.raises(errors.InvalidArgumentError, match="negative"):
+        s.set_regions(zero=[-1], one=[2])
+    with pytest.raises(errors.InvalidArgumentError):
+        s.deform(axis=(0.0, 1.0, 0.0, 0.0))
+
+
+def test_merge_changes_into_cache() -> None:
+    ids = np.array([0, 2, 4, 6], np.uint64)
+    cache = State(1, ids, np.arange(12.0).reshape(4, 3), np.ones((4, 3)), np.full(4, 0.1))
+    ch = Changes(version=3, full=False, ids=np.array([3, 4], np.uint64),
+                 positions=np.array([[9.0, 9, 9], [8, 8, 8]]), normals=np.zeros((2, 3)),
+                 radii=np.array([0.3, 0.4]), removed=np.array([2], np.uint64))
+    out = _merge(cache, ch)
+    assert out.version == 3
+    assert out.ids.tolist() == [0, 3, 4, 6]
+    assert out.positions.tolist() == [[0, 1, 2], [9, 9, 9], [8, 8, 8], [9, 10, 11]]
+    assert out.radii.tolist() == [0.1, 0.3, 0.4, 0.1]
+    assert cache.positions[2].tolist() == [6, 7, 8]  # the cache itself is not modified
+
+
+def test_watcher_reassembles_parts() -> None:
+    w = Watcher.__new__(Watcher)
+    w._pending, w._ready = {}, []
+    for part in (1, 0):  # out of order
+        w._add(proto.Update(session="s", version=5, cause="deform", parts=2, part=part, step=3,
+                            ids=[2 * part, 2 * part + 1], positions=[float(part)] * 6,
+                            normals=[0.0, 0.0, 1.0] * 2, radii=[0.1, 0.2]))
+    assert len(w._ready) == 1
+    ev = w._ready[0]
+    assert ev.ids.tolist() == [0, 1, 2, 3] and ev.positions.shape == (4, 3)
+    assert ev.positions[:, 0].tolist() == [0, 0, 1, 1] and ev.step == 3 and ev.version == 5
