@@ -234,6 +234,7 @@ class Client:
         self._server_info: Optional["proto.ServerInfo"] = None
         self._closed = False
         self._watchers: List["Watcher"] = []
+        self._sessions: List["Session"] = []
 
         self._participant = DomainParticipant(self.domain)
         self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
@@ -256,6 +257,11 @@ class Client:
         """Closes watchers and DDS entities, then stops the server if this client spawned it."""
         if self._closed:
             return
+        for sess in list(self._sessions):  # detach so the server can drop sessions nobody uses
+            try:
+                sess.close()
+            except errors.SurfelEditError:
+                _log.warning("closing session %r failed", sess.name, exc_info=True)
         self._closed = True
         for w in list(self._watchers):
             w.close()
@@ -481,6 +487,7 @@ class Session:
         self._info = reply.session_info[0] if reply.session_info else None
         self._cache: Optional[State] = None
         self._closed = False
+        client._sessions.append(self)
 
     def __enter__(self) -> "Session":
         return self
@@ -498,6 +505,8 @@ class Session:
 
     def close(self) -> None:
         """Detaches from the session (the server drops it when its last client leaves)."""
+        if self in self.client._sessions:
+            self.client._sessions.remove(self)
         if self._closed or self.client.closed:
             self._closed = True
             return
@@ -755,6 +764,28 @@ class Watcher:
         self._closed = False
         self._lock = threading.Lock()
         client._watchers.append(self)
+        self._wait_matched(2.0)
+
+    def _wait_matched(self, timeout: float) -> None:
+        """Waits (bounded) until the server's update writer is discovered: updates are volatile."""
+        deadline = time.monotonic() + timeout
+        ws = WaitSet(self.client._participant)
+        try:
+            self._reader.set_status_mask(DDSStatus.SubscriptionMatched)
+            ws.attach(self._reader)
+            while self._reader.get_subscription_matched_status().current_count == 0:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    _log.warning("watcher of %r: no update writer discovered within %.1f s", self.session, timeout)
+                    return
+                ws.wait(_ns(min(remaining, 0.05)))
+        finally:
+            try:
+                ws.detach(self._reader)
+                self._reader.set_status_mask(0)
+            except Exception:  # pragma: no cover
+                pass
+            _delete(ws)
 
     def __enter__(self) -> "Watcher":
         return self

@@ -23,6 +23,7 @@ def test_status_mapping(status: int, cls: type) -> None:
 
 
 class _NoServer:
+    _sessions: list = []
     """Stands in for a Client: any request is a test failure (checks must happen before sending)."""
 
     closed = False
