@@ -1,0 +1,453 @@
+// Deformation tool (§1): blend functions, lambda fields vs brute force, rigid ends of a step,
+// normals/tangents vs a finite-difference Jacobian, validation, and invariance under similarity.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+#include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/scene.hpp"
+
+namespace surfeledit {
+namespace {
+
+// A capsule along z (radius 0.4, half length 0.8): bottom (z < -0.3) is F0, top (z > 0.3) is F1.
+struct Model {
+  Points positions, normals, tu, tv;  // #P by 3
+  std::vector<Region> regions;        // #P
+};
+
+Model make_model(double spacing = 0.04, double z0 = -0.3, double z1 = 0.3) {
+  SampleParams sp;
+  sp.spacing = spacing;
+  sp.seed = 7;
+  const SampledSurfels s = make_capsule(0.4, 0.8)->sample(sp);
+  Model m;
+  m.positions = s.positions;
+  m.normals = s.normals;
+  m.tu.resize(s.positions.rows(), 3);
+  m.tv.resize(s.positions.rows(), 3);
+  for (Eigen::Index i = 0; i < s.positions.rows(); ++i) {
+    const Vec3 n = s.normals.row(i).transpose();
+    const Vec3 u = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
+    m.tu.row(i) = (spacing * u).transpose();
+    m.tv.row(i) = (spacing * n.cross(u)).transpose();
+    const double z = s.positions(i, 2);
+    m.regions.push_back(z < z0 ? Region::Zero : (z > z1 ? Region::One : Region::Blend));
+  }
+  return m;
+}
+
+// Brute-force distances (model units, not squared) from x to the nearest row of region r.
+double brute_distance(const Model& m, const Vec3& x, Region r, Index* which = nullptr) {
+  double best = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+    if (m.regions[static_cast<std::size_t>(i)] != r) continue;
+    const double d = (m.positions.row(i).transpose() - x).norm();
+    if (d < best) {
+      best = d;
+      if (which) *which = static_cast<Index>(i);
+    }
+  }
+  return best;
+}
+
+double brute_lambda(const Model& m, const Vec3& x) {
+  const double d0 = brute_distance(m, x, Region::Zero), d1 = brute_distance(m, x, Region::One);
+  return d0 / (d0 + d1);
+}
+
+// The step map written independently of the library: R(a, s alpha)(x - c) + c + s t.
+Vec3 reference_map(const Vec3& x, double s, const DeformParams& p, const Vec3& c) {
+  const Mat3 r = Eigen::AngleAxisd(s * p.angle, p.axis.normalized()).toRotationMatrix();
+  return r * (x - c) + c + s * p.translation;
+}
+
+Vec3 f1_centroid(const Model& m) {
+  Vec3 sum = Vec3::Zero();
+  int n = 0;
+  for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+    if (m.regions[static_cast<std::size_t>(i)] == Region::One) {
+      sum += m.positions.row(i).transpose();
+      ++n;
+    }
+  }
+  return sum / n;
+}
+
+TEST(Deformation, BlendFunctionsHitBothEnds) {
+  for (Blend b : {Blend::Smooth, Blend::Quadratic, Blend::Linear}) {
+    SCOPED_TRACE(to_string(b));
+    EXPECT_EQ(parse_blend(to_string(b)), b);
+    EXPECT_EQ(blend_value(b, 0.0), 0.0);  // F0 does not move
+    EXPECT_EQ(blend_value(b, 1.0), 1.0);  // F1 moves fully
+    double prev = 0.0;
+    for (int k = 1; k < 100; ++k) {
+      const double l = k / 100.0;
+      const double v = blend_value(b, l);
+      EXPECT_GT(v, prev);  // strictly increasing
+      prev = v;
+      const double fd = (blend_value(b, l + 1e-6) - blend_value(b, l - 1e-6)) / 2e-6;
+      EXPECT_NEAR(blend_derivative(b, l), fd, 1e-7);
+    }
+  }
+  // smooth: beta = E(1 - lambda), E(x) = (x^2 - 1)^2, flat at both ends.
+  EXPECT_NEAR(blend_value(Blend::Smooth, 0.3), std::pow(0.7 * 0.7 - 1.0, 2), 1e-15);
+  EXPECT_EQ(blend_derivative(Blend::Smooth, 0.0), 0.0);
+  EXPECT_EQ(blend_derivative(Blend::Smooth, 1.0), 0.0);
+  EXPECT_EQ(blend_value(Blend::Quadratic, 0.5), 0.25);
+  try {
+    parse_blend("cubic", "params.blend");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(e.field(), "params.blend");
+  }
+}
+
+TEST(Deformation, FieldsMatchBruteForce) {
+  const Model m = make_model();
+  const DeformationFields f = compute_fields(m.positions, m.regions, 2);
+  const Eigen::Index n = m.positions.rows();
+  ASSERT_EQ(f.lambda.size(), n);
+  ASSERT_EQ(f.grad_lambda.rows(), n);
+  std::size_t deformable = 0;
+  int gradient_checked = 0, gradient_ok = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Region r = m.regions[static_cast<std::size_t>(i)];
+    const Vec3 p = m.positions.row(i).transpose();
+    if (r == Region::Zero) {
+      EXPECT_EQ(f.lambda[i], 0.0);
+      EXPECT_TRUE(f.grad_lambda.row(i).isZero(0.0));
+      continue;
+    }
+    ASSERT_LT(deformable, f.deformable.size());
+    EXPECT_EQ(f.deformable[deformable++], i);
+    if (r == Region::One) {
+      EXPECT_EQ(f.lambda[i], 1.0);
+      EXPECT_TRUE(f.grad_lambda.row(i).isZero(0.0));
+      continue;
+    }
+    EXPECT_NEAR(f.lambda[i], brute_lambda(m, p), 1e-14);
+    // Gradient vs central differences of the brute-force lambda (skipped where the nearest
+    // F0/F1 surfel changes inside the stencil: lambda has a kink there).
+    Index a0 = -1, a1 = -1;
+    brute_distance(m, p, Region::Zero, &a0);
+    brute_distance(m, p, Region::One, &a1);
+    const double h = 1e-6;
+    Vec3 fd;
+    bool same = true;
+    for (int d = 0; d < 3 && same; ++d) {
+      for (double sg : {-1.0, 1.0}) {
+        Index b0 = -1, b1 = -1;
+        brute_distance(m, p + sg * h * Vec3::Unit(d), Region::Zero, &b0);
+        brute_distance(m, p + sg * h * Vec3::Unit(d), Region::One, &b1);
+        same = same && b0 == a0 && b1 == a1;
+      }
+      fd[d] = (brute_lambda(m, p + h * Vec3::Unit(d)) - brute_lambda(m, p - h * Vec3::Unit(d))) / (2 * h);
+    }
+    if (!same) continue;
+    ++gradient_checked;
+    gradient_ok += (f.grad_lambda.row(i).transpose() - fd).norm() <= 1e-6 * (1.0 + fd.norm());
+  }
+  EXPECT_EQ(deformable, f.deformable.size());
+  EXPECT_GT(gradient_checked, 500);
+  EXPECT_EQ(gradient_ok, gradient_checked);
+  EXPECT_GT(f.memory_bytes(), static_cast<std::size_t>(n) * 4 * sizeof(double));
+}
+
+TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
+  Model m = make_model(0.08);
+  // Row 5 (a blend/zero/one row, whatever it is) duplicated: one copy F0, the other F1.
+  const Eigen::Index n = m.positions.rows();
+  Points pos(n + 1, 3);
+  pos.topRows(n) = m.positions;
+  pos.row(n) = m.positions.row(5);
+  std::vector<Region> reg = m.regions;
+  reg[5] = Region::Zero;
+  reg.push_back(Region::One);
+  try {
+    compute_fields(pos, reg);
+    FAIL() << "overlapping regions accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+    EXPECT_NE(std::string(e.what()).find("row 5"), std::string::npos) << e.what();
+  }
+  auto expect_invalid = [](const Points& p, const std::vector<Region>& r) {
+    try {
+      compute_fields(p, r);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+    }
+  };
+  std::vector<Region> no_zero(m.regions.size(), Region::Blend);
+  no_zero[0] = Region::One;
+  expect_invalid(m.positions, no_zero);
+  std::vector<Region> no_one(m.regions.size(), Region::Zero);
+  expect_invalid(m.positions, no_one);
+  expect_invalid(m.positions, std::vector<Region>(3, Region::Zero));  // size mismatch
+  Points bad = m.positions;
+  bad(2, 2) = std::nan("");
+  expect_invalid(bad, m.regions);
+}
+
+TEST(Deformation, ZeroRegionStillOneRegionRigid) {
+  Model m = make_model();
+  const DeformationFields f = compute_fields(m.positions, m.regions);
+  const Model before = m;
+  DeformParams p;
+  p.translation = Vec3(0.1, -0.05, 0.2);
+  p.axis = Vec3(1, 1, 0);
+  p.angle = 0.3;
+  const DeformResult r = apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+  const Vec3 c = f1_centroid(before);
+  EXPECT_LT((r.center - c).norm(), 1e-14);
+  const Mat3 rot = Eigen::AngleAxisd(p.angle, p.axis.normalized()).toRotationMatrix();
+  double worst_f1 = 0.0;
+  std::size_t k = 0;
+  for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+    const Region reg = m.regions[static_cast<std::size_t>(i)];
+    const double s = blend_value(p.blend, f.lambda[i]);
+    if (s > 0) {
+      ASSERT_LT(k, r.moved.size());
+      EXPECT_EQ(r.moved[k++], i);
+    }
+    if (reg == Region::Zero) {  // bit-identical
+      EXPECT_TRUE(m.positions.row(i) == before.positions.row(i));
+      EXPECT_TRUE(m.normals.row(i) == before.normals.row(i));
+      EXPECT_TRUE(m.tu.row(i) == before.tu.row(i));
+      EXPECT_TRUE(m.tv.row(i) == before.tv.row(i));
+    } else if (reg == Region::One) {
+      const Vec3 expect = rot * (before.positions.row(i).transpose() - c) + c + p.translation;
+      worst_f1 = std::max(worst_f1, (m.positions.row(i).transpose() - expect).norm());
+      EXPECT_LT((m.normals.row(i).transpose() - rot * before.normals.row(i).transpose()).norm(), 1e-14);
+      EXPECT_LT((m.tu.row(i).transpose() - rot * before.tu.row(i).transpose()).norm(), 1e-15);
+      EXPECT_LT((m.tv.row(i).transpose() - rot * before.tv.row(i).transpose()).norm(), 1e-15);
+    } else {
+      const Vec3 expect = reference_map(before.positions.row(i).transpose(), s, p, c);
+      EXPECT_LT((m.positions.row(i).transpose() - expect).norm(), 1e-14);
+    }
+    EXPECT_NEAR(m.normals.row(i).norm(), 1.0, 1e-14);
+  }
+  EXPECT_EQ(k, r.moved.size());
+  EXPECT_LT(worst_f1, 1e-14);
+}
+
+TEST(Deformation, RigidWhenF1IsEverythingDeformable) {
+  Model m = make_model(0.04, -0.3, -0.3);  // no blend rows
+  for (Region r : m.regions) ASSERT_NE(r, Region::Blend);
+  const DeformationFields f = compute_fields(m.positions, m.regions);
+  const Model before = m;
+  DeformParams p;
+  p.translation = Vec3(0.3, 0.0, -0.1);
+  p.axis = Vec3(0, 1, 2);
+  p.angle = -0.8;
+  p.center = Vec3(0.5, 0.5, 0.5);
+  p.blend = Blend::Quadratic;
+  const DeformResult r = apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+  EXPECT_EQ(r.center, *p.center);
+  EXPECT_EQ(r.moved, f.deformable);
+  const Mat3 rot = Eigen::AngleAxisd(p.angle, p.axis.normalized()).toRotationMatrix();
+  for (Index i : f.deformable) {
+    const Vec3 expect = rot * (before.positions.row(i).transpose() - *p.center) + *p.center + p.translation;
+    EXPECT_LT((m.positions.row(i).transpose() - expect).norm(), 1e-14);
+    EXPECT_LT((m.normals.row(i).transpose() - rot * before.normals.row(i).transpose()).norm(), 1e-14);
+  }
+  // The moved part stays a rigid copy: pairwise distances are preserved.
+  for (std::size_t k = 1; k < f.deformable.size(); k += 37) {
+    const Index a = f.deformable[k - 1], b = f.deformable[k];
+    EXPECT_NEAR((m.positions.row(a) - m.positions.row(b)).norm(),
+                (before.positions.row(a) - before.positions.row(b)).norm(), 1e-14);
+  }
+}
+
+TEST(Deformation, NormalsAndTangentsFollowTheFiniteDifferenceJacobian) {
+  for (bool rotate : {false, true}) {
+    SCOPED_TRACE(rotate ? "rotation + translation" : "translation only");
+    Model m = make_model();
+    const DeformationFields f = compute_fields(m.positions, m.regions);
+    const Model before = m;
+    DeformParams p;
+    p.translation = Vec3(0.25, 0.1, 0.15);
+    if (rotate) {
+      p.axis = Vec3(0.3, -1, 0.2);
+      p.angle = 0.6;
+    }
+    apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+    const Vec3 c = f1_centroid(before);
+    // F(x) with s from the brute-force lambda at x: the exact map the step samples.
+    auto map = [&](const Vec3& x) { return reference_map(x, blend_value(p.blend, brute_lambda(before, x)), p, c); };
+    int checked = 0, normal_ok = 0, tangent_ok = 0;
+    for (Eigen::Index i = 0; i < m.positions.rows(); i += 3) {
+      if (m.regions[static_cast<std::size_t>(i)] != Region::Blend) continue;
+      const Vec3 x = before.positions.row(i).transpose();
+      Index a0 = -1, a1 = -1;
+      brute_distance(before, x, Region::Zero, &a0);
+      brute_distance(before, x, Region::One, &a1);
+      const double h = 1e-6;
+      Mat3 jac;
+      bool same = true;
+      for (int d = 0; d < 3; ++d) {
+        for (double sg : {-1.0, 1.0}) {
+          Index b0 = -1, b1 = -1;
+          brute_distance(before, x + sg * h * Vec3::Unit(d), Region::Zero, &b0);
+          brute_distance(before, x + sg * h * Vec3::Unit(d), Region::One, &b1);
+          same = same && b0 == a0 && b1 == a1;
+        }
+        jac.col(d) = (map(x + h * Vec3::Unit(d)) - map(x - h * Vec3::Unit(d))) / (2 * h);
+      }
+      if (!same) continue;
+      ++checked;
+      const Vec3 n0 = before.normals.row(i).transpose();
+      // cofactor(J) n = det(J) J^-T n, oriented like R n.
+      Vec3 expect_n = (jac.determinant() * jac.inverse().transpose() * n0).normalized();
+      const Mat3 rot = Eigen::AngleAxisd(blend_value(p.blend, f.lambda[i]) * p.angle,
+                                         rotate ? p.axis.normalized() : Vec3::UnitZ())
+                           .toRotationMatrix();
+      if (expect_n.dot(rot * n0) < 0) expect_n = -expect_n;
+      normal_ok += (m.normals.row(i).transpose() - expect_n).norm() < 1e-6;
+      const Vec3 ju = jac * before.tu.row(i).transpose(), jv = jac * before.tv.row(i).transpose();
+      tangent_ok += (m.tu.row(i).transpose() - ju).norm() < 1e-7 && (m.tv.row(i).transpose() - jv).norm() < 1e-7;
+      // and the normal is the normalised cross product of the deformed tangents
+      const Vec3 cross = m.tu.row(i).transpose().cross(m.tv.row(i).transpose()).normalized();
+      EXPECT_LT((cross - m.normals.row(i).transpose()).norm(), 1e-12);
+    }
+    EXPECT_GT(checked, 100);
+    EXPECT_EQ(normal_ok, checked);
+    EXPECT_EQ(tangent_ok, checked);
+  }
+}
+
+TEST(Deformation, NormalsStayUnitOverManySteps) {
+  Model m = make_model();
+  const DeformationFields f = compute_fields(m.positions, m.regions);
+  DeformParams p;
+  p.translation = Vec3(0.01, 0.02, -0.01);
+  p.axis = Vec3(1, 0, 0);
+  p.angle = 0.05;
+  for (int step = 0; step < 50; ++step) apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+  for (Eigen::Index i = 0; i < m.normals.rows(); ++i) {
+    EXPECT_NEAR(m.normals.row(i).norm(), 1.0, 1e-14);
+    ASSERT_TRUE(m.positions.row(i).allFinite());
+  }
+}
+
+TEST(Deformation, ThreadsGiveIdenticalResults) {
+  Model a = make_model(0.02);
+  Model b = a;
+  const DeformationFields f = compute_fields(a.positions, a.regions);
+  DeformParams p;
+  p.translation = Vec3(0.1, 0.0, 0.1);
+  p.angle = 0.4;
+  p.axis = Vec3(0, 1, 0);
+  const DeformResult ra = apply_step(f, p, a.positions, a.normals, &a.tu, &a.tv, 1);
+  const DeformResult rb = apply_step(f, p, b.positions, b.normals, &b.tu, &b.tv, 2);
+  EXPECT_EQ(ra.moved, rb.moved);
+  EXPECT_TRUE(a.positions == b.positions);
+  EXPECT_TRUE(a.normals == b.normals);
+  EXPECT_TRUE(a.tu == b.tu);
+}
+
+TEST(Deformation, BadParamsThrowAndLeaveArraysUntouched) {
+  Model m = make_model(0.08);
+  const DeformationFields f = compute_fields(m.positions, m.regions);
+  const Model before = m;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto expect_rejected = [&](DeformParams p, const std::string& field, Points* tu, Points* tv, int threads) {
+    try {
+      apply_step(f, p, m.positions, m.normals, tu, tv, threads);
+      ADD_FAILURE() << "accepted bad " << field;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+      EXPECT_EQ(e.field(), field);
+    }
+    EXPECT_TRUE(m.positions == before.positions);
+    EXPECT_TRUE(m.normals == before.normals);
+    EXPECT_TRUE(m.tu == before.tu);
+    EXPECT_TRUE(m.tv == before.tv);
+  };
+  DeformParams p;
+  p.translation = Vec3(nan, 0, 0);
+  expect_rejected(p, "translation", &m.tu, &m.tv, 1);
+  p = {};
+  p.angle = std::numeric_limits<double>::infinity();
+  expect_rejected(p, "angle", &m.tu, &m.tv, 1);
+  p = {};
+  p.angle = 0.1;
+  p.axis = Vec3::Zero();
+  expect_rejected(p, "axis", &m.tu, &m.tv, 1);
+  p = {};
+  p.center = Vec3(0, nan, 0);
+  expect_rejected(p, "center", &m.tu, &m.tv, 1);
+  p = {};
+  p.blend = static_cast<Blend>(9);
+  expect_rejected(p, "blend", &m.tu, &m.tv, 1);
+  expect_rejected(DeformParams{}, "threads", &m.tu, &m.tv, -1);
+  Points short_tv = m.tv.topRows(4);
+  expect_rejected(DeformParams{}, "tangent_v", &m.tu, &short_tv, 1);
+  // A zero axis is fine when nothing rotates.
+  p = {};
+  p.axis = Vec3::Zero();
+  p.translation = Vec3(0, 0, 0.1);
+  EXPECT_NO_THROW(apply_step(f, p, m.positions, m.normals));
+  Points short_normals = m.normals.topRows(3);
+  EXPECT_THROW(apply_step(f, p, m.positions, short_normals), Error);
+  EXPECT_THROW(validate(DeformParams{Vec3::Zero(), Vec3(nan, 0, 0), 0.0, std::nullopt, Blend::Smooth}), Error);
+}
+
+// Runs three steps on the model placed by x -> scale * x + offset (translations scaled too) and
+// returns the largest deviation after mapping back, relative to the model's diagonal.
+struct Deviation {
+  double position = 0.0;  // max |p - p_ref| / diagonal
+  double normal = 0.0;    // max |n - n_ref|
+};
+
+Deviation run_similar(double scale, const Vec3& offset) {
+  const Model base = make_model(0.04);
+  Model ref = base, m = base;
+  m.positions = (base.positions * scale).rowwise() + offset.transpose();
+  const DeformationFields f_ref = compute_fields(ref.positions, ref.regions);
+  const DeformationFields f = compute_fields(m.positions, m.regions);
+  DeformParams p;
+  p.axis = Vec3(1, -2, 0.5);
+  p.angle = 0.35;
+  p.translation = Vec3(0.1, 0.2, -0.05);
+  DeformParams ps = p;
+  ps.translation = p.translation * scale;
+  for (int step = 0; step < 3; ++step) {
+    apply_step(f_ref, p, ref.positions, ref.normals);
+    apply_step(f, ps, m.positions, m.normals);
+  }
+  const double diag = (base.positions.colwise().maxCoeff() - base.positions.colwise().minCoeff()).norm();
+  Deviation d;
+  for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+    const Vec3 back = (m.positions.row(i).transpose() - offset) / scale;
+    d.position = std::max(d.position, (back - ref.positions.row(i).transpose()).norm() / diag);
+    d.normal = std::max(d.normal, (m.normals.row(i) - ref.normals.row(i)).norm());
+  }
+  return d;
+}
+
+TEST(Deformation, InvariantUnderTranslationAndScale) {
+  struct Case {
+    const char* name;
+    double scale;
+    Vec3 offset;
+  };
+  for (const Case& c : {Case{"translate 1e6", 1.0, Vec3(1e6, -1e6, 1e6)}, Case{"scale 1e-4", 1e-4, Vec3::Zero()},
+                        Case{"scale 1e4", 1e4, Vec3::Zero()}}) {
+    const Deviation d = run_similar(c.scale, c.offset);
+    std::cout << "[deformation] " << c.name << ": position deviation " << d.position
+              << " x diagonal, normal deviation " << d.normal << "\n";
+    ::testing::Test::RecordProperty(std::string("invariance_") + c.name, std::to_string(d.position));
+    EXPECT_LT(d.position, 1e-9) << c.name;
+    EXPECT_LT(d.normal, 1e-6) << c.name;
+  }
+}
+
+}  // namespace
+}  // namespace surfeledit
