@@ -1,0 +1,83 @@
+// surfeledit-server: serves surfel editing sessions over DDS until SIGINT/SIGTERM.
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdint>
+#include <exception>
+#include <string>
+#include <thread>
+
+#include "surfeledit/service/service.hpp"
+
+namespace {
+
+// Blocks SIGINT and SIGTERM in the calling thread (and every thread started after it), so
+// that only the dedicated signal thread receives them through sigwait.
+sigset_t block_stop_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  return set;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  surfeledit::service::ServiceConfig config;
+  std::string log_level = "info";
+
+  CLI::App app{"surfeledit-server: interactive editing of point-sampled surfaces over Cyclone DDS"};
+  app.set_config("--config", "", "Read options from an INI or TOML file (keys as the long option names)");
+  app.add_option("--domain", config.domain, "DDS domain id")->capture_default_str()->check(CLI::Range(0, 232));
+  app.add_option("--log-level", log_level, "Log level")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+  app.add_option("--max-chunk-surfels", config.max_chunk_surfels,
+                 "Surfels per LoadChunk, StatePage and Update sample")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 24));
+  app.add_option("--max-model-surfels", config.max_model_surfels, "Surfels per model")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(INT32_MAX)));
+  app.add_option("--threads", config.threads, "Worker threads per session for batch work (0: all cores)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  auto log = spdlog::stderr_color_mt("surfeledit");
+  log->set_level(spdlog::level::from_str(log_level));
+  log->flush_on(spdlog::level::info);
+
+  sigset_t stop_signals = block_stop_signals();
+  try {
+    surfeledit::service::Service service(config);
+    // Waits for SIGINT/SIGTERM and stops the service; woken by pthread_kill if run() fails.
+    std::thread signal_thread([&] {
+      int signal_number = 0;
+      if (sigwait(&stop_signals, &signal_number) == 0) {
+        log->info("signal {} received, stopping", signal_number);
+      }
+      service.stop();
+    });
+    log->info("surfeledit-server ready on domain {}", config.domain);
+    try {
+      service.run();
+    } catch (...) {
+      pthread_kill(signal_thread.native_handle(), SIGTERM);
+      signal_thread.join();
+      throw;
+    }
+    signal_thread.join();
+  } catch (const std::exception& e) {
+    log->critical("surfeledit-server failed: {}", e.what());
+    return 1;
+  }
+  log->info("surfeledit-server exited cleanly");
+  return 0;
+}
