@@ -24,6 +24,11 @@ constexpr const char* kUpdateTopic = "surfeledit_update";
 constexpr dds_attach_t kRequestsTag = 1;
 constexpr dds_attach_t kStopTag = 2;
 
+// Topic types matched by name only (see dds::without_type_info); static: topics refer to them.
+const dds_topic_descriptor_t kRequestType = dds::without_type_info(surfeledit_proto_Request_desc);
+const dds_topic_descriptor_t kReplyType = dds::without_type_info(surfeledit_proto_Reply_desc);
+const dds_topic_descriptor_t kUpdateType = dds::without_type_info(surfeledit_proto_Update_desc);
+
 // Requests taken per loan.
 constexpr std::size_t kTakeBatch = 16;
 
@@ -49,9 +54,9 @@ struct Service::Impl {
         handler(handler_config(c)),
         participant(dds::make_participant(static_cast<dds_domainid_t>(c.domain))),
         qos(dds::protocol_qos()),
-        request_topic(dds::make_topic(participant, &surfeledit_proto_Request_desc, kRequestTopic, qos)),
-        reply_topic(dds::make_topic(participant, &surfeledit_proto_Reply_desc, kReplyTopic, qos)),
-        update_topic(dds::make_topic(participant, &surfeledit_proto_Update_desc, kUpdateTopic, qos)),
+        request_topic(dds::make_topic(participant, &kRequestType, kRequestTopic, qos)),
+        reply_topic(dds::make_topic(participant, &kReplyType, kReplyTopic, qos)),
+        update_topic(dds::make_topic(participant, &kUpdateType, kUpdateTopic, qos)),
         request_reader(dds::make_reader(participant, request_topic, qos)),
         reply_writer(dds::make_writer(participant, reply_topic, qos)),
         update_writer(dds::make_writer(participant, update_topic, qos)),
