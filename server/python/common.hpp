@@ -2,6 +2,7 @@
 // core concept (one file each), and numpy conversion helpers.
 #pragma once
 
+#include <Eigen/Dense>
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
