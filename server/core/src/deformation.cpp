@@ -35,15 +35,49 @@ int resolve_threads(int threads, const char* field) {
 
 bool valid_blend(Blend b) { return b == Blend::Smooth || b == Blend::Quadratic || b == Blend::Linear; }
 
-// Rotation matrix about unit axis a by the angle whose cosine and sine are (c, s) (Rodrigues).
-Mat3 rotation(const Vec3& a, double c, double s) {
-  const double k = 1.0 - c;
-  Mat3 r;
-  r << c + k * a.x() * a.x(), k * a.x() * a.y() - s * a.z(), k * a.x() * a.z() + s * a.y(),
-      k * a.y() * a.x() + s * a.z(), c + k * a.y() * a.y(), k * a.y() * a.z() - s * a.x(),
-      k * a.z() * a.x() - s * a.y(), k * a.z() * a.y() + s * a.x(), c + k * a.z() * a.z();
-  return r;
+// Minimal scalar 3-vector and 3x3 matrix for the per-surfel loop of apply_step.
+struct V3 {
+  double x, y, z;
+  static V3 load(const double* p) { return {p[0], p[1], p[2]}; }
+  static V3 of(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+  void store(double* p) const {
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+  }
+};
+inline V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator*(double k, const V3& a) { return {k * a.x, k * a.y, k * a.z}; }
+inline double dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3 cross(const V3& a, const V3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
+struct R3 {
+  double m[9];  // row-major
+  static R3 of(const Mat3& r) {
+    R3 o;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) o.m[3 * i + j] = r(i, j);
+    return o;
+  }
+  // Rodrigues: R = cs I + sn [a]x + (1 - cs) a a^T, a unit.
+  static R3 rotation(const V3& a, double cs, double sn) {
+    const double k = 1.0 - cs;
+    const double kxy = k * a.x * a.y, kxz = k * a.x * a.z, kyz = k * a.y * a.z;
+    return {{cs + k * a.x * a.x, kxy - sn * a.z, kxz + sn * a.y,  //
+             kxy + sn * a.z, cs + k * a.y * a.y, kyz - sn * a.x,  //
+             kxz - sn * a.y, kyz + sn * a.x, cs + k * a.z * a.z}};
+  }
+  V3 operator*(const V3& v) const {
+    return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
+            m[6] * v.x + m[7] * v.y + m[8] * v.z};
+  }
+  V3 transposed_times(const V3& v) const {
+    return {m[0] * v.x + m[3] * v.y + m[6] * v.z, m[1] * v.x + m[4] * v.y + m[7] * v.z,
+            m[2] * v.x + m[5] * v.y + m[8] * v.z};
+  }
+};
 
 }  // namespace
 
@@ -206,13 +240,20 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   if (has_u) require_rows(tangent_u->rows(), "tangent_u");
   if (has_v) require_rows(tangent_v->rows(), "tangent_v");
 
-  // One pass over the deformable rows: check them, collect the moved ones (s > 0) and F1's centroid
-  // (shifted mean relative to the first F1 row, for precision far from the origin).
+  // One pass over the deformable rows: check the fields, collect the moved rows (s > 0) and, when
+  // no centre is given, F1's centroid (shifted mean relative to the first F1 row, for precision far
+  // from the origin). The model arrays themselves are not scanned for non-finite values here: the
+  // step is memory-bound and a second full read of positions/normals/gradients would double its
+  // cost; they were validated where they entered (compute_fields, the model), and a non-finite F1
+  // position still shows up as a non-finite centroid below.
   DeformResult result;
   result.moved.reserve(fields.deformable.size());
   Vec3 f1_ref = Vec3::Zero(), f1_sum = Vec3::Zero();
   std::size_t f1_count = 0;
   Index prev = -1;
+  const bool need_centroid = !params.center;
+  const double* Pc = positions.data();
+  const Blend blend = params.blend;
   for (const Index i : fields.deformable) {
     if (i <= prev || i >= n) {
       throw Error(ErrorCode::InvalidArgument, "fields.deformable",
@@ -221,22 +262,19 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
     prev = i;
     const Region region = fields.regions[static_cast<std::size_t>(i)];
     const double l = fields.lambda[i];
-    if (region == Region::Zero || !(l >= 0.0 && l <= 1.0) || !fields.grad_lambda.row(i).allFinite()) {
+    if (region == Region::Zero || !(l >= 0.0 && l <= 1.0)) {
       throw Error(ErrorCode::InvalidArgument, "fields",
-                  "row " + std::to_string(i) + " has an inconsistent region, lambda " + fmt(l) + " or gradient");
+                  "row " + std::to_string(i) + " is listed as deformable with region " +
+                      std::to_string(static_cast<int>(region)) + " and lambda " + fmt(l));
     }
-    if (!positions.row(i).allFinite() || !normals.row(i).allFinite() ||
-        (has_u && !tangent_u->row(i).allFinite()) || (has_v && !tangent_v->row(i).allFinite())) {
-      throw Error(ErrorCode::InvalidArgument, "positions",
-                  "row " + std::to_string(i) + " has a non-finite position, normal or tangent");
-    }
-    if (region == Region::One) {
-      const Vec3 p = positions.row(i).transpose();
+    if (need_centroid && region == Region::One) {
+      const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(i);
+      const Vec3 p(Pc[o], Pc[o + 1], Pc[o + 2]);
       if (f1_count == 0) f1_ref = p;
       f1_sum += p - f1_ref;
       ++f1_count;
     }
-    if (blend_value(params.blend, l) > 0.0) result.moved.push_back(i);
+    if (blend_value(blend, l) > 0.0) result.moved.push_back(i);
   }
   if (params.center) {
     result.center = *params.center;
@@ -245,6 +283,9 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
       throw Error(ErrorCode::InvalidArgument, "center", "no centre given and the one region F1 is empty");
     }
     result.center = f1_ref + f1_sum / static_cast<double>(f1_count);
+    if (!result.center.allFinite()) {
+      throw Error(ErrorCode::InvalidArgument, "positions", "F1 holds a non-finite position");
+    }
   }
 
   // ---- step constants ----
@@ -253,8 +294,6 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const double alpha = params.angle;
   const bool rotate = alpha != 0.0;
   const Vec3 a = rotate ? Vec3(params.axis.normalized()) : Vec3::UnitZ();
-  const Mat3 r_full = rotate ? rotation(a, std::cos(alpha), std::sin(alpha)) : Mat3::Identity();
-  const Blend blend = params.blend;
   const Index* moved = result.moved.data();
   const Eigen::Index n_moved = static_cast<Eigen::Index>(result.moved.size());
   double* P = positions.data();
@@ -267,79 +306,79 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   // w = R^T dF/ds = alpha (a x (p - c)) + R^T t (R commutes with rotations about a). Hence
   //   J x = R (x + w (g . x)),  cofactor(J) n = R ((1 + g . w) n - (w . n) g),
   // the latter being J u x J v for an orthonormal tangent frame (u, v) of n.
+  // One sin/cos pair per blend row; F1 rows (s = 1) share the step's rotation r1.
+  // Plain scalar 3-vectors (V3) here: Eigen's 2-wide packets on 3-vectors cost more shuffles than
+  // they save in this loop.
+  const V3 cv = V3::of(c), tv = V3::of(t), av = V3::of(a);
+  const double sin_full = std::sin(alpha), cos_full = std::cos(alpha);
+  const R3 r1 = R3::rotation(av, cos_full, sin_full);  // the full step's rotation
+  const V3 axt = cross(av, tv);                         // a x t
+  const double adt = dot(av, tv);                       // a . t
   auto step_row = [&](Index i) {
     const bool one = fields.regions[static_cast<std::size_t>(i)] == Region::One;
     const double l = fields.lambda[i];
     const double s = one ? 1.0 : blend_value(blend, l);
-    double* pp = P + 3 * static_cast<std::ptrdiff_t>(i);
-    double* np = N + 3 * static_cast<std::ptrdiff_t>(i);
-    const Vec3 p(pp[0], pp[1], pp[2]);
-    const Vec3 nrm(np[0], np[1], np[2]);
+    const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(i);
+    const V3 p = V3::load(P + o);
+    V3 g{0.0, 0.0, 0.0};
+    if (!one) g = blend_derivative(blend, l) * V3::load(G + o);
+    const bool flat = g.x == 0.0 && g.y == 0.0 && g.z == 0.0;  // J = R
     if (!rotate) {
       // Translation only: R = I, w = t.
-      const Vec3 q = p + s * t;
-      pp[0] = q.x(); pp[1] = q.y(); pp[2] = q.z();
-      if (one) return;  // g = 0: J = I, normals and tangents unchanged
-      const double ds = blend_derivative(blend, l);
-      const Vec3 g = ds * Vec3(G[3 * i], G[3 * i + 1], G[3 * i + 2]);
-      if (g.x() == 0.0 && g.y() == 0.0 && g.z() == 0.0) return;
-      Vec3 m = (1.0 + g.dot(t)) * nrm - t.dot(nrm) * g;
-      if (m.dot(nrm) < 0.0) m = -m;
-      const double len = m.norm();
-      if (len > 0.0) {
-        m /= len;
-        np[0] = m.x(); np[1] = m.y(); np[2] = m.z();
-      }
+      (p + s * tv).store(P + o);
+      if (flat) return;  // J = I: normals and tangents unchanged
+      const V3 nrm = V3::load(N + o);
+      const V3 m = (1.0 + dot(g, tv)) * nrm - dot(tv, nrm) * g;
+      const double len2 = dot(m, m);
+      if (len2 > 0.0) ((dot(m, nrm) < 0.0 ? -1.0 : 1.0) / std::sqrt(len2) * m).store(N + o);
       if (U) {
-        double* up = U + 3 * static_cast<std::ptrdiff_t>(i);
-        const Vec3 u(up[0], up[1], up[2]);
-        const Vec3 ju = u + t * g.dot(u);
-        up[0] = ju.x(); up[1] = ju.y(); up[2] = ju.z();
+        const V3 u = V3::load(U + o);
+        (u + dot(g, u) * tv).store(U + o);
       }
       if (V) {
-        double* vp = V + 3 * static_cast<std::ptrdiff_t>(i);
-        const Vec3 v(vp[0], vp[1], vp[2]);
-        const Vec3 jv = v + t * g.dot(v);
-        vp[0] = jv.x(); vp[1] = jv.y(); vp[2] = jv.z();
+        const V3 v = V3::load(V + o);
+        (v + dot(g, v) * tv).store(V + o);
       }
       return;
     }
-    const Vec3 rel = p - c;
-    Mat3 rot;
+    const V3 rel = p - cv;
+    const V3 nrm = V3::load(N + o);
     if (one) {
-      rot = r_full;
-    } else {
-      const double th = s * alpha;
-      rot = rotation(a, std::cos(th), std::sin(th));
+      // F1: the one rotation of the step, a rigid motion (lengths preserved, no renormalisation).
+      (r1 * rel + cv + tv).store(P + o);
+      (r1 * nrm).store(N + o);
+      if (U) (r1 * V3::load(U + o)).store(U + o);
+      if (V) (r1 * V3::load(V + o)).store(V + o);
+      return;
     }
-    const Vec3 q = rot * rel + c + s * t;
-    pp[0] = q.x(); pp[1] = q.y(); pp[2] = q.z();
-    Vec3 g = Vec3::Zero();
-    if (!one) g = blend_derivative(blend, l) * Vec3(G[3 * i], G[3 * i + 1], G[3 * i + 2]);
-    const bool flat = g.x() == 0.0 && g.y() == 0.0 && g.z() == 0.0;  // J = R
-    Vec3 w = Vec3::Zero();
-    Vec3 m = nrm;
-    if (!flat) {
-      w = alpha * a.cross(rel) + rot.transpose() * t;
-      m = (1.0 + g.dot(w)) * nrm - w.dot(nrm) * g;
-      if (m.dot(nrm) < 0.0) m = -m;
-      if (!(m.squaredNorm() > 0.0)) m = nrm;
+    const double th = s * alpha;
+    const double sn = std::sin(th), cs = std::cos(th);  // one sincos call (GCC fuses the pair)
+    const R3 rot = R3::rotation(av, cs, sn);
+    (rot * rel + cv + s * tv).store(P + o);
+    if (flat) {
+      const V3 rn = rot * nrm;
+      ((1.0 / std::sqrt(dot(rn, rn))) * rn).store(N + o);
+      if (U) (rot * V3::load(U + o)).store(U + o);
+      if (V) (rot * V3::load(V + o)).store(V + o);
+      return;
     }
-    Vec3 nn = rot * m;
-    const double len = nn.norm();
-    if (len > 0.0) nn /= len;
-    np[0] = nn.x(); np[1] = nn.y(); np[2] = nn.z();
+    // R^T t = cos t - sin (a x t) + (1 - cos)(a . t) a
+    const V3 w = alpha * cross(av, rel) + (cs * tv - sn * axt + ((1.0 - cs) * adt) * av);
+    V3 m = (1.0 + dot(g, w)) * nrm - dot(w, nrm) * g;
+    double len2 = dot(m, m);
+    if (!(len2 > 0.0)) {
+      m = nrm;
+      len2 = dot(m, m);
+    }
+    // |R m| = |m|: normalise with m's length; the sign makes the normal agree with R n.
+    ((dot(m, nrm) < 0.0 ? -1.0 : 1.0) / std::sqrt(len2) * (rot * m)).store(N + o);
     if (U) {
-      double* up = U + 3 * static_cast<std::ptrdiff_t>(i);
-      const Vec3 u(up[0], up[1], up[2]);
-      const Vec3 ju = rot * (flat ? u : Vec3(u + w * g.dot(u)));
-      up[0] = ju.x(); up[1] = ju.y(); up[2] = ju.z();
+      const V3 u = V3::load(U + o);
+      (rot * (u + dot(g, u) * w)).store(U + o);
     }
     if (V) {
-      double* vp = V + 3 * static_cast<std::ptrdiff_t>(i);
-      const Vec3 v(vp[0], vp[1], vp[2]);
-      const Vec3 jv = rot * (flat ? v : Vec3(v + w * g.dot(v)));
-      vp[0] = jv.x(); vp[1] = jv.y(); vp[2] = jv.z();
+      const V3 v = V3::load(V + o);
+      (rot * (v + dot(g, v) * w)).store(V + o);
     }
   };
 
