@@ -40,10 +40,10 @@ def unique_domain() -> int:
 
 def find_executable(env: str, *candidates: str) -> Optional[str]:
     value = os.environ.get(env)
-    if value:
-        return value if os.path.isfile(value) else None
+    if value and os.path.isfile(value):
+        return value
     for pattern in candidates:
-        hits = sorted(glob.glob(str(REPO / pattern)))
+        hits = sorted(glob.glob(str(REPO / pattern), recursive=True))
         for h in hits:
             if os.access(h, os.X_OK):
                 return h
@@ -51,7 +51,8 @@ def find_executable(env: str, *candidates: str) -> Optional[str]:
 
 
 def server_executable() -> str:
-    exe = find_executable("SURFELEDIT_SERVER", "build/server/app/surfeledit-server")
+    exe = find_executable("SURFELEDIT_SERVER", "build/server/app/surfeledit-server",
+                          "build*/server/app/surfeledit-server")
     if exe is None:
         pytest.skip("surfeledit-server not built (set SURFELEDIT_SERVER or build into build/server/app)")
     return exe

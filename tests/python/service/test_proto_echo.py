@@ -69,8 +69,8 @@ def test_random_values_are_not_defaults() -> None:
 
 @pytest.fixture
 def echo(tmp_path: Path) -> Iterator[ManagedProcess]:
-    exe = find_executable("SURFELEDIT_PROTO_ECHO", "build*/tests/surfeledit-proto-echo",
-                          "build*/proto/surfeledit-proto-echo", "build*/**/surfeledit-proto-echo")
+    exe = find_executable("SURFELEDIT_PROTO_ECHO", "build/tests/surfeledit-proto-echo",
+                          "build/server/app/surfeledit-proto-echo", "build*/**/surfeledit-proto-echo")
     if exe is None:
         pytest.skip("surfeledit-proto-echo not built (set SURFELEDIT_PROTO_ECHO)")
     domain = unique_domain()
