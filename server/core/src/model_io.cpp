@@ -6,12 +6,12 @@
 #include <pcl/io/obj_io.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
+#include <pcl/console/print.h>
 #include <pcl/point_types.h>
 
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <queue>
 #include <sstream>
 
@@ -218,63 +218,6 @@ SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   return a;
 }
 
-// PCL's OBJ reader mishandles some files (texture coordinates, face formats); this small
-// reader of "v" and "f" lines is used for .obj files: position-only, polygons as fans.
-pcl::PolygonMesh read_obj(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw io_error(path, "cannot open");
-  std::vector<double> xyz;
-  pcl::PolygonMesh mesh;
-  std::string line;
-  std::size_t line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    std::istringstream s(line);
-    std::string tag;
-    s >> tag;
-    if (tag == "v") {
-      double x, y, z;
-      if (!(s >> x >> y >> z)) throw io_error(path, "line " + std::to_string(line_no) + ": bad vertex");
-      xyz.insert(xyz.end(), {x, y, z});
-    } else if (tag == "f") {
-      pcl::Vertices poly;
-      std::string tok;
-      const long nv = static_cast<long>(xyz.size() / 3);
-      while (s >> tok) {
-        long i = 0;
-        try {
-          i = std::stol(tok.substr(0, tok.find('/')));
-        } catch (const std::exception&) {
-          throw io_error(path, "line " + std::to_string(line_no) + ": bad face index '" + tok + "'");
-        }
-        if (i < 0) i = nv + i + 1;  // relative index
-        if (i < 1 || i > nv)
-          throw io_error(path, "line " + std::to_string(line_no) + ": face index " + tok + " out of range");
-        poly.vertices.push_back(static_cast<pcl::index_t>(i - 1));
-      }
-      if (poly.vertices.size() < 3) throw io_error(path, "line " + std::to_string(line_no) + ": face with fewer than 3 vertices");
-      mesh.polygons.push_back(std::move(poly));
-    }
-  }
-  // Store vertices as float64 x, y, z in the mesh's cloud.
-  auto& c = mesh.cloud;
-  c.width = static_cast<std::uint32_t>(xyz.size() / 3);
-  c.height = 1;
-  c.point_step = 24;
-  c.row_step = c.point_step * c.width;
-  for (int k = 0; k < 3; ++k) {
-    pcl::PCLPointField f;
-    f.name = std::string(1, "xyz"[k]);
-    f.offset = 8 * k;
-    f.datatype = pcl::PCLPointField::FLOAT64;
-    f.count = 1;
-    c.fields.push_back(f);
-  }
-  c.data.resize(xyz.size() * sizeof(double));
-  std::memcpy(c.data.data(), xyz.data(), c.data.size());
-  return mesh;
-}
-
 }  // namespace
 
 SurfelArrays load_surfels(const std::string& path, LoadParams params) {
@@ -283,13 +226,13 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   if (fs::is_directory(path, ec)) throw io_error(path, "is a directory");
   const std::string ext = extension_of(path);
   SurfelArrays a;
+  // PCL reports problems on its console; we report them as exceptions instead.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   if (ext == ".obj") {
-    const pcl::PolygonMesh mesh = read_obj(path);
-    if (mesh.polygons.empty()) {
-      a = from_cloud(mesh.cloud, path, params);
-    } else {
-      a = from_mesh(mesh, path);
-    }
+    // Note: PCL's OBJ reader stores coordinates as float32.
+    pcl::PolygonMesh mesh;
+    if (pcl::io::loadOBJFile(path, mesh) < 0) throw io_error(path, "not a readable OBJ file");
+    a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
   } else if (ext == ".ply") {
     pcl::PolygonMesh mesh;
     pcl::PLYReader reader;
@@ -363,6 +306,7 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
       std::memcpy(p + o, &v, 4);
     }
   }
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   int rc = 0;
   if (ext == ".ply") {
     pcl::PLYWriter w;
