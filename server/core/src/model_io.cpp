@@ -241,6 +241,21 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   } else if (ext == ".pcd") {
     pcl::PCLPointCloud2 cloud;
     pcl::PCDReader reader;
+    // PCL 1.13's PCDReader::read crashes on files without a valid header: check it first.
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int pcd_version = 0, data_type = 0;
+    unsigned int data_offset = 0;
+    if (reader.readHeader(path, cloud, origin, orientation, pcd_version, data_type, data_offset) < 0 ||
+        cloud.fields.empty() || cloud.point_step == 0 || std::uint64_t(cloud.width) * cloud.height == 0) {
+      throw io_error(path, "not a readable PCD file (no valid header with fields and points)");
+    }
+    const std::uint64_t need = std::uint64_t(data_offset) + std::uint64_t(cloud.width) * cloud.height * cloud.point_step;
+    if (data_type == 1 && fs::file_size(path, ec) < need) {  // binary: the data must all be there
+      throw io_error(path, "truncated: the header announces " + std::to_string(need) + " bytes, the file has " +
+                               std::to_string(fs::file_size(path, ec)));
+    }
+    cloud = pcl::PCLPointCloud2();
     if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
   } else {

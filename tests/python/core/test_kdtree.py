@@ -1,0 +1,87 @@
+"""surfeledit.core.KdTree against scipy's cKDTree (an independent implementation)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from surfeledit import core
+from surfeledit.errors import InvalidArgumentError
+
+
+def _clouds():
+    rng = np.random.default_rng(7)
+    line = np.zeros((200, 3))
+    line[:, 0] = rng.random(200)
+    plane = np.c_[rng.random((300, 2)), np.zeros(300)]
+    dup = np.repeat(rng.random((30, 3)), 5, axis=0)
+    return {
+        "random": rng.random((5000, 3)),
+        "collinear": line,
+        "coplanar": plane,
+        "duplicates": dup,
+        "single": np.array([[0.3, -2.0, 5.0]]),
+        "far_from_origin": rng.random((2000, 3)) * 1e-3 + 1e6,
+    }
+
+
+@pytest.mark.parametrize("name", list(_clouds()))
+@pytest.mark.parametrize("leaf_size", [1, 10, 50])
+def test_knn_matches_scipy(name: str, leaf_size: int) -> None:
+    pts = _clouds()[name]
+    rng = np.random.default_rng(1)
+    lo, hi = pts.min(0), pts.max(0)
+    queries = lo + (hi - lo + 1e-9) * rng.random((300, 3))
+    k = min(8, len(pts))
+    idx, dist2 = core.KdTree(pts, leaf_size=leaf_size).knn(queries, k)
+    ref_d, _ = cKDTree(pts).query(queries, k)
+    ref_d = np.asarray(ref_d).reshape(len(queries), k)
+    # Ties may pick different points: compare distances, and that indices give those distances.
+    scale = max(1.0, float(np.abs(pts).max()))
+    np.testing.assert_allclose(np.sqrt(dist2), ref_d, rtol=1e-9, atol=1e-12 * scale)
+    recomputed = np.linalg.norm(pts[idx] - queries[:, None, :], axis=2)
+    np.testing.assert_allclose(recomputed, np.sqrt(dist2), rtol=1e-9, atol=1e-12 * scale)
+
+
+def test_knn_pads_when_k_exceeds_points() -> None:
+    pts = np.random.default_rng(2).random((3, 3))
+    idx, dist2 = core.KdTree(pts).knn(np.zeros((2, 3)), 5)
+    assert idx.shape == (2, 5)
+    assert (idx[:, 3:] == -1).all() and np.isinf(dist2[:, 3:]).all()
+    assert sorted(idx[0, :3]) == [0, 1, 2]
+
+
+@pytest.mark.parametrize("name", ["random", "duplicates", "coplanar"])
+def test_radius_matches_scipy(name: str) -> None:
+    pts = _clouds()[name]
+    queries = np.random.default_rng(3).random((200, 3))
+    r = 0.08
+    idx, dist2 = core.KdTree(pts).radius(queries, r)
+    ref = cKDTree(pts).query_ball_point(queries, r)
+    assert len(idx) == len(queries)
+    for mine, d2, theirs, q in zip(idx, dist2, ref, queries):
+        assert sorted(mine.tolist()) == sorted(theirs)
+        assert np.all(np.diff(d2) >= 0)  # ascending by distance
+        np.testing.assert_allclose(d2, ((pts[mine] - q) ** 2).sum(1), rtol=1e-12)
+
+
+def test_empty_query_set() -> None:
+    tree = core.KdTree(np.random.default_rng(4).random((10, 3)))
+    idx, dist2 = tree.knn(np.zeros((0, 3)), 3)
+    assert idx.shape == (0, 3) and dist2.shape == (0, 3)
+    ridx, rd2 = tree.radius(np.zeros((0, 3)), 0.1)
+    assert ridx == [] and rd2 == []
+
+
+def test_bad_input_is_typed() -> None:
+    with pytest.raises(InvalidArgumentError) as e:
+        core.KdTree(np.zeros((4, 2)))
+    assert e.value.field == "points"
+    with pytest.raises(InvalidArgumentError):
+        core.KdTree(np.array([[0.0, np.nan, 0.0]]))
+    with pytest.raises(InvalidArgumentError) as e:
+        core.KdTree(np.zeros((4, 3)), leaf_size=0)
+    assert e.value.field == "leaf_size"
+    with pytest.raises(InvalidArgumentError):
+        core.KdTree(np.zeros((4, 3))).knn(np.zeros((1, 3)), 0)
