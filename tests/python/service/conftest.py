@@ -18,8 +18,12 @@ from typing import Callable, Iterator, List, Optional, Tuple
 
 import numpy as np
 import pytest
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.topic import Topic
 
 import surfeledit
+from surfeledit._protocol import TOPIC_REQUEST, proto, request_qos
 from surfeledit.demo import fallback_scene
 
 REPO = Path(__file__).resolve().parents[3]
@@ -36,6 +40,32 @@ def unique_domain() -> int:
     7 is coprime with 230, so consecutive calls never repeat within a run.
     """
     return 1 + (os.getpid() * 31 + 7 * next(_counter)) % 230
+
+
+def domain_in_use(domain: int, wait: float = 0.3) -> bool:
+    """True if something on ``domain`` already serves the surfeledit or echo topics (a stray server
+    would answer our requests too, so tests must not share its domain)."""
+    dp = DomainParticipant(domain)
+    try:
+        endpoints = [DataWriter(dp, Topic(dp, TOPIC_REQUEST, proto.Request), qos=request_qos()),
+                     DataWriter(dp, Topic(dp, "echo_in_Request", proto.Request), qos=request_qos())]
+        deadline = time.monotonic() + wait
+        while time.monotonic() < deadline:
+            if any(w.get_publication_matched_status().current_count for w in endpoints):
+                return True
+            time.sleep(0.005)
+        return False
+    finally:
+        dp.__del__()  # deletes the participant and its children now
+
+
+def free_domain() -> int:
+    """A unique domain (see unique_domain) on which nothing answers yet."""
+    for _ in range(20):
+        d = unique_domain()
+        if not domain_in_use(d):
+            return d
+    raise RuntimeError("no free DDS domain found in 20 tries")
 
 
 def find_executable(env: str, *candidates: str) -> Optional[str]:
@@ -99,7 +129,7 @@ class ServerProcess(ManagedProcess):
 def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ServerProcess]:
     """A running surfeledit-server on a fresh domain; killed at teardown whatever happens."""
     exe = server_executable()
-    domain = unique_domain()
+    domain = free_domain()
     srv = ServerProcess(exe, domain, tmp_path / f"server-{domain}.log")
     request.addfinalizer(srv.stop)
     yield srv

@@ -21,7 +21,7 @@ from cyclonedds.topic import Topic
 
 from surfeledit._protocol import proto, request_qos
 
-from .conftest import ManagedProcess, find_executable, unique_domain
+from .conftest import ManagedProcess, find_executable, free_domain
 
 TOP_LEVEL = ["Request", "Reply", "Update"]
 
@@ -73,7 +73,7 @@ def echo(tmp_path: Path) -> Iterator[ManagedProcess]:
                           "build/server/app/surfeledit-proto-echo", "build*/**/surfeledit-proto-echo")
     if exe is None:
         pytest.skip("surfeledit-proto-echo not built (set SURFELEDIT_PROTO_ECHO)")
-    domain = unique_domain()
+    domain = free_domain()
     proc = ManagedProcess([exe, "--domain", str(domain)], tmp_path / "echo.log")
     proc.domain = domain  # type: ignore[attr-defined]
     try:
