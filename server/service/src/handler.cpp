@@ -193,7 +193,11 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
       SessionEntry& entry = sessions_.attached(session, client);
       Upload* upload = uploads_.find(client, session);
       if (!upload) throw Error(ErrorCode::Conflict, "op", "no upload in progress: send OP_LOAD_BEGIN first");
-      if (!upload->complete()) upload->take();  // throws Conflict naming the count
+      if (!upload->complete()) {
+        throw Error(ErrorCode::Conflict, "load_begin.total",
+                    "upload incomplete: received " + std::to_string(upload->received()) + " of " +
+                        std::to_string(upload->total()) + " surfels");
+      }
       prefixed("load_chunk", [&] { validate_arrays(upload->arrays()); });
       SurfelArrays arrays = upload->take();
       uploads_.erase(client, session);
