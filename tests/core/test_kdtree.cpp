@@ -321,6 +321,16 @@ TEST(KdTree, RejectsBadInput) {
   EXPECT_THROW(ok.radius(Vec3::Zero(), -1.0, idx, d2), Error);
   EXPECT_THROW(ok.knn(Vec3::Zero(), -1, idx, d2), Error);
   EXPECT_THROW(ok.nearest(Vec3(std::nan(""), 0, 0)), Error);
+  try {
+    ok.knn(Points::Zero(1000, 3), 1 << 20);  // 2^30 padded entries
+    FAIL() << "huge k accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::TooLarge);
+  }
+  Points bad_q = Points::Zero(3, 3);
+  bad_q(1, 1) = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(ok.knn(bad_q, 2), Error);
+  EXPECT_THROW(ok.radius(bad_q, 0.1), Error);
 }
 
 TEST(KdTree, MoveAndMemory) {

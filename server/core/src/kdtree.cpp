@@ -216,6 +216,11 @@ KnnResult KdTree::knn(const Points& queries, int k) const {
   check_k(k);
   require_finite(queries, "queries");
   const Eigen::Index nq = queries.rows();
+  // The padded #Q by k result is allocated in full; refuse sizes beyond 2^28 entries (~3 GB).
+  if (static_cast<double>(nq) * static_cast<double>(k) > static_cast<double>(1 << 28)) {
+    throw Error(ErrorCode::TooLarge, "k",
+                std::to_string(nq) + " queries x k = " + std::to_string(k) + " exceeds 2^28 result entries");
+  }
   KnnResult result;
   result.indices.setConstant(nq, k, -1);
   result.dist2.setConstant(nq, k, std::numeric_limits<double>::infinity());
