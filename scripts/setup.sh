@@ -14,7 +14,7 @@ log() { printf '[setup] %s\n' "$*"; }
 # 1. Debian packages.
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev
   libeigen3-dev libpcl-dev libnanoflann-dev cyclonedds-dev cyclonedds-tools
-  libgtest-dev libspdlog-dev libcli11-dev)
+  libgtest-dev libspdlog-dev libcli11-dev libbenchmark-dev)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -43,12 +43,12 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   echo "$want" >"$stamp"
 fi
 
-# 3. Build: core library, server, pybind11 module (into client_py/surfeledit), C++ tests.
+# 3. Build: core library, server, pybind11 module (into client_py/surfeledit), C++ tests, benchmarks.
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then
   log "configuring $BUILD"
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE="$VENV/bin/python" \
     -Dpybind11_DIR="$("$VENV/bin/python" -m pybind11 --cmakedir)" \
-    -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON >"$BUILD.configure.log" 2>&1 \
+    -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON -DSURFELEDIT_BUILD_BENCH=ON >"$BUILD.configure.log" 2>&1 \
     || { tail -n 40 "$BUILD.configure.log"; exit 1; }
 fi
 log "building ($JOBS jobs)"

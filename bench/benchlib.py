@@ -1,0 +1,73 @@
+"""Helpers shared by the Python benchmark drivers in bench/ (machine info, load, tables, paths).
+
+Not a benchmark itself; the drivers put bench/ on sys.path and import it.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+from typing import List, Optional, Sequence
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def load_average() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f}, {five:.2f}, {fifteen:.2f}"
+
+
+def machine_line() -> str:
+    """CPU model, logical cores and load average (1, 5, 15 min) right now."""
+    return f"machine: {cpu_model()}, {os.cpu_count()} logical cores, load average {load_average()}"
+
+
+def wait_for_low_load(max_load: float, timeout_s: float) -> None:
+    """Waits (up to timeout_s) until the 1-minute load average is below max_load; prints what it did."""
+    if max_load <= 0:
+        return
+    deadline = time.monotonic() + timeout_s
+    while os.getloadavg()[0] >= max_load and time.monotonic() < deadline:
+        time.sleep(5)
+    print(f"load before start: {load_average()} (waited for 1-min load < {max_load} up to {timeout_s:.0f} s)")
+
+
+def build_dir(explicit: Optional[str]) -> Path:
+    """--build-dir, else env SURFELEDIT_BUILD_DIR, else <repo>/build."""
+    return Path(explicit or os.environ.get("SURFELEDIT_BUILD_DIR") or REPO / "build").resolve()
+
+
+def percentile(values: Sequence[float], q: float) -> float:
+    """q in [0, 1], linear interpolation between closest ranks."""
+    s = sorted(values)
+    pos = q * (len(s) - 1)
+    lo = int(pos)
+    hi = min(lo + 1, len(s) - 1)
+    return s[lo] + (pos - lo) * (s[hi] - s[lo])
+
+
+def median(values: Sequence[float]) -> float:
+    return statistics.median(values)
+
+
+def table(header: Sequence[str], rows: List[Sequence[object]]) -> str:
+    """A Markdown table (also readable on a terminal)."""
+    cells = [[str(c) for c in header]] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
+    fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"  # noqa: E731
+    lines = [fmt(cells[0]), "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+    lines += [fmt(r) for r in cells[1:]]
+    return "\n".join(lines)
