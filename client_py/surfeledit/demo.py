@@ -85,6 +85,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                       f"{r.round_trip_ms:>9.2f}")
             final = session.positions()
             print(f"sphere lowest z: {final[part == 1, 2].min():.3f}")
+            held = session.info()
+            parts = ", ".join(f"{s.name} {s.bytes / 1024:.0f} KiB" for s in held.structures)
+            print(f"session holds {held.surfels} surfels, {held.bytes_per_surfel:.1f} bytes/surfel ({parts})")
     return 0
 
 
