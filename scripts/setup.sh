@@ -44,15 +44,16 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
 fi
 
 # 3. Build: core library, server, pybind11 module (into client_py/surfeledit), C++ tests, benchmarks.
+mkdir -p "$BUILD"
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then
   log "configuring $BUILD"
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE="$VENV/bin/python" \
     -Dpybind11_DIR="$("$VENV/bin/python" -m pybind11 --cmakedir)" \
-    -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON -DSURFELEDIT_BUILD_BENCH=ON >"$BUILD.configure.log" 2>&1 \
-    || { tail -n 40 "$BUILD.configure.log"; exit 1; }
+    -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON -DSURFELEDIT_BUILD_BENCH=ON >"$BUILD/setup-configure.log" 2>&1 \
+    || { tail -n 40 "$BUILD/setup-configure.log"; exit 1; }
 fi
 log "building ($JOBS jobs)"
-cmake --build "$BUILD" -j "$JOBS" >"$BUILD.build.log" 2>&1 || { grep -E "error|Error" "$BUILD.build.log" | head -n 40; exit 1; }
+cmake --build "$BUILD" -j "$JOBS" >"$BUILD/setup-build.log" 2>&1 || { grep -E "error|Error" "$BUILD/setup-build.log" | head -n 40; exit 1; }
 
 # The client finds the server on PATH inside the venv.
 ln -sf "$BUILD/server/app/surfeledit-server" "$VENV/bin/surfeledit-server"
