@@ -3,7 +3,7 @@
 // (zero region F0, ~400k surfels). Fields (lambda, grad lambda) are computed once, outside timing.
 //
 // Run (the binary is built with -DSURFELEDIT_BUILD_BENCH=ON):
-//   build/bench/surfeledit_bench_deformation [--repetitions=N] [--deformable=60000] \
+//   build/bench/surfeledit_bench_deformation [--repetitions=N] [--deformable=60000]
 //       [--benchmark_out=out.json --benchmark_out_format=json]
 // Each repetition times exactly one step (Iterations(1)), so the aggregates over N repetitions
 // (default 500) are the distribution of single steps: mean, median, p99, max, in microseconds.

@@ -3,8 +3,8 @@
 //
 // Normally run through bench/core/bench_kdtree.py, which writes the inputs and runs scipy and the
 // Python binding beside this binary. By hand:
-//   build/bench/surfeledit_bench_kdtree --points=P.f64 --queries=Q.f64 \
-//       [--leaf-sweep=1,2,4,6,8,10,12,16,20,30,40,50] [--repetitions=5] \
+//   build/bench/surfeledit_bench_kdtree --points=P.f64 --queries=Q.f64
+//       [--leaf-sweep=1,2,4,6,8,10,12,16,20,30,40,50] [--repetitions=5]
 //       [--benchmark_out=out.json --benchmark_out_format=json]
 // P.f64 / Q.f64: raw little-endian float64, x y z per point (file size = 24 bytes * count).
 //

@@ -1,0 +1,209 @@
+#!/usr/bin/env python3
+"""DDS round trip of one deformation step vs a bare DDS ping of the same payload, in one run.
+
+Run (after scripts/setup.sh; needs build/server/app/surfeledit-server and build/tests/surfeledit-proto-echo):
+    .venv/bin/python bench/service/bench_step_rtt.py [--build-dir build] [--steps 200] [--warmup 20]
+                                                     [--domain D] [--max-load 1.0] [--json-out r.json]
+
+What is timed (all in milliseconds, client side, time.perf_counter):
+  step  Session.deform(...) against a real surfeledit-server spawned on a private DDS domain: the
+        client writes a Request (OP_DEFORM) and waits for the matching Reply (StepResult.round_trip_ms).
+        The server's own timings (reply `total`, `apply`) are reported beside it.
+  ping  surfeledit-proto-echo on the same domain: the same deform Request sample (same type, same
+        size) written to echo_in_Request and timed until it comes back on echo_out_Request.
+Both go through the same Python cyclonedds stack and QoS (reliable, keep-all, volatile), so their
+ratio is the server's overhead. Scenes (fixed seeds): "small" = make_default_scene() at spacing 0.05
+(~9.9k surfels), "60k" = slab (F0) + sphere of ~60k deformable surfels (as bench_deformation.cpp).
+Steps are sent back to back (the next request as soon as the reply arrives). The server writes the
+Reply BEFORE it publishes the step's Update samples (server/service/src/service.cpp), but on the same
+thread, so publishing the Update of step i delays the serving of step i+1 if it arrives meanwhile.
+Per scene: ping block, then step block, then a second ping block (pings = both blocks).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet  # noqa: E402
+from cyclonedds.domain import DomainParticipant  # noqa: E402
+from cyclonedds.pub import DataWriter  # noqa: E402
+from cyclonedds.sub import DataReader  # noqa: E402
+from cyclonedds.topic import Topic  # noqa: E402
+
+import surfeledit  # noqa: E402
+from surfeledit import core  # noqa: E402
+from surfeledit._protocol import proto, request_qos  # noqa: E402
+
+
+def small_scene() -> Dict[str, np.ndarray]:
+    s = core.make_default_scene().sample(spacing=0.05, seed=1)
+    pos, nrm, part = np.asarray(s.positions), np.asarray(s.normals), np.asarray(s.part)
+    sphere = part == 1
+    return {"positions": pos, "normals": nrm, "zero": np.flatnonzero(part == 0),
+            "one": np.flatnonzero(sphere & (pos[:, 2] > 1.25)), "deformable": int(sphere.sum())}
+
+
+def scene_60k(deformable: int = 60_000) -> Dict[str, np.ndarray]:
+    """Slab 3 x 3 x 0.3 (F0) + sphere r 0.5 at z = 1 with ~`deformable` samples (F1: z > 1.25)."""
+    sphere = core.make_sphere(0.5, center=(0.0, 0.0, 1.0))
+    slab = core.make_box((1.5, 1.5, 0.15))
+    spacing = (sphere.area / deformable) ** 0.5
+    spacing *= (len(sphere.sample(spacing=spacing, seed=7)) / deformable) ** 0.5
+    sp, sb = sphere.sample(spacing=spacing, seed=7), slab.sample(spacing=spacing, seed=7)
+    pos = np.vstack([sb.positions, sp.positions])
+    nrm = np.vstack([sb.normals, sp.normals])
+    nb = len(sb)
+    return {"positions": pos, "normals": nrm, "zero": np.arange(nb),
+            "one": nb + np.flatnonzero(np.asarray(sp.positions)[:, 2] > 1.25), "deformable": len(sp)}
+
+
+def deform_args(i: int) -> dict:
+    sign = 1.0 if i % 2 == 0 else -1.0  # oscillate in place
+    return {"translation": (0.0, 0.01 * sign, 0.005 * sign), "axis": (1.0, 0.0, 0.0), "angle": 0.05 * sign}
+
+
+class Echo:
+    """surfeledit-proto-echo on `domain` plus a writer/reader pair on echo_in/out_Request."""
+
+    def __init__(self, exe: Path, domain: int) -> None:
+        self.proc = subprocess.Popen([str(exe), "--domain", str(domain)], stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, text=True)
+        line = self.proc.stdout.readline()
+        if "ready" not in line:
+            raise RuntimeError(f"surfeledit-proto-echo did not start: {line!r}")
+        self.dp = DomainParticipant(domain)
+        self.writer = DataWriter(self.dp, Topic(self.dp, "echo_in_Request", proto.Request), qos=request_qos())
+        self.reader = DataReader(self.dp, Topic(self.dp, "echo_out_Request", proto.Request), qos=request_qos())
+        self.cond = ReadCondition(self.reader, SampleState.NotRead | ViewState.Any | InstanceState.Any)
+        self.ws = WaitSet(self.dp)
+        self.ws.attach(self.cond)
+        deadline = time.monotonic() + 20
+        while (self.writer.get_publication_matched_status().current_count == 0
+               or self.reader.get_subscription_matched_status().current_count == 0):
+            if time.monotonic() > deadline:
+                raise RuntimeError("echo endpoints never matched")
+            time.sleep(0.01)
+        time.sleep(0.3)  # let the echo's writer discover our reader too (volatile)
+
+    def ping(self, sample: "proto.Request") -> float:
+        """ms from write to the echoed sample being taken."""
+        t0 = time.perf_counter()
+        self.writer.write(sample)
+        while True:
+            got = [s for s in self.reader.take(N=16, condition=self.cond) if isinstance(s, proto.Request)]
+            if any(s.request_id == sample.request_id for s in got):
+                return (time.perf_counter() - t0) * 1e3
+            if time.perf_counter() - t0 > 10:
+                raise TimeoutError("echo did not come back within 10 s")
+            self.ws.wait(1_000_000_000)
+
+    def close(self) -> None:
+        self.proc.terminate()
+        self.proc.wait(timeout=10)
+
+
+def stats(values: List[float]) -> Dict[str, float]:
+    return {"n": len(values), "p50": benchlib.median(values), "p99": benchlib.percentile(values, 0.99),
+            "max": max(values)}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build-dir")
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--warmup", type=int, default=20)
+    ap.add_argument("--domain", type=int, default=150 + os.getpid() % 80)
+    ap.add_argument("--max-load", type=float, default=0.0)
+    ap.add_argument("--json-out")
+    args = ap.parse_args()
+
+    build = benchlib.build_dir(args.build_dir)
+    server = build / "server" / "app" / "surfeledit-server"
+    echo_exe = next((p for p in [build / "tests" / "surfeledit-proto-echo", build / "server" / "app" /
+                                 "surfeledit-proto-echo"] if p.is_file()), None)
+    if not server.is_file() or echo_exe is None:
+        print(f"missing {server} or surfeledit-proto-echo under {build}: build first")
+        return 2
+    os.environ["SURFELEDIT_SERVER"] = str(server)
+    benchlib.wait_for_low_load(args.max_load, 600)
+    print(benchlib.machine_line())
+    print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}")
+
+    echo = Echo(echo_exe, args.domain)
+    client = surfeledit.connect(domain=args.domain, spawn=True, timeout=30.0)
+    results = {}
+    rows = []
+    try:
+        for name, make in [("small", small_scene), ("60k", scene_60k)]:
+            sc = make()
+            sess = client.open_session(f"bench-{name}")
+            t0 = time.perf_counter()
+            sess.load_points(sc["positions"], sc["normals"])
+            sess.set_regions(zero=sc["zero"], one=sc["one"])
+            print(f"scene {name}: {len(sc['positions']):,} surfels, {sc['deformable']:,} deformable, "
+                  f"{len(sc['one']):,} in F1; upload + regions {time.perf_counter() - t0:.1f} s", flush=True)
+            # The ping payload: a deform Request exactly as Session.deform builds it.
+            a = deform_args(0)
+            dreq = proto.Deform(translation=proto.Vec3(*a["translation"]), axis=proto.Vec3(*a["axis"]),
+                                angle=a["angle"], has_center=False, center=proto.Vec3(), blend="smooth")
+
+            def ping_block() -> List[float]:
+                out = []
+                for i in range(args.warmup + args.steps):
+                    ms = echo.ping(client.new_request(proto.Op.OP_DEFORM, sess.name, deform=dreq))
+                    if i >= args.warmup:
+                        out.append(ms)
+                return out
+
+            pings = ping_block()
+            rtt, total, apply_ms = [], [], []
+            for i in range(args.warmup + args.steps):
+                r = sess.deform(**deform_args(i))
+                if i >= args.warmup:
+                    rtt.append(r.round_trip_ms)
+                    total.append(r.timings.get("total", float("nan")))
+                    apply_ms.append(r.timings.get("apply", float("nan")))
+            pings += ping_block()
+            sess.close()
+            res = {"surfels": len(sc["positions"]), "deformable": sc["deformable"], "ping": stats(pings),
+                   "step": stats(rtt), "server_total": stats(total), "server_apply": stats(apply_ms)}
+            res["ratio_p50"] = res["step"]["p50"] / res["ping"]["p50"]
+            res["ratio_p99"] = res["step"]["p99"] / res["ping"]["p99"]
+            results[name] = res
+            for label, key in [("bare ping (echo)", "ping"), ("step round trip", "step"),
+                               ("  server total", "server_total"), ("  server apply", "server_apply")]:
+                s = res[key]
+                rows.append([name, f"{res['surfels']:,} / {res['deformable']:,}", label, s["n"], f"{s['p50']:.3f}",
+                             f"{s['p99']:.3f}", f"{s['max']:.3f}"])
+            rows.append([name, "", "step / ping", "", f"{res['ratio_p50']:.2f}x", f"{res['ratio_p99']:.2f}x", ""])
+    finally:
+        client.close()
+        echo.close()
+
+    print()
+    print(benchlib.table(["scene", "surfels / deformable", "what", "n", "p50 ms", "p99 ms", "max ms"], rows))
+    for name, res in results.items():
+        ok = res["ratio_p50"] <= 2.0
+        print(f"target step <= 2x bare ping ({name}): {'MET' if ok else 'MISSED'} at p50 ({res['ratio_p50']:.2f}x), "
+              f"p99 {res['ratio_p99']:.2f}x")
+    print("reply vs update: the server writes the Reply first, then publishes the Update (same thread)")
+    print(benchlib.machine_line())
+    if args.json_out:
+        Path(args.json_out).write_text(json.dumps(results, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
