@@ -107,8 +107,11 @@ def run_cpp(exe: Path, points: np.ndarray, queries: np.ndarray, reps: int, tmp: 
     print("running:", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     res: Dict[str, Dict[str, float]] = {}
-    for b in json.loads(j.read_text())["benchmarks"]:
-        if b.get("aggregate_name") != "median":
+    runs = json.loads(j.read_text())["benchmarks"]
+    # Median aggregates when repeated; a single repetition reports just the run itself.
+    want = "aggregate" if any(b.get("run_type") == "aggregate" for b in runs) else "iteration"
+    for b in runs:
+        if b.get("run_type") != want or (want == "aggregate" and b.get("aggregate_name") != "median"):
             continue
         assert b["time_unit"] == "ms"
         res[b["run_name"]] = {"ms": b["real_time"], "qps": b.get("items_per_second", float("nan"))}

@@ -3,10 +3,12 @@
 
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server and build/tests/surfeledit-proto-echo):
     .venv/bin/python bench/service/bench_step_rtt.py [--build-dir build] [--steps 200] [--warmup 20]
-                                                     [--domain D] [--max-load 1.0] [--json-out r.json]
+                                                     [--domain D] [--server-threads 1,0] [--max-load 1.0]
+                                                     [--json-out r.json]
 
 What is timed (all in milliseconds, client side, time.perf_counter):
-  step  Session.deform(...) against a real surfeledit-server spawned on a private DDS domain: the
+  step  Session.deform(...) against a real surfeledit-server started by this script on a private DDS
+        domain with `--threads T` for each T of --server-threads (0 = the server's default, all cores): the
         client writes a Request (OP_DEFORM) and waits for the matching Reply (StepResult.round_trip_ms).
         The server's own timings (reply `total`, `apply`) are reported beside it.
   ping  surfeledit-proto-echo on the same domain: the same deform Request sample (same type, same
@@ -114,9 +116,70 @@ class Echo:
         self.proc.wait(timeout=10)
 
 
+def connect_when_up(domain: int, srv: subprocess.Popen, log: Path, timeout_s: float = 60.0) -> "surfeledit.Client":
+    """connect(spawn=False) retried until the server we started answers."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        if srv.poll() is not None:
+            raise RuntimeError(f"surfeledit-server exited ({srv.returncode}):\n{log.read_text()[-2000:]}")
+        try:
+            return surfeledit.connect(domain=domain, spawn=False, timeout=10.0)
+        except surfeledit.ServerStartError:
+            if time.monotonic() > deadline:
+                raise
+
+
 def stats(values: List[float]) -> Dict[str, float]:
     return {"n": len(values), "p50": benchlib.median(values), "p99": benchlib.percentile(values, 0.99),
             "max": max(values)}
+
+
+def run_scenes(client: "surfeledit.Client", echo: Echo, args: argparse.Namespace, threads: int,
+               results: Dict[str, dict], rows: List[list]) -> None:
+    for name, make in [("small", small_scene), ("60k", scene_60k)]:
+        sc = make()
+        sess = client.open_session(f"bench-{name}")
+        t0 = time.perf_counter()
+        sess.load_points(sc["positions"], sc["normals"])
+        sess.set_regions(zero=sc["zero"], one=sc["one"])
+        print(f"server --threads {threads}, scene {name}: {len(sc['positions']):,} surfels, {sc['deformable']:,} "
+              f"deformable, {len(sc['one']):,} in F1; upload + regions {time.perf_counter() - t0:.1f} s", flush=True)
+        # The ping payload: a deform Request exactly as Session.deform builds it.
+        a = deform_args(0)
+        dreq = proto.Deform(translation=proto.Vec3(*a["translation"]), axis=proto.Vec3(*a["axis"]),
+                            angle=a["angle"], has_center=False, center=proto.Vec3(), blend="smooth")
+
+        def ping_block() -> List[float]:
+            out = []
+            for i in range(args.warmup + args.steps):
+                ms = echo.ping(client.new_request(proto.Op.OP_DEFORM, sess.name, deform=dreq))
+                if i >= args.warmup:
+                    out.append(ms)
+            return out
+
+        pings = ping_block()
+        rtt, total, apply_ms = [], [], []
+        for i in range(args.warmup + args.steps):
+            r = sess.deform(**deform_args(i))
+            if i >= args.warmup:
+                rtt.append(r.round_trip_ms)
+                total.append(r.timings.get("total", float("nan")))
+                apply_ms.append(r.timings.get("apply", float("nan")))
+        pings += ping_block()
+        sess.close()
+        res = {"server_threads": threads, "surfels": len(sc["positions"]), "deformable": sc["deformable"],
+               "ping": stats(pings), "step": stats(rtt), "server_total": stats(total),
+               "server_apply": stats(apply_ms)}
+        res["ratio_p50"] = res["step"]["p50"] / res["ping"]["p50"]
+        res["ratio_p99"] = res["step"]["p99"] / res["ping"]["p99"]
+        key = f"{name} (server --threads {threads})"
+        results[key] = res
+        for label, k in [("bare ping (echo)", "ping"), ("step round trip", "step"),
+                         ("  server total", "server_total"), ("  server apply", "server_apply")]:
+            st = res[k]
+            rows.append([key, f"{res['surfels']:,} / {res['deformable']:,}", label, st["n"], f"{st['p50']:.3f}",
+                         f"{st['p99']:.3f}", f"{st['max']:.3f}"])
+        rows.append([key, "", "step / ping", "", f"{res['ratio_p50']:.2f}x", f"{res['ratio_p99']:.2f}x", ""])
 
 
 def main() -> int:
@@ -125,6 +188,7 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--warmup", type=int, default=20)
     ap.add_argument("--domain", type=int, default=150 + os.getpid() % 80)
+    ap.add_argument("--server-threads", default="1,0", help="comma list of surfeledit-server --threads values")
     ap.add_argument("--max-load", type=float, default=0.0)
     ap.add_argument("--json-out")
     args = ap.parse_args()
@@ -136,60 +200,29 @@ def main() -> int:
     if not server.is_file() or echo_exe is None:
         print(f"missing {server} or surfeledit-proto-echo under {build}: build first")
         return 2
-    os.environ["SURFELEDIT_SERVER"] = str(server)
     benchlib.wait_for_low_load(args.max_load, 600)
     print(benchlib.machine_line())
     print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}")
 
     echo = Echo(echo_exe, args.domain)
-    client = surfeledit.connect(domain=args.domain, spawn=True, timeout=30.0)
-    results = {}
+    results: Dict[str, dict] = {}
     rows = []
     try:
-        for name, make in [("small", small_scene), ("60k", scene_60k)]:
-            sc = make()
-            sess = client.open_session(f"bench-{name}")
-            t0 = time.perf_counter()
-            sess.load_points(sc["positions"], sc["normals"])
-            sess.set_regions(zero=sc["zero"], one=sc["one"])
-            print(f"scene {name}: {len(sc['positions']):,} surfels, {sc['deformable']:,} deformable, "
-                  f"{len(sc['one']):,} in F1; upload + regions {time.perf_counter() - t0:.1f} s", flush=True)
-            # The ping payload: a deform Request exactly as Session.deform builds it.
-            a = deform_args(0)
-            dreq = proto.Deform(translation=proto.Vec3(*a["translation"]), axis=proto.Vec3(*a["axis"]),
-                                angle=a["angle"], has_center=False, center=proto.Vec3(), blend="smooth")
-
-            def ping_block() -> List[float]:
-                out = []
-                for i in range(args.warmup + args.steps):
-                    ms = echo.ping(client.new_request(proto.Op.OP_DEFORM, sess.name, deform=dreq))
-                    if i >= args.warmup:
-                        out.append(ms)
-                return out
-
-            pings = ping_block()
-            rtt, total, apply_ms = [], [], []
-            for i in range(args.warmup + args.steps):
-                r = sess.deform(**deform_args(i))
-                if i >= args.warmup:
-                    rtt.append(r.round_trip_ms)
-                    total.append(r.timings.get("total", float("nan")))
-                    apply_ms.append(r.timings.get("apply", float("nan")))
-            pings += ping_block()
-            sess.close()
-            res = {"surfels": len(sc["positions"]), "deformable": sc["deformable"], "ping": stats(pings),
-                   "step": stats(rtt), "server_total": stats(total), "server_apply": stats(apply_ms)}
-            res["ratio_p50"] = res["step"]["p50"] / res["ping"]["p50"]
-            res["ratio_p99"] = res["step"]["p99"] / res["ping"]["p99"]
-            results[name] = res
-            for label, key in [("bare ping (echo)", "ping"), ("step round trip", "step"),
-                               ("  server total", "server_total"), ("  server apply", "server_apply")]:
-                s = res[key]
-                rows.append([name, f"{res['surfels']:,} / {res['deformable']:,}", label, s["n"], f"{s['p50']:.3f}",
-                             f"{s['p99']:.3f}", f"{s['max']:.3f}"])
-            rows.append([name, "", "step / ping", "", f"{res['ratio_p50']:.2f}x", f"{res['ratio_p99']:.2f}x", ""])
+        for threads in [int(t) for t in args.server_threads.split(",")]:
+            log = Path(f"/tmp/surfeledit-bench-server-{args.domain}-t{threads}.log")
+            with log.open("w") as f:
+                srv = subprocess.Popen([str(server), "--domain", str(args.domain), "--threads", str(threads)],
+                                       stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
+            try:
+                client = connect_when_up(args.domain, srv, log)
+                try:
+                    run_scenes(client, echo, args, threads, results, rows)
+                finally:
+                    client.close()
+            finally:
+                srv.terminate()
+                srv.wait(timeout=20)
     finally:
-        client.close()
         echo.close()
 
     print()
