@@ -5,10 +5,9 @@
 #include "common.hpp"
 
 namespace surfeledit::py {
-namespace {
 
-DeformParams make_params(const Vec3& t, const Vec3& axis, double angle, const std::optional<Vec3>& center,
-                         const std::string& blend) {
+DeformParams make_deform_params(const Vec3& t, const Vec3& axis, double angle, const std::optional<Vec3>& center,
+                                const std::string& blend) {
   DeformParams p;
   p.translation = t;
   p.axis = axis;
@@ -18,6 +17,8 @@ DeformParams make_params(const Vec3& t, const Vec3& axis, double angle, const st
   validate(p);
   return p;
 }
+
+namespace {
 
 // The deformation tool in-process over its own copy of positions and normals.
 struct DeformationTool {
@@ -75,7 +76,7 @@ blend between them. step(...) applies one cumulative step and returns the moved 
           "step",
           [](DeformationTool& t, const Vec3& translation, const Vec3& axis, double angle, std::optional<Vec3> center,
              const std::string& blend) {
-            const DeformParams p = make_params(translation, axis, angle, center, blend);
+            const DeformParams p = make_deform_params(translation, axis, angle, center, blend);
             DeformResult r;
             {
               pyb::gil_scoped_release release;

@@ -48,12 +48,7 @@ void bind_edit_session(pyb::module_& m) {
           "deform",
           [](EditSession& s, const Vec3& translation, const Vec3& axis, double angle, std::optional<Vec3> center,
              const std::string& blend) {
-            DeformParams p;
-            p.translation = translation;
-            p.axis = axis;
-            p.angle = angle;
-            p.center = center;
-            p.blend = parse_blend(blend);
+            const DeformParams p = make_deform_params(translation, axis, angle, center, blend);
             DeformResult r;
             {
               pyb::gil_scoped_release release;

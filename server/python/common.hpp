@@ -8,6 +8,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit::py {
@@ -18,6 +19,10 @@ namespace pyb = pybind11;
 Points to_points(const pyb::handle& a, const char* field);
 // (N,) float64 array -> Values.
 Values to_values(const pyb::handle& a, const char* field);
+
+// Validated deformation step from the Python keyword arguments.
+DeformParams make_deform_params(const Vec3& translation, const Vec3& axis, double angle,
+                                const std::optional<Vec3>& center, const std::string& blend);
 
 void bind_errors(pyb::module_& m);
 void bind_kdtree(pyb::module_& m);

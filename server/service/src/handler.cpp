@@ -202,16 +202,7 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
       SurfelArrays arrays = upload->take();
       uploads_.erase(client, session);
       SurfelModel model = prefixed("load_chunk", [&] { return SurfelModel::from_arrays(std::move(arrays)); });
-      entry.session->load(std::move(model));
-      UpdateEvent event;
-      event.session = session;
-      event.version = entry.session->version();
-      event.cause = "load";
-      event.full = true;
-      event.all_rows = true;
-      updates.push_back(std::move(event));
-      reply.session_info = session_info(entry);
-      reply.version = entry.session->version();
+      replace_model(entry, session, std::move(model), reply, updates);
       return;
     }
     case surfeledit_proto_OP_LOAD_FILE: {
@@ -227,16 +218,7 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
                         std::to_string(config_.max_model_surfels));
       }
       SurfelModel model = prefixed("load_file", [&] { return SurfelModel::from_arrays(std::move(arrays)); });
-      entry.session->load(std::move(model));
-      UpdateEvent event;
-      event.session = session;
-      event.version = entry.session->version();
-      event.cause = "load";
-      event.full = true;
-      event.all_rows = true;
-      updates.push_back(std::move(event));
-      reply.session_info = session_info(entry);
-      reply.version = entry.session->version();
+      replace_model(entry, session, std::move(model), reply, updates);
       return;
     }
     case surfeledit_proto_OP_SET_REGIONS: {
@@ -286,6 +268,20 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
     }
   }
   throw Error(ErrorCode::InvalidArgument, "op", "unknown op " + std::to_string(static_cast<long>(request.op)));
+}
+
+void Handler::replace_model(SessionEntry& entry, const std::string& session, SurfelModel model, Reply& reply,
+                            std::vector<UpdateEvent>& updates) {
+  entry.session->load(std::move(model));
+  UpdateEvent event;
+  event.session = session;
+  event.version = entry.session->version();
+  event.cause = "load";
+  event.full = true;
+  event.all_rows = true;
+  updates.push_back(std::move(event));
+  reply.session_info = session_info(entry);
+  reply.version = entry.session->version();
 }
 
 SessionInfo Handler::session_info(const SessionEntry& entry) const {

@@ -40,6 +40,9 @@ class Handler {
  private:
   void dispatch(const surfeledit_proto_Request& request, Reply& reply, std::vector<UpdateEvent>& updates);
   SessionInfo session_info(const SessionEntry& entry) const;
+  // Replaces the session's model, answers with its info and announces a full update.
+  void replace_model(SessionEntry& entry, const std::string& session, SurfelModel model, Reply& reply,
+                     std::vector<UpdateEvent>& updates);
   ServerInfo server_info() const;
   StatePage state_page(const EditSession& session, const surfeledit_proto_GetState& args) const;
 
