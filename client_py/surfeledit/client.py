@@ -257,9 +257,16 @@ class Client:
         """Closes watchers and DDS entities, then stops the server if this client spawned it."""
         if self._closed:
             return
-        for sess in list(self._sessions):  # detach so the server can drop sessions nobody uses
+        # Detach so the server can drop sessions nobody uses; skip it when no server is matched any
+        # more (it exited), which would only wait for request timeouts.
+        server_present = self._writer.get_publication_matched_status().current_count > 0
+        for sess in list(self._sessions):
             try:
-                sess.close()
+                if server_present:
+                    sess.close()
+                else:
+                    sess._closed = True
+                    self._sessions.remove(sess)
             except errors.SurfelEditError:
                 _log.warning("closing session %r failed", sess.name, exc_info=True)
         self._closed = True
