@@ -114,7 +114,9 @@ def run_cpp(exe: Path, points: np.ndarray, queries: np.ndarray, reps: int, tmp: 
         if b.get("run_type") != want or (want == "aggregate" and b.get("aggregate_name") != "median"):
             continue
         assert b["time_unit"] == "ms"
-        res[b["run_name"]] = {"ms": b["real_time"], "qps": b.get("items_per_second", float("nan"))}
+        # run_name carries "/min_time:0.200/repeats:5" after the registered name: strip those parts.
+        name = "/".join(x for x in b["run_name"].split("/") if not x.startswith(("min_time:", "repeats:", "iterations:")))
+        res[name] = {"ms": b["real_time"], "qps": b.get("items_per_second", float("nan"))}
     return res
 
 
