@@ -24,7 +24,7 @@ from cyclonedds.topic import Topic
 
 import surfeledit
 from surfeledit._protocol import TOPIC_REQUEST, proto, request_qos
-from surfeledit.demo import fallback_scene
+from surfeledit.demo import default_scene
 
 REPO = Path(__file__).resolve().parents[3]
 _counter = itertools.count()
@@ -176,18 +176,8 @@ Scene = Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 def generated_scene(spacing: float = 0.05) -> Scene:
-    """positions (P, 3), normals (P, 3), radii (P,), part (P,) (0 slab, 1 sphere).
-
-    From ``surfeledit.core.make_default_scene()`` when the pybind module is built, else a numpy
-    sphere above a slab.
-    """
-    try:
-        from surfeledit import core  # type: ignore[attr-defined]
-    except ImportError:
-        return fallback_scene(spacing)
-    s = core.make_default_scene().sample(spacing=spacing)
-    return (np.asarray(s.positions, np.float64), np.asarray(s.normals, np.float64),
-            np.asarray(s.radii, np.float64), np.asarray(s.part))
+    """positions (P, 3), normals (P, 3), radii (P,), part (P,) (0 slab, 1 sphere) of the demo scene."""
+    return default_scene(spacing)
 
 
 @pytest.fixture
