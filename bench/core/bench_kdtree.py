@@ -12,6 +12,9 @@ Datasets (fixed seeds):
          vertices, i.e. SMALLER than 300k (skipped with a printed reason if the file is absent).
 Queries: --queries points drawn (seed 2) from the dataset and moved by Gaussian noise of sigma = half
 the median nearest-neighbour spacing, so they lie near, but not on, the surface (as a tool's queries do).
+Every dataset is measured twice with the SAME queries in two orders: "random" (drawn order: every query
+lands somewhere else in the tree, the cache-hostile case) and "row" (sorted by the row they were drawn
+from: the model's storage order, the way compute_fields walks the surfels).
 
 Peers, all on ONE thread:
   ours C++     surfeledit::KdTree (nanoflann), leaf 10 (the default), batch knn     } C++ binary
@@ -55,12 +58,17 @@ def scene_points() -> np.ndarray:
     return np.ascontiguousarray(pts[keep])
 
 
-def make_queries(points: np.ndarray, n: int) -> np.ndarray:
+def make_queries(points: np.ndarray, n: int) -> Dict[str, np.ndarray]:
+    """The same n query points in two orders: 'random' (source rows drawn at random) and 'row'
+    (sorted by source row, i.e. walking the model in storage order as compute_fields does; neighbouring
+    queries then touch neighbouring tree nodes, so caches help)."""
     rng = np.random.default_rng(2)
     nn = core.KdTree(points, threads=1).knn(points[rng.choice(points.shape[0], 2000)], 2)[1][:, 1]
     sigma = 0.5 * float(np.median(np.sqrt(nn)))  # model units
-    q = points[rng.integers(0, points.shape[0], n)] + rng.normal(0.0, sigma, (n, 3))
-    return np.ascontiguousarray(q)
+    src = rng.integers(0, points.shape[0], n)
+    q = points[src] + rng.normal(0.0, sigma, (n, 3))
+    order = np.argsort(src, kind="stable")
+    return {"random": np.ascontiguousarray(q), "row": np.ascontiguousarray(q[order])}
 
 
 def median_time(fn: Callable[[], object], repetitions: int) -> float:
@@ -97,13 +105,14 @@ def run_python_peers(points: np.ndarray, queries: np.ndarray, reps: int) -> Dict
     return out
 
 
-def run_cpp(exe: Path, points: np.ndarray, queries: np.ndarray, reps: int, tmp: Path) -> Dict[str, Dict[str, float]]:
+def run_cpp(exe: Path, points: np.ndarray, queries: np.ndarray, reps: int, tmp: Path,
+            sweep: bool = True) -> Dict[str, Dict[str, float]]:
     """Runs the Google Benchmark binary; returns name -> {'ms': median real time, 'qps': median items/s}."""
     p, q, j = tmp / "points.f64", tmp / "queries.f64", tmp / "out.json"
     points.astype("<f8").tofile(p)
     queries.astype("<f8").tofile(q)
     cmd = [str(exe), f"--points={p}", f"--queries={q}", f"--repetitions={reps}",
-           "--leaf-sweep=" + ",".join(map(str, LEAF_SWEEP)), f"--benchmark_out={j}", "--benchmark_out_format=json"]
+           "--leaf-sweep=" + (",".join(map(str, LEAF_SWEEP)) if sweep else ""), f"--benchmark_out={j}", "--benchmark_out_format=json"]
     print("running:", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     res: Dict[str, Dict[str, float]] = {}
@@ -120,10 +129,11 @@ def run_cpp(exe: Path, points: np.ndarray, queries: np.ndarray, reps: int, tmp: 
     return res
 
 
-def report(name: str, points: np.ndarray, queries: np.ndarray, exe: Optional[Path], reps: int) -> dict:
-    print(f"\n## {name}: {points.shape[0]:,} points, {queries.shape[0]:,} queries", flush=True)
+def report(name: str, points: np.ndarray, queries: np.ndarray, exe: Optional[Path], reps: int, order: str,
+           sweep: bool) -> dict:
+    print(f"\n## {name}: {points.shape[0]:,} points, {queries.shape[0]:,} queries in {order} order", flush=True)
     with tempfile.TemporaryDirectory(prefix="surfeledit-bench-kdtree-") as tmp:
-        cpp = run_cpp(exe, points, queries, reps, Path(tmp)) if exe else {}
+        cpp = run_cpp(exe, points, queries, reps, Path(tmp), sweep) if exe else {}
     py = run_python_peers(points, queries, reps)
     rows: List[list] = []
     peers: Dict[str, Dict[str, float]] = {}
@@ -156,16 +166,40 @@ def report(name: str, points: np.ndarray, queries: np.ndarray, exe: Optional[Pat
     faster = s[0]["k1_qps"] > s[1]["k1_qps"] and s[0]["k10_qps"] > s[1]["k10_qps"] and s[0]["build_ms"] < s[1]["build_ms"]
     print(f"target faster than scipy (build, k=1, k=10): {'MET' if faster else 'MISSED'}")
 
-    if cpp:
-        sweep = []
+    if cpp and sweep:
+        rows = []
         nq = queries.shape[0]
         for leaf in LEAF_SWEEP:
             b, k1r, k10r = (cpp[f"sweep/{w}/leaf:{leaf}"] for w in ("build", "knn1", "knn10"))
-            sweep.append([leaf, f"{b['ms']:.1f}", f"{k1r['ms']:.1f}", f"{k1r['qps']:,.0f}", f"{k10r['ms']:.1f}",
-                          f"{k10r['qps']:,.0f}"])
-        print(f"\nleaf-size sweep, ours C++ (1 thread; query ms = all {nq:,} queries)")
-        print(benchlib.table(["leaf", "build ms", "k=1 ms", "k=1 q/s", "k=10 ms", "k=10 q/s"], sweep))
-    return {"points": int(points.shape[0]), "queries": int(queries.shape[0]), "peers": peers, "cpp": cpp}
+            rows.append([leaf, f"{b['ms']:.1f}", f"{k1r['ms']:.1f}", f"{k1r['qps']:,.0f}", f"{k10r['ms']:.1f}",
+                         f"{k10r['qps']:,.0f}"])
+        print(f"\nleaf-size sweep, ours C++ (1 thread; query ms = all {nq:,} queries, {order} order)")
+        print(benchlib.table(["leaf", "build ms", "k=1 ms", "k=1 q/s", "k=10 ms", "k=10 q/s"], rows))
+    return {"points": int(points.shape[0]), "queries": int(queries.shape[0]), "order": order, "peers": peers,
+            "cpp": cpp}
+
+
+def report_all(key: str, name: str, points: np.ndarray, exe: Optional[Path], args: argparse.Namespace,
+               results: dict) -> None:
+    for order, q in make_queries(points, args.queries).items():
+        results[f"{key}/{order}"] = report(name, points, q, exe, args.repetitions, order,
+                                           sweep=not args.no_sweep)
+
+
+def diagnose_layout(points: np.ndarray, exe: Path, args: argparse.Namespace) -> None:
+    """Why size matters: C++ knn of ours vs PCL on (a) a 34,834-point random subset of the scene (as small
+    as the bunny) and (b) all 300k scene points re-stored in a spatially coherent order (sorted by
+    0.05-unit x, y cells, then z). Queries in row order. Diagnostic only (one repetition)."""
+    small = points[np.sort(np.random.default_rng(3).choice(points.shape[0], 34_834, replace=False))]
+    cells = np.floor(points / 0.05)
+    coherent = points[np.lexsort((points[:, 2], cells[:, 1], cells[:, 0]))]
+    rows = []
+    for label, p in [("scene, 34,834-point subset", small), ("scene 300k, cell-sorted storage", coherent)]:
+        with tempfile.TemporaryDirectory(prefix="surfeledit-bench-kdtree-") as tmp:
+            cpp = run_cpp(exe, np.ascontiguousarray(p), make_queries(p, args.queries)["row"], 1, Path(tmp), sweep=False)
+        rows.append([label] + [f"{cpp[f'knn/{w}/k:{k}']['qps']:,.0f}" for k in (1, 10) for w in ("ours", "pcl")])
+    print("\n## layout diagnostic (queries/s, 1 repetition, row order)")
+    print(benchlib.table(["points", "ours k=1", "PCL k=1", "ours k=10", "PCL k=10"], rows))
 
 
 def main() -> int:
@@ -174,6 +208,8 @@ def main() -> int:
     ap.add_argument("--repetitions", type=int, default=5)
     ap.add_argument("--queries", type=int, default=100_000)
     ap.add_argument("--max-load", type=float, default=0.0, help="wait until the 1-min load is below this (0: don't)")
+    ap.add_argument("--no-sweep", action="store_true", help="skip the leaf-size sweep")
+    ap.add_argument("--diagnose-layout", action="store_true", help="also run the point-layout diagnostic")
     ap.add_argument("--json-out")
     args = ap.parse_args()
 
@@ -183,14 +219,15 @@ def main() -> int:
         exe = None
     benchlib.wait_for_low_load(args.max_load, 600)
     print(benchlib.machine_line())
-    results = {}
+    results: dict = {}
     pts = scene_points()
-    results["scene"] = report("scene (make_default_scene, 300k subset)", pts, make_queries(pts, args.queries), exe,
-                              args.repetitions)
+    report_all("scene", "scene (make_default_scene, 300k subset)", pts, exe, args, results)
+    if args.diagnose_layout and exe:
+        diagnose_layout(pts, exe, args)
     if BUNNY.is_file():
         bunny = np.ascontiguousarray(np.asarray(core.load_file(str(BUNNY))["positions"], dtype=np.float64))
-        results["bunny"] = report(f"bunny ({BUNNY.name}, as is: {bunny.shape[0]:,} points, smaller than 300k)",
-                                  bunny, make_queries(bunny, args.queries), exe, args.repetitions)
+        report_all("bunny", f"bunny ({BUNNY.name}, as is: {bunny.shape[0]:,} points, smaller than 300k)", bunny, exe,
+                   args, results)
     else:
         print(f"\nbunny skipped: {BUNNY} not found")
     print("\n" + benchlib.machine_line())
