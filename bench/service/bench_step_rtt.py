@@ -16,7 +16,7 @@ What is timed (all in milliseconds, client side, time.perf_counter):
 Both go through the same Python cyclonedds stack and QoS (reliable, keep-all, volatile), so their
 ratio is the server's overhead. Scenes (fixed seeds): "small" = make_default_scene() at spacing 0.05
 (~9.9k surfels), "60k" = slab (F0) + sphere of ~60k deformable surfels (as bench_deformation.cpp).
-Steps are sent back to back (the next request as soon as the reply arrives). The server writes the
+Steps are sent back to back (the next request as soon as the reply arrives), or --gap-ms apart. The server writes the
 Reply BEFORE it publishes the step's Update samples (server/service/src/service.cpp), but on the same
 thread, so publishing the Update of step i delays the serving of step i+1 if it arrives meanwhile.
 Per scene: ping block, then step block, then a second ping block (pings = both blocks).
@@ -160,6 +160,8 @@ def run_scenes(client: "surfeledit.Client", echo: Echo, args: argparse.Namespace
         pings = ping_block()
         rtt, total, apply_ms = [], [], []
         for i in range(args.warmup + args.steps):
+            if args.gap_ms > 0:
+                time.sleep(args.gap_ms / 1e3)
             r = sess.deform(**deform_args(i))
             if i >= args.warmup:
                 rtt.append(r.round_trip_ms)
@@ -189,6 +191,8 @@ def main() -> int:
     ap.add_argument("--warmup", type=int, default=20)
     ap.add_argument("--domain", type=int, default=150 + os.getpid() % 80)
     ap.add_argument("--server-threads", default="1,0", help="comma list of surfeledit-server --threads values")
+    ap.add_argument("--gap-ms", type=float, default=0.0,
+                    help="pause before each step (ms): lets the server finish publishing the previous Update")
     ap.add_argument("--max-load", type=float, default=0.0)
     ap.add_argument("--json-out")
     args = ap.parse_args()
@@ -202,7 +206,7 @@ def main() -> int:
         return 2
     benchlib.wait_for_low_load(args.max_load, 600)
     print(benchlib.machine_line())
-    print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}")
+    print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}; gap between steps {args.gap_ms} ms")
 
     echo = Echo(echo_exe, args.domain)
     results: Dict[str, dict] = {}
