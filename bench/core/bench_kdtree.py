@@ -188,18 +188,22 @@ def report_all(key: str, name: str, points: np.ndarray, exe: Optional[Path], arg
 
 def diagnose_layout(points: np.ndarray, exe: Path, args: argparse.Namespace) -> None:
     """Why size matters: C++ knn of ours vs PCL on (a) a 34,834-point random subset of the scene (as small
-    as the bunny) and (b) all 300k scene points re-stored in a spatially coherent order (sorted by
-    0.05-unit x, y cells, then z). Queries in row order. Diagnostic only (one repetition)."""
+    as the bunny), (b) the 300k scene points as stored, and (c) the same 300k points re-stored in a
+    spatially coherent order (sorted by 0.05-unit x, y cells, then z); queries in both orders.
+    Diagnostic only (one repetition)."""
     small = points[np.sort(np.random.default_rng(3).choice(points.shape[0], 34_834, replace=False))]
     cells = np.floor(points / 0.05)
     coherent = points[np.lexsort((points[:, 2], cells[:, 1], cells[:, 0]))]
     rows = []
-    for label, p in [("scene, 34,834-point subset", small), ("scene 300k, cell-sorted storage", coherent)]:
-        with tempfile.TemporaryDirectory(prefix="surfeledit-bench-kdtree-") as tmp:
-            cpp = run_cpp(exe, np.ascontiguousarray(p), make_queries(p, args.queries)["row"], 1, Path(tmp), sweep=False)
-        rows.append([label] + [f"{cpp[f'knn/{w}/k:{k}']['qps']:,.0f}" for k in (1, 10) for w in ("ours", "pcl")])
-    print("\n## layout diagnostic (queries/s, 1 repetition, row order)")
-    print(benchlib.table(["points", "ours k=1", "PCL k=1", "ours k=10", "PCL k=10"], rows))
+    for label, p in [("scene, 34,834-point subset", small), ("scene 300k, as stored", points),
+                     ("scene 300k, cell-sorted storage", coherent)]:
+        for order, q in make_queries(np.ascontiguousarray(p), args.queries).items():
+            with tempfile.TemporaryDirectory(prefix="surfeledit-bench-kdtree-") as tmp:
+                cpp = run_cpp(exe, np.ascontiguousarray(p), q, 1, Path(tmp), sweep=False)
+            rows.append([label, order] + [f"{cpp[f'knn/{w}/k:{k}']['qps']:,.0f}" for k in (1, 10)
+                                          for w in ("ours", "pcl")])
+    print("\n## layout diagnostic (queries/s, 1 repetition)")
+    print(benchlib.table(["points", "query order", "ours k=1", "PCL k=1", "ours k=10", "PCL k=10"], rows))
 
 
 def main() -> int:
@@ -210,6 +214,7 @@ def main() -> int:
     ap.add_argument("--max-load", type=float, default=0.0, help="wait until the 1-min load is below this (0: don't)")
     ap.add_argument("--no-sweep", action="store_true", help="skip the leaf-size sweep")
     ap.add_argument("--diagnose-layout", action="store_true", help="also run the point-layout diagnostic")
+    ap.add_argument("--diagnose-only", action="store_true", help="run only the point-layout diagnostic")
     ap.add_argument("--json-out")
     args = ap.parse_args()
 
@@ -221,6 +226,9 @@ def main() -> int:
     print(benchlib.machine_line())
     results: dict = {}
     pts = scene_points()
+    if args.diagnose_only and exe:
+        diagnose_layout(pts, exe, args)
+        return 0
     report_all("scene", "scene (make_default_scene, 300k subset)", pts, exe, args, results)
     if args.diagnose_layout and exe:
         diagnose_layout(pts, exe, args)
