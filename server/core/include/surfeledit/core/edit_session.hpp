@@ -10,8 +10,10 @@
 #include <memory>
 #include <string>
 
+#include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/selector.hpp"
+#include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 
 namespace surfeledit {
@@ -40,6 +42,20 @@ struct SessionReport {
   double bytes_per_surfel = 0.0;
 };
 
+// What one deformation step did.
+struct StepOutcome {
+  std::uint64_t seq = 0;       // 1-based step number in this session
+  IndexList moved;             // rows whose attributes changed (moved or split), ascending
+  IdList inserted;             // ids of surfels inserted by resampling (appended rows)
+  Vec3 center = Vec3::Zero();  // rotation centre used
+  bool detected = false;       // a collision detector ran
+  IdList colliding;            // colliding surfel ids after the step, ascending
+  std::vector<double> depths;  // per colliding id: penetration depth estimate, model units
+  CollisionStats stats;        // of the detector (zeros when none ran)
+  double deform_ms = 0.0;      // time of the deformation itself
+  double resample_ms = 0.0;    // time of resampling
+};
+
 // Region selection: explicit ids and/or selectors, merged.
 struct RegionSpec {
   IdList ids;
@@ -66,8 +82,20 @@ class EditSession {
   void set_regions(const RegionSpec& zero, const RegionSpec& one);
   // Ids matching a spec (ids validated, selectors applied to current positions), ascending.
   IdList resolve(const RegionSpec& spec, const std::string& field) const;
-  // Applies one step; requires regions. Bumps the version.
-  DeformResult deform(const DeformParams& params);
+  // Applies one step, then resampling and collision detection as configured; requires regions.
+  // Bumps the version.
+  StepOutcome deform(const DeformParams& params);
+
+  // Session settings (collision algorithm, heuristics, resampling); validated before anything
+  // changes. Re-initialises the detector from the current model when regions are set (its
+  // "original" model is the current one); the model and the version do not change.
+  void configure(const std::vector<NamedSetting>& changes);
+  const SessionSettings& settings() const { return settings_; }
+  // Colliding ids after the last step (empty before any step / after a reset), ascending.
+  const IdList& colliding() const { return colliding_; }
+  // Removes surfels (validated first: unknown ids, or leaving the zero or one region empty, throw
+  // and change nothing); the detector keeps the state of the others. Bumps the version.
+  void remove(const IdList& ids);
 
   // Changes since version `since` (since >= version() gives none).
   Changes changes_since(std::uint64_t since) const;
@@ -85,6 +113,11 @@ class EditSession {
   std::vector<std::uint64_t> row_version_;  // per row: version of its last change
   std::vector<std::pair<std::uint64_t, SurfelId>> removed_log_;
   std::unique_ptr<DeformationFields> fields_;
+  SessionSettings settings_;
+  std::unique_ptr<CollisionDetector> detector_;  // built when regions are set and algorithm != none
+  IdList colliding_;
+  Values rest_radius_;  // per row, for resampling (built when resampling is enabled)
+  std::uint64_t steps_ = 0;
 };
 
 }  // namespace surfeledit

@@ -1,0 +1,94 @@
+// Collision detection between the deformable part of a model and its zero region (§4 of
+// ALGORITHMS.md; thesis ch. 6): four algorithms behind one interface.
+//
+// A deformable surfel s1 (position p1) with nearest reference surfel s2 (p2, normal n2) is
+// *inside* when (p1 - p2) . n2 < W (strict; W = `threshold`, 0 by default). The reference set is
+// the zero region (Simple, Improved, Temporal) or the original, undeformed whole model (Robust).
+// All distances in model units; `dist2` / `rho2` are squared.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "surfeledit/core/deformation.hpp"
+
+namespace surfeledit {
+
+enum class CollisionAlgorithm : std::uint8_t {
+  None = 0,      // no detection (nothing built)
+  Simple = 1,    // §4.1: nearest zero surfel of every deformable surfel, every step
+  Improved = 2,  // §4.2: Simple + spatial coherence (a tested ball settles its deformable surfels)
+  Temporal = 3,  // §4.3: Simple + temporal coherence (a surfel inside its sphere keeps its state)
+  Robust = 4,    // §4.4: parity of inside changes against the original model (the default)
+};
+
+// "none" | "simple" | "improved" | "temporal" | "robust"; throws InvalidArgument naming `field`.
+CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field = "algorithm");
+const char* to_string(CollisionAlgorithm algorithm);
+
+struct CollisionParams {
+  CollisionAlgorithm algorithm = CollisionAlgorithm::Robust;  // which detector
+  double threshold = 0.0;        // W: inside iff (p1 - p2) . n2 < W, model units
+  bool boundary = true;          // Simple/Improved/Temporal: the boundary-surfel heuristic (§4.1)
+  int boundary_n = 10;           // neighbours (whole model) looked at per deformable surfel, >= 1
+  int boundary_i = 5;            // of those, the i nearest zero surfels are marked boundary, 1..n
+  bool step_bound = true;        // Simple/Improved/Temporal: state may change only if |d| <= |t| + r1 + r2
+  int threads = 0;               // worker threads (0 = all); results do not depend on it
+};
+
+// Throws InvalidArgument naming the field (e.g. "boundary_n") and the value.
+void validate(const CollisionParams& params);
+
+struct CollisionStats {
+  Index deformable = 0;      // deformable surfels considered this step
+  Index tested = 0;          // surfels whose state was (re)evaluated this step
+  Index queries = 0;         // nearest-neighbour queries made this step
+  Index colliding = 0;       // surfels reported colliding
+  double detect_ms = 0.0;    // time of this step's detection
+  double preprocess_ms = 0.0;  // time of the last reset (building trees, spheres, boundary marks)
+};
+
+struct CollisionResult {
+  IndexList colliding;         // rows of colliding surfels, ascending
+  std::vector<double> depths;  // per colliding row: penetration depth estimate (>= 0, model units)
+  CollisionStats stats;
+};
+
+// The model as a detector sees it. Arrays have #P rows; `regions` from the deformation fields.
+struct CollisionScene {
+  const Points& positions;             // #P by 3, current
+  const Points& normals;               // #P by 3, current, unit
+  const Values& radii;                 // #P
+  const std::vector<Region>& regions;  // #P; deformable = not Zero
+};
+
+class CollisionDetector {
+ public:
+  // A detector for `params.algorithm` (nullptr for None). Validates params.
+  static std::unique_ptr<CollisionDetector> create(const CollisionParams& params);
+  virtual ~CollisionDetector() = default;
+
+  const CollisionParams& params() const { return params_; }
+
+  // (Re)initialises every state from the model as it is now: this becomes the "original"
+  // model (Robust), spheres start at the current positions, nothing collides. Records
+  // stats().preprocess_ms.
+  virtual void reset(const CollisionScene& scene) = 0;
+  // Evaluates the model after a step. `previous`: positions before the step (#P by 3), for each
+  // surfel's own displacement t. Zero surfels must not have moved since reset.
+  virtual CollisionResult detect(const CollisionScene& scene, const Points& previous) = 0;
+  // Rows removed from the model: `keep` has one flag per old row; state of kept rows is compacted.
+  virtual void on_removed(const std::vector<bool>& keep) = 0;
+  // Rows appended to the model (after the existing ones), each split from `parents[k]` (a row
+  // before the append). A child inside its parent's sphere takes the parent's sphere and state;
+  // otherwise it starts with radius 0 (tested at the next step) (§4.4, thesis §6.5).
+  virtual void on_inserted(const CollisionScene& scene, const IndexList& parents) = 0;
+  // Bytes held (trees, per-surfel state).
+  virtual std::size_t memory_bytes() const = 0;
+
+ protected:
+  explicit CollisionDetector(CollisionParams params) : params_(params) {}
+  CollisionParams params_;
+};
+
+}  // namespace surfeledit

@@ -1,0 +1,44 @@
+// Session settings by name: the names the protocol's OP_CONFIGURE and the Python keyword
+// arguments use (`session.configure(algorithm="robust", boundary_n=10, ...)`).
+//
+//   algorithm        text    "none" | "simple" | "improved" | "temporal" | "robust"
+//   threshold        number  W of the inside test, model units
+//   boundary         bool    boundary-surfel heuristic (simple/improved/temporal)
+//   boundary_n       int     neighbours looked at for boundary marks
+//   boundary_i       int     zero neighbours marked boundary
+//   step_bound       bool    per-surfel step bound (simple/improved/temporal)
+//   threads          int     worker threads for detection (0 = all)
+//   resample         bool    dynamic resampling
+//   split_threshold  number  stretch ratio that splits a surfel
+#pragma once
+
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/resampling.hpp"
+
+namespace surfeledit {
+
+struct SessionSettings {
+  CollisionParams collision;
+  ResampleParams resample;
+};
+
+// A setting's value as it arrives: number (also for ints), bool or text.
+using SettingValue = std::variant<double, bool, std::string>;
+struct NamedSetting {
+  std::string name;
+  SettingValue value;
+};
+
+// Applies `changes` to a copy of `current` and validates the result. Throws InvalidArgument naming
+// the setting (field = its name) for an unknown name, a value of the wrong kind (e.g. text for
+// boundary_n, 2.5 for an int) or a bad value; `current` is never modified.
+SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes);
+
+// Every setting with its current value, in the order listed above.
+std::vector<NamedSetting> describe(const SessionSettings& settings);
+
+}  // namespace surfeledit
