@@ -62,16 +62,28 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
   ++version_;
 }
 
-DeformResult EditSession::deform(const DeformParams& params) {
+StepOutcome EditSession::deform(const DeformParams& params) {
   model();  // throws without a model
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
   SurfelArrays& a = model_.arrays();
   const bool tangents = model_.has_tangents();
-  DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
-                              tangents ? &a.tangent_v : nullptr, params_.threads);
+  const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+                                    tangents ? &a.tangent_v : nullptr, params_.threads);
   ++version_;
   touch_rows(r.moved);
-  return r;
+  StepOutcome out;
+  out.seq = ++steps_;
+  out.moved = r.moved;
+  out.center = r.center;
+  return out;
+}
+
+void EditSession::configure(const std::vector<NamedSetting>&) {
+  throw Error(ErrorCode::Internal, "configure", "collision settings are not available in this build yet");
+}
+
+void EditSession::remove(const IdList&) {
+  throw Error(ErrorCode::Internal, "remove", "surfel removal is not available in this build yet");
 }
 
 void EditSession::touch_rows(const IndexList& rows) {
