@@ -49,7 +49,7 @@ void bind_edit_session(pyb::module_& m) {
           [](EditSession& s, const Vec3& translation, const Vec3& axis, double angle, std::optional<Vec3> center,
              const std::string& blend) {
             const DeformParams p = make_deform_params(translation, axis, angle, center, blend);
-            DeformResult r;
+            StepOutcome r;
             {
               pyb::gil_scoped_release release;
               r = s.deform(p);

@@ -241,7 +241,7 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
       SessionEntry& entry = sessions_.attached(session, client);
       const DeformParams params = to_core(args, "deform");
       const Clock::time_point t0 = Clock::now();
-      DeformResult result = prefixed("deform", [&] { return entry.session->deform(params); });
+      StepOutcome result = prefixed("deform", [&] { return entry.session->deform(params); });
       reply.timings.emplace_back("apply", ms_since(t0));
       entry.steps += 1;
       StepInfo step;
