@@ -63,6 +63,9 @@ TEST(EditSession, BuildsFieldsOnlyWhenRegionsAreSet) {
   };
   EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions"}));
   f.session.set_regions({f.zero, {}}, {f.one, {}});
+  // The default settings run the Robust detector once regions are set.
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust"}));
+  f.session.configure({{"algorithm", std::string("none")}});
   EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields"}));
   const SessionReport r = f.session.report();
   EXPECT_GT(r.bytes_per_surfel, 0.0);

@@ -1,9 +1,41 @@
 #include "surfeledit/core/edit_session.hpp"
 
 #include <algorithm>
+#include <chrono>
+#include <iterator>
 #include <sstream>
 
+#include "surfeledit/core/resampling.hpp"
+
 namespace surfeledit {
+
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
+  return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
+}
+
+// A detector for `params` reset from the model as it is now (nullptr for algorithm none).
+std::unique_ptr<CollisionDetector> make_detector(const CollisionParams& params, const SurfelModel& m,
+                                                 const DeformationFields& f) {
+  std::unique_ptr<CollisionDetector> d = CollisionDetector::create(params);
+  if (d) d->reset(scene_of(m, f));
+  return d;
+}
+
+template <typename T>
+void keep_entries(std::vector<T>& v, const std::vector<bool>& keep) {
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (keep[i]) v[j++] = v[i];
+  v.resize(j);
+}
+
+}  // namespace
 
 EditSession::EditSession(std::string name, SessionParams params)
     : name_(std::move(name)), params_(params) {}
@@ -23,6 +55,9 @@ void EditSession::load(SurfelModel model) {
   row_version_.assign(static_cast<std::size_t>(model_.size()), version_);
   removed_log_.clear();
   fields_.reset();
+  detector_.reset();
+  colliding_.clear();
+  rest_radius_ = Values();
 }
 
 IdList EditSession::resolve(const RegionSpec& spec, const std::string& field) const {
@@ -58,32 +93,150 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
     r = Region::One;
   }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
+  std::unique_ptr<CollisionDetector> detector = make_detector(settings_.collision, model_, *fields);
   fields_ = std::move(fields);
+  detector_ = std::move(detector);
+  colliding_.clear();
   ++version_;
 }
 
 StepOutcome EditSession::deform(const DeformParams& params) {
   model();  // throws without a model
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
+  validate(params);
   SurfelArrays& a = model_.arrays();
+  const bool resample = settings_.resample.enabled;
+  if (resample) {
+    // Tangent axes (kept up to date by apply_step) and rest radii, from when resampling started.
+    if (!model_.has_tangents()) make_tangent_frames(a.normals, a.radii, a.tangent_u, a.tangent_v);
+    if (rest_radius_.size() != model_.size()) rest_radius_ = a.radii;
+  }
+  Points previous;  // positions before the step, for each surfel's own displacement
+  if (detector_) previous = a.positions;
   const bool tangents = model_.has_tangents();
+  StepOutcome out;
+  const auto t_deform = std::chrono::steady_clock::now();
   const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                     tangents ? &a.tangent_v : nullptr, params_.threads);
+  out.deform_ms = ms_since(t_deform);
   ++version_;
   touch_rows(r.moved);
-  StepOutcome out;
   out.seq = ++steps_;
   out.moved = r.moved;
   out.center = r.center;
+  // Applies planned splits: the parent row becomes child A, child B is appended with a new id.
+  auto apply_splits = [&](SplitPlan plan) {
+    if (plan.parents.empty()) return;
+    const Index old_rows = model_.size();
+    const Eigen::Index k = static_cast<Eigen::Index>(plan.parents.size());
+    const Values b_radii = plan.b.radii;
+    out.inserted = model_.insert(std::move(plan.b));  // validates child B before anything else changes
+    DeformationFields& f = *fields_;
+    const Index rows = old_rows + static_cast<Index>(k);
+    f.lambda.conservativeResize(rows);
+    f.grad_lambda.conservativeResize(rows, 3);
+    rest_radius_.conservativeResize(rows);
+    if (previous.rows() > 0) previous.conservativeResize(rows, 3);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      const Index parent = plan.parents[static_cast<std::size_t>(j)];
+      const Index child = old_rows + static_cast<Index>(j);
+      // The parent row becomes child A.
+      a.positions.row(parent) = plan.a.positions.row(j);
+      a.normals.row(parent) = plan.a.normals.row(j).normalized();
+      a.radii[parent] = plan.a.radii[j];
+      a.tangent_u.row(parent) = plan.a.tangent_u.row(j);
+      a.tangent_v.row(parent) = plan.a.tangent_v.row(j);
+      if (plan.a.colors.rows() > 0 && a.colors.rows() == rows) a.colors.row(parent) = plan.a.colors.row(j);
+      // Child B inherits the parent's deformation fields.
+      f.regions.push_back(f.regions[parent]);
+      f.lambda[child] = f.lambda[parent];
+      f.grad_lambda.row(child) = f.grad_lambda.row(parent);
+      f.deformable.push_back(child);
+      rest_radius_[parent] = plan.a.radii[j];
+      rest_radius_[child] = b_radii[j];
+      if (previous.rows() > 0) previous.row(child) = previous.row(parent);
+      row_version_.push_back(version_);
+      out.moved.push_back(child);
+    }
+    if (detector_) detector_->on_inserted(scene_of(model_, f), plan.parents);
+  };
+  if (resample) {
+    const auto t_resample = std::chrono::steady_clock::now();
+    apply_splits(plan_splits(a, r.moved, rest_radius_, settings_.resample));
+    out.resample_ms = ms_since(t_resample);
+  }
+  if (detector_) {
+    CollisionResult c = detector_->detect(scene_of(model_, *fields_), previous);
+    out.detected = true;
+    out.colliding.reserve(c.colliding.size());
+    for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
+    out.depths = std::move(c.depths);
+    out.stats = c.stats;
+    colliding_ = out.colliding;
+  }
   return out;
 }
 
-void EditSession::configure(const std::vector<NamedSetting>&) {
-  throw Error(ErrorCode::Internal, "configure", "collision settings are not available in this build yet");
+void EditSession::configure(const std::vector<NamedSetting>& changes) {
+  const SessionSettings next = apply_settings(settings_, changes);
+  std::unique_ptr<CollisionDetector> detector;
+  if (fields_ && !model_.empty()) detector = make_detector(next.collision, model_, *fields_);
+  settings_ = next;
+  detector_ = std::move(detector);
+  colliding_.clear();
 }
 
-void EditSession::remove(const IdList&) {
-  throw Error(ErrorCode::Internal, "remove", "surfel removal is not available in this build yet");
+void EditSession::remove(const IdList& ids) {
+  const SurfelModel& m = model();
+  const IndexList rows = m.rows_of(ids, "ids");  // NotFound / repeated ids
+  if (rows.empty()) return;
+  if (rows.size() == static_cast<std::size_t>(m.size())) {
+    throw Error(ErrorCode::Conflict, "ids", "removing every surfel would leave an empty model");
+  }
+  std::vector<bool> keep(static_cast<std::size_t>(m.size()), true);
+  for (Index r : rows) keep[r] = false;
+  if (fields_) {
+    std::size_t zero_left = 0, one_left = 0;
+    for (std::size_t r = 0; r < keep.size(); ++r) {
+      if (!keep[r]) continue;
+      zero_left += fields_->regions[r] == Region::Zero;
+      one_left += fields_->regions[r] == Region::One;
+    }
+    if (zero_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the zero region empty");
+    if (one_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the one region empty");
+  }
+  ++version_;
+  for (Index r : rows) removed_log_.emplace_back(version_, m.ids()[r]);
+  model_.remove(ids);
+  keep_entries(row_version_, keep);
+  if (rest_radius_.size() > 0) {
+    Eigen::Index j = 0;
+    for (Eigen::Index i = 0; i < rest_radius_.size(); ++i)
+      if (keep[static_cast<std::size_t>(i)]) rest_radius_[j++] = rest_radius_[i];
+    rest_radius_.conservativeResize(j);
+  }
+  if (fields_) {
+    DeformationFields& f = *fields_;
+    Eigen::Index j = 0;
+    for (Eigen::Index i = 0; i < f.lambda.size(); ++i) {
+      if (!keep[static_cast<std::size_t>(i)]) continue;
+      f.lambda[j] = f.lambda[i];
+      f.grad_lambda.row(j) = f.grad_lambda.row(i);
+      ++j;
+    }
+    f.lambda.conservativeResize(j);
+    f.grad_lambda.conservativeResize(j, 3);
+    keep_entries(f.regions, keep);
+    f.deformable.clear();
+    for (std::size_t r = 0; r < f.regions.size(); ++r)
+      if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
+  }
+  if (detector_) detector_->on_removed(keep);
+  IdList gone = ids;
+  std::sort(gone.begin(), gone.end());
+  IdList still;
+  std::set_difference(colliding_.begin(), colliding_.end(), gone.begin(), gone.end(), std::back_inserter(still));
+  colliding_ = std::move(still);
 }
 
 void EditSession::touch_rows(const IndexList& rows) {
@@ -111,6 +264,13 @@ SessionReport EditSession::report() const {
   rep.structures.push_back({"versions", row_version_.size() * sizeof(std::uint64_t) +
                                             removed_log_.size() * sizeof(removed_log_[0])});
   if (fields_) rep.structures.push_back({"deformation_fields", fields_->memory_bytes()});
+  if (detector_) {
+    rep.structures.push_back({std::string("collision_") + to_string(detector_->params().algorithm),
+                              detector_->memory_bytes()});
+  }
+  if (rest_radius_.size() > 0) {
+    rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});
+  }
   for (const auto& s : rep.structures) rep.total_bytes += s.bytes;
   rep.bytes_per_surfel = rep.surfels ? static_cast<double>(rep.total_bytes) / rep.surfels : 0.0;
   return rep;

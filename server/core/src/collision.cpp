@@ -1,0 +1,228 @@
+// Collision detection: algorithm names, parameter validation, the detector factory, and the
+// pieces the detectors share (zero-region copy with boundary marks, the §4.1 test).
+#include "surfeledit/core/collision.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "collision_detail.hpp"
+
+namespace surfeledit {
+
+// Defined in collision_simple.cpp, collision_temporal.cpp, collision_robust.cpp.
+std::unique_ptr<CollisionDetector> make_simple_detector(const CollisionParams& params, bool improved);
+std::unique_ptr<CollisionDetector> make_temporal_detector(const CollisionParams& params);
+std::unique_ptr<CollisionDetector> make_robust_detector(const CollisionParams& params);
+
+CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field) {
+  if (name == "none") return CollisionAlgorithm::None;
+  if (name == "simple") return CollisionAlgorithm::Simple;
+  if (name == "improved") return CollisionAlgorithm::Improved;
+  if (name == "temporal") return CollisionAlgorithm::Temporal;
+  if (name == "robust") return CollisionAlgorithm::Robust;
+  throw Error(ErrorCode::InvalidArgument, field,
+              "unknown collision algorithm '" + name + "' (expected none, simple, improved, temporal or robust)");
+}
+
+const char* to_string(CollisionAlgorithm algorithm) {
+  switch (algorithm) {
+    case CollisionAlgorithm::None: return "none";
+    case CollisionAlgorithm::Simple: return "simple";
+    case CollisionAlgorithm::Improved: return "improved";
+    case CollisionAlgorithm::Temporal: return "temporal";
+    case CollisionAlgorithm::Robust: return "robust";
+  }
+  return "unknown";
+}
+
+void validate(const CollisionParams& p) {
+  switch (p.algorithm) {
+    case CollisionAlgorithm::None:
+    case CollisionAlgorithm::Simple:
+    case CollisionAlgorithm::Improved:
+    case CollisionAlgorithm::Temporal:
+    case CollisionAlgorithm::Robust: break;
+    default:
+      throw Error(ErrorCode::InvalidArgument, "algorithm",
+                  "unknown collision algorithm value " + std::to_string(static_cast<int>(p.algorithm)));
+  }
+  if (!std::isfinite(p.threshold)) {
+    std::ostringstream msg;
+    msg << "must be finite, got " << p.threshold;
+    throw Error(ErrorCode::InvalidArgument, "threshold", msg.str());
+  }
+  if (p.boundary_n < 1) {
+    throw Error(ErrorCode::InvalidArgument, "boundary_n", "must be >= 1, got " + std::to_string(p.boundary_n));
+  }
+  if (p.boundary_i < 1 || p.boundary_i > p.boundary_n) {
+    throw Error(ErrorCode::InvalidArgument, "boundary_i",
+                "must be in 1..boundary_n (" + std::to_string(p.boundary_n) + "), got " +
+                    std::to_string(p.boundary_i));
+  }
+  if (p.threads < 0) {
+    throw Error(ErrorCode::InvalidArgument, "threads", "must be >= 0, got " + std::to_string(p.threads));
+  }
+}
+
+std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionParams& params) {
+  validate(params);
+  switch (params.algorithm) {
+    case CollisionAlgorithm::None: return nullptr;
+    case CollisionAlgorithm::Simple: return make_simple_detector(params, false);
+    case CollisionAlgorithm::Improved: return make_simple_detector(params, true);
+    case CollisionAlgorithm::Temporal: return make_temporal_detector(params);
+    case CollisionAlgorithm::Robust: return make_robust_detector(params);
+  }
+  return nullptr;
+}
+
+namespace detail {
+
+int resolve_threads(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
+
+void require_scene_rows(const CollisionScene& scene, Index rows, const char* what) {
+  const Eigen::Index n = rows;
+  if (scene.positions.rows() != n || scene.normals.rows() != n || scene.radii.size() != n ||
+      static_cast<Eigen::Index>(scene.regions.size()) != n) {
+    std::ostringstream msg;
+    msg << what << ": the detector holds " << rows << " rows but the scene has positions "
+        << scene.positions.rows() << ", normals " << scene.normals.rows() << ", radii " << scene.radii.size()
+        << ", regions " << scene.regions.size();
+    throw Error(ErrorCode::Internal, "scene", msg.str());
+  }
+}
+
+void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& zero) {
+  deformable.clear();
+  zero.clear();
+  for (std::size_t r = 0; r < scene.regions.size(); ++r)
+    (scene.regions[r] == Region::Zero ? zero : deformable).push_back(static_cast<Index>(r));
+}
+
+IndexList remap_rows(const std::vector<bool>& keep) {
+  IndexList out(keep.size(), -1);
+  Index j = 0;
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i]) out[i] = j++;
+  return out;
+}
+
+void compact(Points& a, const std::vector<bool>& keep) {
+  Eigen::Index j = 0;
+  for (Eigen::Index i = 0; i < a.rows(); ++i)
+    if (keep[static_cast<std::size_t>(i)]) a.row(j++) = a.row(i);
+  a.conservativeResize(j, 3);
+}
+
+void compact(Values& a, const std::vector<bool>& keep) {
+  Eigen::Index j = 0;
+  for (Eigen::Index i = 0; i < a.size(); ++i)
+    if (keep[static_cast<std::size_t>(i)]) a[j++] = a[i];
+  a.conservativeResize(j);
+}
+
+void append_row(Points& a, const Vec3& v) {
+  a.conservativeResize(a.rows() + 1, 3);
+  a.row(a.rows() - 1) = v.transpose();
+}
+
+void append_value(Values& a, double v) {
+  a.conservativeResize(a.size() + 1);
+  a[a.size() - 1] = v;
+}
+
+void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows) {
+  if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
+  const Eigen::Index z = static_cast<Eigen::Index>(zero_rows.size());
+  positions.resize(z, 3);
+  normals.resize(z, 3);
+  radii.resize(z);
+  for (Eigen::Index k = 0; k < z; ++k) {
+    const Index r = zero_rows[static_cast<std::size_t>(k)];
+    positions.row(k) = scene.positions.row(r);
+    normals.row(k) = scene.normals.row(r);
+    radii[k] = scene.radii[r];
+  }
+  rows = zero_rows;
+  marked.assign(zero_rows.size(), 0);
+  tree = std::make_unique<KdTree>(positions);
+}
+
+void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {
+  std::fill(marked.begin(), marked.end(), 0);
+  if (deformable.empty()) return;
+  // Row -> index into the zero copies (-1 for deformable rows).
+  IndexList zero_of_row(scene.regions.size(), -1);
+  for (std::size_t k = 0; k < rows.size(); ++k) zero_of_row[rows[k]] = static_cast<Index>(k);
+  KdTreeParams tp;
+  tp.threads = threads;
+  const KdTree whole(scene.positions, tp);
+  Points queries(static_cast<Eigen::Index>(deformable.size()), 3);
+  for (std::size_t q = 0; q < deformable.size(); ++q) queries.row(q) = scene.positions.row(deformable[q]);
+  // n + 1 neighbours: the surfel itself comes back too and is skipped.
+  const KnnResult knn = whole.knn(queries, n + 1);
+  for (std::size_t q = 0; q < deformable.size(); ++q) {
+    int seen = 0, marks = 0;
+    for (Eigen::Index j = 0; j < knn.indices.cols() && seen < n && marks < i; ++j) {
+      const Index r = knn.indices(q, j);
+      if (r < 0 || r == deformable[q]) continue;
+      ++seen;
+      const Index z = zero_of_row[r];
+      if (z >= 0) {
+        marked[z] = 1;
+        ++marks;
+      }
+    }
+  }
+}
+
+void ZeroSet::on_removed(const std::vector<bool>& keep, const IndexList& new_row) {
+  std::vector<bool> keep_zero(rows.size());
+  bool any_removed = false;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    keep_zero[k] = keep[rows[k]];
+    any_removed |= !keep_zero[k];
+  }
+  if (!any_removed) {
+    for (Index& r : rows) r = new_row[r];
+    return;
+  }
+  compact(positions, keep_zero);
+  compact(normals, keep_zero);
+  compact(radii, keep_zero);
+  compact(marked, keep_zero);
+  compact(rows, keep_zero);
+  for (Index& r : rows) r = new_row[r];
+  if (rows.empty()) throw Error(ErrorCode::Internal, "regions", "every zero surfel was removed");
+  tree = std::make_unique<KdTree>(positions);
+}
+
+std::size_t ZeroSet::memory_bytes() const {
+  return static_cast<std::size_t>(positions.size() + normals.size() + radii.size()) * sizeof(double) +
+         marked.capacity() + rows.capacity() * sizeof(Index) + (tree ? tree->memory_bytes() : 0);
+}
+
+SimpleTest simple_test(const CollisionParams& params, const ZeroSet& zero, Index k, const Vec3& p1, double r1,
+                       const Vec3& previous, bool previous_state) {
+  SimpleTest out;
+  const Vec3 d = p1 - zero.positions.row(k).transpose();
+  out.dist2 = d.squaredNorm();
+  if (params.step_bound) {
+    // Def. 6.1 with the surfel's own displacement t this step: farther than |t| + r1 + r2 from the
+    // nearest zero surfel, it cannot have crossed the zero surface.
+    const double bound = (p1 - previous).norm() + r1 + zero.radii[k];
+    if (out.dist2 > bound * bound) {
+      out.state = previous_state;
+      return out;
+    }
+  }
+  const bool inside = d.dot(zero.normals.row(k).transpose()) < params.threshold;
+  out.state = inside && !(params.boundary && zero.marked[static_cast<std::size_t>(k)]);
+  return out;
+}
+
+}  // namespace detail
+}  // namespace surfeledit

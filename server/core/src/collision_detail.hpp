@@ -1,0 +1,77 @@
+// Internal pieces shared by the collision detectors (not a public header).
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <vector>
+
+#include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/kdtree.hpp"
+
+namespace surfeledit::detail {
+
+// Worker threads for `threads` (0 = all hardware threads).
+int resolve_threads(int threads);
+
+// Milliseconds since `start`.
+inline double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+inline Vec3 row3(const Points& a, Index i) { return a.row(i).transpose(); }
+
+// Checks that every array of `scene` has `rows` rows (Internal otherwise: the session keeps them in step).
+void require_scene_rows(const CollisionScene& scene, Index rows, const char* what);
+
+// Rows of `scene` with region != Zero, ascending; `zero` gets the others.
+void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& zero);
+
+// Old row -> new row after a removal (`keep`: one flag per old row), -1 for removed rows.
+IndexList remap_rows(const std::vector<bool>& keep);
+
+// Keeps the entries of a per-row array whose flag is set (order kept).
+template <typename T>
+void compact(std::vector<T>& v, const std::vector<bool>& keep) {
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (keep[i]) v[j++] = v[i];
+  v.resize(j);
+}
+void compact(Points& a, const std::vector<bool>& keep);
+void compact(Values& a, const std::vector<bool>& keep);
+void append_row(Points& a, const Vec3& v);
+void append_value(Values& a, double v);
+
+// The zero region as the Simple / Improved / Temporal detectors see it: a private copy of the zero
+// surfels (they do not move), their k-d tree and their boundary marks (§4.1).
+struct ZeroSet {
+  Points positions;                  // #Z by 3
+  Points normals;                    // #Z by 3
+  Values radii;                      // #Z
+  std::vector<std::uint8_t> marked;  // #Z: 1 = boundary surfel
+  IndexList rows;                    // #Z: row in the model
+  std::unique_ptr<KdTree> tree;      // over `positions`
+
+  // Copies the zero rows of `scene` and builds the tree. Throws InvalidArgument when there are none.
+  void build(const CollisionScene& scene, const IndexList& zero_rows);
+  // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
+  // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
+  // number of nearest-neighbour queries made.
+  void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads);
+  // Index (into the copies) of the zero surfel nearest to p; -1 when there is none.
+  Index nearest(const Vec3& p) const { return tree->nearest(p); }
+  // Drops removed rows (marks of the survivors are kept) and renumbers rows; rebuilds the tree
+  // when a zero surfel went away.
+  void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
+  std::size_t memory_bytes() const;
+};
+
+// One evaluation of the §4.1 test for deformable surfel s1 at p1 against zero surfel k.
+struct SimpleTest {
+  double dist2 = 0.0;  // |p1 - p2|^2
+  bool state = false;  // colliding after the test
+};
+SimpleTest simple_test(const CollisionParams& params, const ZeroSet& zero, Index k, const Vec3& p1, double r1,
+                       const Vec3& previous, bool previous_state);
+
+}  // namespace surfeledit::detail

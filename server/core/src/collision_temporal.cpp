@@ -1,0 +1,164 @@
+// Temporal Coherence Algo (§4.3, thesis §6.2): each deformable surfel keeps a sphere (c, rho2) that
+// holds no zero surfel; while the surfel stays strictly inside it (|p - c|^2 < rho2) its state cannot
+// have changed and it is skipped. Otherwise it queries its nearest zero surfel, re-centres the sphere
+// (c = p, rho2 = |d|^2) and is tested with the §4.1 heuristics. Independent per surfel: multithreaded.
+// Depth (Eq. 6.4): rho - |p - c|.
+#include <algorithm>
+#include <cmath>
+
+#include "collision_detail.hpp"
+
+namespace surfeledit {
+
+namespace {
+
+using namespace detail;
+
+class TemporalDetector final : public CollisionDetector {
+ public:
+  explicit TemporalDetector(const CollisionParams& params) : CollisionDetector(params) {}
+
+  void reset(const CollisionScene& scene) override {
+    const auto start = std::chrono::steady_clock::now();
+    IndexList deformable, zero_rows;
+    split_rows(scene, deformable, zero_rows);
+    ZeroSet zero;
+    zero.build(scene, zero_rows);
+    const int threads = resolve_threads(params_.threads);
+    if (params_.boundary) zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads);
+    const Index rows = static_cast<Index>(scene.regions.size());
+    center_ = scene.positions;
+    rho2_.setZero(rows);
+    const Index n = static_cast<Index>(deformable.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (Index q = 0; q < n; ++q) {
+      const Index r = deformable[q];
+      const Vec3 p = row3(scene.positions, r);
+      rho2_[r] = (p - row3(zero.positions, zero.nearest(p))).squaredNorm();
+    }
+    zero_ = std::move(zero);
+    deformable_ = std::move(deformable);
+    rows_ = rows;
+    colliding_.assign(static_cast<std::size_t>(rows_), 0);
+    preprocess_ms_ = ms_since(start);
+  }
+
+  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+    const auto start = std::chrono::steady_clock::now();
+    require_scene_rows(scene, rows_, "detect");
+    if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
+    const Index n = static_cast<Index>(deformable_.size());
+    const int threads = resolve_threads(params_.threads);
+    std::vector<double> depth(static_cast<std::size_t>(n), 0.0);
+    Index tested = 0;
+    auto one = [&](Index q) -> Index {
+      const Index r = deformable_[q];
+      const Vec3 p1 = row3(scene.positions, r);
+      const double moved2 = (p1 - row3(center_, r)).squaredNorm();
+      if (moved2 < rho2_[r]) {
+        if (colliding_[r]) depth[q] = std::max(0.0, std::sqrt(rho2_[r]) - std::sqrt(moved2));
+        return 0;
+      }
+      const Index k = zero_.nearest(p1);
+      const SimpleTest t = simple_test(params_, zero_, k, p1, scene.radii[r], row3(previous, r), colliding_[r]);
+      center_.row(r) = p1.transpose();
+      rho2_[r] = t.dist2;
+      colliding_[r] = t.state;
+      depth[q] = std::sqrt(t.dist2);
+      return 1;
+    };
+    if (threads == 1 || n < 2048) {
+      for (Index q = 0; q < n; ++q) tested += one(q);
+    } else {
+#pragma omp parallel for schedule(dynamic, 512) num_threads(threads) reduction(+ : tested)
+      for (Index q = 0; q < n; ++q) tested += one(q);
+    }
+    CollisionResult result;
+    for (Index q = 0; q < n; ++q) {
+      const Index r = deformable_[q];
+      if (!colliding_[r]) continue;
+      result.colliding.push_back(r);
+      result.depths.push_back(depth[q]);
+    }
+    result.stats.deformable = n;
+    result.stats.tested = tested;
+    result.stats.queries = tested;
+    result.stats.colliding = static_cast<Index>(result.colliding.size());
+    result.stats.preprocess_ms = preprocess_ms_;
+    result.stats.detect_ms = ms_since(start);
+    return result;
+  }
+
+  void on_removed(const std::vector<bool>& keep) override {
+    if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
+    const IndexList new_row = remap_rows(keep);
+    // Removing zero surfels only empties spheres further: they stay valid.
+    zero_.on_removed(keep, new_row);
+    IndexList deformable;
+    for (Index r : deformable_)
+      if (keep[r]) deformable.push_back(new_row[r]);
+    deformable_ = std::move(deformable);
+    compact(center_, keep);
+    compact(rho2_, keep);
+    compact(colliding_, keep);
+    rows_ = static_cast<Index>(colliding_.size());
+  }
+
+  void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
+    const Index added = static_cast<Index>(parents.size());
+    require_scene_rows(scene, rows_ + added, "on_inserted");
+    for (Index k = 0; k < added; ++k) {
+      const Index q = parents[k];
+      if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
+        throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
+      }
+    }
+    center_.conservativeResize(rows_ + added, 3);
+    rho2_.conservativeResize(rows_ + added);
+    for (Index k = 0; k < added; ++k) {
+      const Index q = parents[k], b = rows_ + k;
+      colliding_.push_back(colliding_[q]);
+      deformable_.push_back(b);
+      // Child B: the parent's sphere if it lies inside it, else an empty sphere (tested next step).
+      const Vec3 pb = row3(scene.positions, b);
+      if ((pb - row3(center_, q)).squaredNorm() < rho2_[q]) {
+        center_.row(b) = center_.row(q);
+        rho2_[b] = rho2_[q];
+      } else {
+        center_.row(b) = pb.transpose();
+        rho2_[b] = 0.0;
+      }
+    }
+    // Child A (the parent row) keeps the sphere only if it lies inside it.
+    for (Index q : parents) {
+      const Vec3 pa = row3(scene.positions, q);
+      if (!((pa - row3(center_, q)).squaredNorm() < rho2_[q])) {
+        center_.row(q) = pa.transpose();
+        rho2_[q] = 0.0;
+      }
+    }
+    rows_ += added;
+  }
+
+  std::size_t memory_bytes() const override {
+    return zero_.memory_bytes() + deformable_.capacity() * sizeof(Index) + colliding_.capacity() +
+           static_cast<std::size_t>(center_.size() + rho2_.size()) * sizeof(double);
+  }
+
+ private:
+  ZeroSet zero_;
+  IndexList deformable_;                 // rows with region != Zero, ascending
+  Index rows_ = 0;
+  Points center_;                        // #P by 3: sphere centres c (rows of zero surfels unused)
+  Values rho2_;                          // #P: squared sphere radii
+  std::vector<std::uint8_t> colliding_;  // #P
+  double preprocess_ms_ = 0.0;
+};
+
+}  // namespace
+
+std::unique_ptr<CollisionDetector> make_temporal_detector(const CollisionParams& params) {
+  return std::make_unique<TemporalDetector>(params);
+}
+
+}  // namespace surfeledit

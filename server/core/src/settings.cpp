@@ -1,0 +1,108 @@
+// Session settings by name: kind checks, a validated copy, and the listing.
+#include "surfeledit/core/settings.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace surfeledit {
+
+namespace {
+
+const char* kind_of(const SettingValue& v) {
+  if (std::holds_alternative<double>(v)) return "number";
+  if (std::holds_alternative<bool>(v)) return "bool";
+  return "text";
+}
+
+[[noreturn]] void wrong_kind(const NamedSetting& s, const char* expected) {
+  throw Error(ErrorCode::InvalidArgument, s.name,
+              std::string("expects a ") + expected + ", got a " + kind_of(s.value));
+}
+
+double number(const NamedSetting& s) {
+  if (!std::holds_alternative<double>(s.value)) wrong_kind(s, "number");
+  const double v = std::get<double>(s.value);
+  if (!std::isfinite(v)) {
+    std::ostringstream msg;
+    msg << "must be finite, got " << v;
+    throw Error(ErrorCode::InvalidArgument, s.name, msg.str());
+  }
+  return v;
+}
+
+int integer(const NamedSetting& s) {
+  if (!std::holds_alternative<double>(s.value)) wrong_kind(s, "integer");
+  const double v = std::get<double>(s.value);
+  if (!std::isfinite(v) || v != std::floor(v) || v < std::numeric_limits<int>::min() ||
+      v > std::numeric_limits<int>::max()) {
+    std::ostringstream msg;
+    msg.precision(17);
+    msg << "expects an integer, got " << v;
+    throw Error(ErrorCode::InvalidArgument, s.name, msg.str());
+  }
+  return static_cast<int>(v);
+}
+
+bool flag(const NamedSetting& s) {
+  if (!std::holds_alternative<bool>(s.value)) wrong_kind(s, "bool");
+  return std::get<bool>(s.value);
+}
+
+const std::string& text(const NamedSetting& s) {
+  if (!std::holds_alternative<std::string>(s.value)) wrong_kind(s, "text");
+  return std::get<std::string>(s.value);
+}
+
+}  // namespace
+
+SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes) {
+  SessionSettings next = current;
+  CollisionParams& c = next.collision;
+  for (const NamedSetting& s : changes) {
+    if (s.name == "algorithm") {
+      c.algorithm = parse_algorithm(text(s), s.name);
+    } else if (s.name == "threshold") {
+      c.threshold = number(s);
+    } else if (s.name == "boundary") {
+      c.boundary = flag(s);
+    } else if (s.name == "boundary_n") {
+      c.boundary_n = integer(s);
+    } else if (s.name == "boundary_i") {
+      c.boundary_i = integer(s);
+    } else if (s.name == "step_bound") {
+      c.step_bound = flag(s);
+    } else if (s.name == "threads") {
+      c.threads = integer(s);
+    } else if (s.name == "resample") {
+      next.resample.enabled = flag(s);
+    } else if (s.name == "split_threshold") {
+      next.resample.split_threshold = number(s);
+    } else {
+      throw Error(ErrorCode::InvalidArgument, s.name,
+                  "unknown setting '" + s.name +
+                      "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, threads, "
+                      "resample or split_threshold)");
+    }
+  }
+  validate(next.collision);
+  validate(next.resample);
+  return next;
+}
+
+std::vector<NamedSetting> describe(const SessionSettings& s) {
+  const CollisionParams& c = s.collision;
+  return {
+      {"algorithm", std::string(to_string(c.algorithm))},
+      {"threshold", c.threshold},
+      {"boundary", c.boundary},
+      {"boundary_n", static_cast<double>(c.boundary_n)},
+      {"boundary_i", static_cast<double>(c.boundary_i)},
+      {"step_bound", c.step_bound},
+      {"threads", static_cast<double>(c.threads)},
+      {"resample", s.resample.enabled},
+      {"split_threshold", s.resample.split_threshold},
+  };
+}
+
+}  // namespace surfeledit
