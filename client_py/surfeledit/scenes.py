@@ -102,6 +102,14 @@ def _spacing(base: float, scale: float) -> float:
     return base / math.sqrt(scale)
 
 
+def rotation_matrix(axis: Tuple[float, float, float], angle: float) -> np.ndarray:
+    """(3, 3) rotation by ``angle`` radians about ``axis`` (right-handed, Rodrigues)."""
+    a = np.asarray(axis, np.float64)
+    a = a / np.linalg.norm(a)
+    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+
+
 def seam_points(positions: np.ndarray, zero: np.ndarray, spacing: float) -> np.ndarray:
     """Zero surfels whose nearest deformable surfel (at rest) is closer than 1.5 spacings, (S, 3)."""
     mask = np.zeros(positions.shape[0], bool)
@@ -136,7 +144,9 @@ def piercing(scale: float = 1.0, seed: int = 1, steps: int = 50) -> SceneSetup:
     z0 = half_t + r + 2.0 * h
     scene = core.Scene()
     scene.add(plate)
-    scene.add(core.make_sphere(r, center=[0.0, 0.0, z0]))
+    # A generic orientation: the sphere is sampled in rings of constant latitude, and a ring parallel
+    # to the plate would cross it all at once (every step hitting the same offset from the face).
+    scene.add(core.make_sphere(r, center=[0.0, 0.0, z0], rotation=rotation_matrix((1.0, 2.0, 3.0), 0.7)))
     s = scene.sample(spacing=h, seed=seed)
     part = np.asarray(s.part)
     return _setup("piercing", s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, plate.sdf,
