@@ -19,9 +19,76 @@ IdList to_ids(const pyb::handle& h, const char* field) {
 
 pyb::array_t<std::uint64_t> ids_array(const IdList& ids) { return pyb::array_t<std::uint64_t>(ids.size(), ids.data()); }
 
+// Keyword arguments -> settings: bool -> bool, int/float -> number, str -> text.
+std::vector<NamedSetting> to_settings(const pyb::kwargs& kwargs) {
+  std::vector<NamedSetting> out;
+  for (const auto& [key, value] : kwargs) {
+    const std::string name = pyb::cast<std::string>(key);
+    if (pyb::isinstance<pyb::bool_>(value)) {
+      out.push_back({name, pyb::cast<bool>(value)});
+    } else if (pyb::isinstance<pyb::int_>(value) || pyb::isinstance<pyb::float_>(value)) {
+      out.push_back({name, pyb::cast<double>(value)});
+    } else if (pyb::isinstance<pyb::str>(value)) {
+      out.push_back({name, pyb::cast<std::string>(value)});
+    } else {
+      throw Error(ErrorCode::InvalidArgument, name,
+                  "expects a bool, number or str, got " + std::string(pyb::str(pyb::type::handle_of(value).attr("__name__"))));
+    }
+  }
+  return out;
+}
+
+pyb::dict settings_dict(const SessionSettings& settings) {
+  pyb::dict d;
+  for (const NamedSetting& s : describe(settings)) {
+    if (const bool* b = std::get_if<bool>(&s.value)) {
+      d[pyb::str(s.name)] = *b;
+    } else if (const std::string* t = std::get_if<std::string>(&s.value)) {
+      d[pyb::str(s.name)] = *t;
+    } else {
+      const double v = std::get<double>(s.value);
+      const bool integral = s.name == "boundary_n" || s.name == "boundary_i" || s.name == "threads";
+      if (integral) {
+        d[pyb::str(s.name)] = static_cast<long long>(v);
+      } else {
+        d[pyb::str(s.name)] = v;
+      }
+    }
+  }
+  return d;
+}
+
+pyb::dict stats_dict(const CollisionStats& s) {
+  pyb::dict d;
+  d["deformable"] = s.deformable;
+  d["tested"] = s.tested;
+  d["queries"] = s.queries;
+  d["colliding"] = s.colliding;
+  d["detect_ms"] = s.detect_ms;
+  d["preprocess_ms"] = s.preprocess_ms;
+  return d;
+}
+
 }  // namespace
 
 void bind_edit_session(pyb::module_& m) {
+  pyb::class_<StepOutcome>(m, "StepOutcome", "What one deformation step did (in-process)")
+      .def_readonly("seq", &StepOutcome::seq)
+      .def_property_readonly("moved", [](const StepOutcome& o) { return o.moved.size(); }, "number of moved or split rows")
+      .def_property_readonly("inserted", [](const StepOutcome& o) { return ids_array(o.inserted); })
+      .def_property_readonly("center", [](const StepOutcome& o) { return o.center; })
+      .def_readonly("detected", &StepOutcome::detected)
+      .def_property_readonly("colliding", [](const StepOutcome& o) { return ids_array(o.colliding); })
+      .def_property_readonly("depths",
+                             [](const StepOutcome& o) { return pyb::array_t<double>(o.depths.size(), o.depths.data()); })
+      .def_property_readonly("stats", [](const StepOutcome& o) { return stats_dict(o.stats); })
+      .def_readonly("deform_ms", &StepOutcome::deform_ms)
+      .def_readonly("resample_ms", &StepOutcome::resample_ms)
+      .def("__repr__", [](const StepOutcome& o) {
+        return "StepOutcome(seq=" + std::to_string(o.seq) + ", moved=" + std::to_string(o.moved.size()) +
+               ", inserted=" + std::to_string(o.inserted.size()) + ", colliding=" + std::to_string(o.colliding.size()) + ")";
+      });
+
   pyb::class_<EditSession>(m, "EditSession", "An editing session in-process (what the server holds per session)")
       .def(pyb::init([](const std::string& name, int threads) { return std::make_unique<EditSession>(name, SessionParams{threads}); }),
            pyb::arg("name") = "local", pyb::kw_only(), pyb::arg("threads") = 0)
@@ -49,16 +116,32 @@ void bind_edit_session(pyb::module_& m) {
           [](EditSession& s, const Vec3& translation, const Vec3& axis, double angle, std::optional<Vec3> center,
              const std::string& blend) {
             const DeformParams p = make_deform_params(translation, axis, angle, center, blend);
-            StepOutcome r;
-            {
-              pyb::gil_scoped_release release;
-              r = s.deform(p);
-            }
-            return r.moved.size();
+            pyb::gil_scoped_release release;
+            return s.deform(p);
           },
           pyb::kw_only(), pyb::arg("translation") = Vec3::Zero(), pyb::arg("axis") = Vec3::UnitZ(),
           pyb::arg("angle") = 0.0, pyb::arg("center") = pyb::none(), pyb::arg("blend") = "smooth",
-          "One step; returns the number of moved surfels")
+          "One step, then resampling and collision detection as configured; returns a StepOutcome")
+      .def(
+          "configure",
+          [](EditSession& s, const pyb::kwargs& kwargs) {
+            const std::vector<NamedSetting> changes = to_settings(kwargs);
+            pyb::gil_scoped_release release;
+            s.configure(changes);
+          },
+          "Session settings by keyword (algorithm=, threshold=, boundary=, boundary_n=, boundary_i=, step_bound=, "
+          "threads=, resample=, split_threshold=); validated before anything changes")
+      .def("settings", [](const EditSession& s) { return settings_dict(s.settings()); })
+      .def("colliding", [](const EditSession& s) { return ids_array(s.colliding()); },
+           "Colliding ids after the last step, ascending")
+      .def(
+          "remove",
+          [](EditSession& s, const pyb::handle& ids) {
+            const IdList list = to_ids(ids, "ids");
+            pyb::gil_scoped_release release;
+            s.remove(list);
+          },
+          pyb::arg("ids"))
       .def_property_readonly("version", &EditSession::version)
       .def_property_readonly("state_hash", &EditSession::state_hash)
       .def("ids", [](const EditSession& s) { return ids_array(s.model().ids()); })

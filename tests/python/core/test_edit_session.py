@@ -32,9 +32,9 @@ def test_steps_bump_version_and_move_only_the_deformable_part(scene) -> None:
     s, es = scene
     es.set_regions(zero=np.flatnonzero(s.part == 0), one=np.flatnonzero(s.part == 1))
     v = es.version
-    moved = es.deform(translation=(0.0, 0.0, -0.05))
+    step = es.deform(translation=(0.0, 0.0, -0.05))
     assert es.version == v + 1
-    assert moved == int((s.part == 1).sum())
+    assert step.moved == int((s.part == 1).sum())
     p = es.positions()
     np.testing.assert_array_equal(p[s.part == 0], s.positions[s.part == 0])
     np.testing.assert_allclose(p[s.part == 1], s.positions[s.part == 1] + [0, 0, -0.05], atol=1e-12)
