@@ -1,0 +1,462 @@
+// A binary bounding volume hierarchy over a subset of a model's surfels, with the box kind chosen
+// at compile time (thesis §7.3.2: templates, no virtual calls in the hot path). Box kinds: Aabb,
+// Obb, Sphere. A Box provides
+//   static Box fit(positions, radii, rows, n)          tight box over the balls of rows (kDeadRow skipped)
+//   static Vec3 split_direction(box, positions, rows, n) unit axis the build splits along
+//   expand(p, r), enclose(child), inflate(m), enforce_min_extent(e), contains(p, r), contains(child)
+//
+// Layout: nodes in one flat array; the children of a node are adjacent (first_child, first_child + 1)
+// and always have larger indices than their parent, so a reverse sweep visits children before
+// parents. Every node covers a range of slots of `order()`, a permutation of the tree's rows.
+//
+// Invariants (checked by the property tests): every live box contains the balls (position, radius)
+// of all surfels under it, and every parent contains its children -- after the build, after each
+// bottom-up refit, and for the nodes a top-down refit has visited in the current step.
+//
+// Deforming trees (Box = Aabb): refit() starts a step; with UpdateMode TopDown / Hybrid the deeper
+// nodes are refit when a traversal calls touch() on them. Removed surfels are marked dead and dropped
+// at the next refit of their leaf; inserted surfels join the leaf of the surfel they were split
+// from, whose box (and its ancestors') grows to cover them until the next rebuild.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+#include "surfeledit/core/bvh/aabb.hpp"
+#include "surfeledit/core/bvh/counters.hpp"
+#include "surfeledit/core/bvh/params.hpp"
+
+namespace surfeledit::bvh {
+
+// One node of a Bvh: its box, its children and the slots of the rows under it.
+template <class Box>
+struct BvhNode {
+  Box box;                        // bounds the balls of every live surfel under this node
+  std::int32_t first_child = -1;  // index of the left child; the right one is first_child + 1; -1 = leaf
+  std::int32_t parent = -1;       // index of the parent; -1 for the root
+  std::int32_t begin = 0;         // first slot of order() under this node
+  std::int32_t end = 0;           // one past the last slot (a leaf's live rows are compacted to the front)
+  std::int32_t level = 0;         // depth, root = 0
+
+  bool leaf() const { return first_child < 0; }
+  std::int32_t size() const { return end - begin; }  // surfel count used by the descend rule (Code 8.4)
+};
+
+template <class Box>
+class Bvh {
+ public:
+  using Node = BvhNode<Box>;
+
+  Bvh() = default;
+  // Builds over `rows` (indices into `positions` / `radii`; `radii` may be empty = radius 0).
+  Bvh(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params = {}) {
+    build(positions, radii, rows, params);
+  }
+
+  // Top-down build (§5 "Build"): split the node's split_direction at the mean of the projected
+  // positions; stop at max_level or at <= leaf_max_surfels; a child never gets fewer than
+  // leaf_min_surfels. Then leaf boxes get min_leaf_extent and parents are grown over their children.
+  void build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params);
+
+  const BvhParams& params() const { return params_; }
+  const std::vector<Node>& nodes() const { return nodes_; }
+  const Node& node(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)]; }
+  const Box& box(std::int32_t i) const { return nodes_[static_cast<std::size_t>(i)].box; }
+  const IndexList& order() const { return order_; }
+  bool empty() const { return nodes_.empty(); }
+  int height() const { return height_; }                  // number of levels (0 when empty)
+  Index surfel_count() const { return live_; }            // live surfels, inserted ones included
+  double build_ms() const { return build_ms_; }           // wall time of the last build
+  // True once a refit, insertion or removal has changed the tree since the last build
+  // (the thesis's hasBeenUpdated: a rebuild would fit tighter).
+  bool refit_since_build() const { return refit_since_build_; }
+  std::size_t memory_bytes() const;
+
+  // Calls f(row) for each live surfel under `node` (inserted ones included).
+  template <class F>
+  void for_each_row(std::int32_t node, F&& f) const;
+
+  // ---- deforming AABB trees ------------------------------------------------------------------
+  // Starts a step: bottom-up part of the refit for the current mode (see UpdateMode). The arrays
+  // must stay alive and unchanged until the next refit(), since touch() reads them.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  BvhCounters refit(const Points& positions, const Values& radii);
+  // Top-down part: refits `node` from its surfels if it is below the bottom-up levels and was not
+  // refit in this step yet (then grows its ancestors over it if needed). Cheap when nothing to do.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  void touch(std::int32_t node, BvhCounters& counters);
+  // Refits every node now (a full top-down pass over what touch() would do), e.g. before inspecting boxes.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  void touch_all(BvhCounters& counters);
+  std::uint64_t step() const { return step_; }  // incremented by each refit()
+
+  // The model dropped rows: `keep` has one flag per old row. Dropped surfels become dead slots
+  // (boxes unchanged until their leaf's next refit); kept rows are renumbered.
+  void on_removed(const std::vector<bool>& keep);
+  // The model appended parents.size() rows after its existing ones (row = positions.rows() -
+  // parents.size() + k was split from parents[k]). Each joins its parent's leaf, whose box and
+  // ancestors grow to cover it. Children of rows not in this tree are ignored.
+  BvhCounters on_inserted(const Points& positions, const Values& radii, const IndexList& parents);
+
+  // ---- tree/tree marks (Code 8.4) ------------------------------------------------------------
+  // Starts a new marking epoch: every node is unmarked at once.
+  void new_marks() {
+    if (++mark_ == 0) {
+      std::fill(marks_.begin(), marks_.end(), 0u);
+      mark_ = 1;
+    }
+  }
+  bool marked(std::int32_t n) const { return marks_[static_cast<std::size_t>(n)] == mark_; }
+  void set_mark(std::int32_t n) { marks_[static_cast<std::size_t>(n)] = mark_; }
+
+ private:
+  Node& mut(std::int32_t i) { return nodes_[static_cast<std::size_t>(i)]; }
+  void compact_leaf(std::int32_t leaf);
+  Aabb tight_aabb(std::int32_t node) const;
+  unsigned refit_axes(Aabb& box, const Aabb& tight, unsigned axes) const;
+  void grow_ancestors(std::int32_t node);
+  int bottom_up_levels() const;
+
+  BvhParams params_;
+  std::vector<Node> nodes_;
+  IndexList order_;                        // slots: a permutation of the tree's rows, kDeadRow when removed
+  std::vector<std::int32_t> leaf_of_row_;  // by model row: its leaf, -1 if not in this tree
+  // Inserted surfels: singly linked list per leaf (head by node, next and row by entry).
+  std::vector<std::int32_t> extra_head_, extra_next_;
+  IndexList extra_row_;
+  Index extras_ = 0;                       // live inserted surfels
+  Index live_ = 0;
+  int height_ = 0;
+  double build_ms_ = 0.0;
+  bool refit_since_build_ = false;
+  // Step state of a deforming tree.
+  std::uint64_t step_ = 0;
+  std::vector<std::uint64_t> stamp_;       // step in which a node was last refit
+  std::vector<std::uint8_t> masks_;        // scratch: axes a node changed in the bottom-up sweep
+  int cut_ = 0;                            // nodes with level < cut_ are refit bottom-up
+  const Points* positions_ = nullptr;      // arrays of the current step (for touch)
+  const Values* radii_ = nullptr;
+  // Marks of the tree/tree traversal.
+  std::vector<std::uint32_t> marks_;
+  std::uint32_t mark_ = 1;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Implementation
+
+template <class Box>
+void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params) {
+  validate(params);
+  const auto t0 = std::chrono::steady_clock::now();
+  params_ = params;
+  nodes_.clear();
+  order_ = rows;
+  const std::int32_t n = static_cast<std::int32_t>(order_.size());
+  live_ = n;
+  extras_ = 0;
+  extra_next_.clear();
+  extra_row_.clear();
+  refit_since_build_ = false;
+  step_ = 0;
+  height_ = 0;
+  cut_ = 0;
+  positions_ = nullptr;
+  radii_ = nullptr;
+  if (n > 0) {
+    nodes_.reserve(static_cast<std::size_t>(2 * (n / std::max(1, params.leaf_min_surfels)) + 1));
+    Node root;
+    root.begin = 0;
+    root.end = n;
+    nodes_.push_back(root);
+    std::vector<std::int32_t> stack{0};
+    std::vector<double> proj;
+    while (!stack.empty()) {
+      const std::int32_t i = stack.back();
+      stack.pop_back();
+      const std::int32_t begin = nodes_[i].begin, end = nodes_[i].end, level = nodes_[i].level;
+      const std::int32_t count = end - begin;
+      Index* rows_ptr = order_.data() + begin;
+      nodes_[i].box = Box::fit(positions, radii, rows_ptr, static_cast<std::size_t>(count));
+      height_ = std::max(height_, level + 1);
+      if (level >= params.max_level || count <= params.leaf_max_surfels || count < 2 * params.leaf_min_surfels) continue;
+      const Vec3 dir = Box::split_direction(nodes_[i].box, positions, rows_ptr, static_cast<std::size_t>(count));
+      double mean = 0.0;
+      for (std::int32_t k = 0; k < count; ++k) mean += positions.row(rows_ptr[k]).dot(dir);
+      mean /= count;
+      Index* mid = std::partition(rows_ptr, rows_ptr + count,
+                                  [&](Index r) { return positions.row(r).dot(dir) < mean; });
+      std::int32_t cut = static_cast<std::int32_t>(mid - rows_ptr);
+      const std::int32_t lo_cut = params.leaf_min_surfels, hi_cut = count - params.leaf_min_surfels;
+      if (cut < lo_cut || cut > hi_cut) {
+        // The mean leaves a side too small (or empty): take the nearest admissible cut by rank.
+        cut = std::clamp(cut, lo_cut, hi_cut);
+        std::nth_element(rows_ptr, rows_ptr + cut, rows_ptr + count, [&](Index a, Index b) {
+          return positions.row(a).dot(dir) < positions.row(b).dot(dir);
+        });
+      }
+      const std::int32_t c = static_cast<std::int32_t>(nodes_.size());
+      Node left, right;
+      left.parent = right.parent = i;
+      left.level = right.level = level + 1;
+      left.begin = begin;
+      left.end = right.begin = begin + cut;
+      right.end = end;
+      nodes_[i].first_child = c;
+      nodes_.push_back(left);
+      nodes_.push_back(right);
+      stack.push_back(c + 1);
+      stack.push_back(c);
+    }
+    // §10.1.1: minimum leaf extent, then every parent at least as large as (containing) its children.
+    for (std::size_t k = nodes_.size(); k-- > 0;) {
+      Node& nd = nodes_[k];
+      if (nd.leaf()) {
+        if (params.min_leaf_extent > 0.0) nd.box.enforce_min_extent(params.min_leaf_extent);
+      } else {
+        nd.box.enclose(nodes_[nd.first_child].box);
+        nd.box.enclose(nodes_[nd.first_child + 1].box);
+      }
+    }
+  }
+  Index max_row = -1;
+  for (Index r : order_) max_row = std::max(max_row, r);
+  leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    if (nodes_[k].leaf())
+      for (std::int32_t s = nodes_[k].begin; s < nodes_[k].end; ++s) leaf_of_row_[order_[s]] = static_cast<std::int32_t>(k);
+  extra_head_.assign(nodes_.size(), -1);
+  stamp_.assign(nodes_.size(), 0);
+  masks_.assign(nodes_.size(), 0);
+  marks_.assign(nodes_.size(), 0);
+  mark_ = 1;
+  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <class Box>
+std::size_t Bvh<Box>::memory_bytes() const {
+  return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(Index) +
+         leaf_of_row_.capacity() * sizeof(std::int32_t) +
+         (extra_head_.capacity() + extra_next_.capacity()) * sizeof(std::int32_t) + extra_row_.capacity() * sizeof(Index) +
+         stamp_.capacity() * sizeof(std::uint64_t) + masks_.capacity() + marks_.capacity() * sizeof(std::uint32_t);
+}
+
+template <class Box>
+template <class F>
+void Bvh<Box>::for_each_row(std::int32_t node, F&& f) const {
+  const Node& nd = nodes_[static_cast<std::size_t>(node)];
+  for (std::int32_t s = nd.begin; s < nd.end; ++s)
+    if (order_[s] >= 0) f(order_[s]);
+  if (extras_ == 0) return;
+  // Inserted surfels hang off leaves: walk the leaves under `node`.
+  std::int32_t stack_buf[128];
+  int top = 0;
+  stack_buf[top++] = node;
+  while (top > 0) {
+    const std::int32_t i = stack_buf[--top];
+    const Node& x = nodes_[static_cast<std::size_t>(i)];
+    if (x.leaf()) {
+      for (std::int32_t e = extra_head_[i]; e >= 0; e = extra_next_[e])
+        if (extra_row_[e] >= 0) f(extra_row_[e]);
+    } else {
+      stack_buf[top++] = x.first_child;
+      stack_buf[top++] = x.first_child + 1;
+    }
+  }
+}
+
+template <class Box>
+void Bvh<Box>::compact_leaf(std::int32_t leaf) {
+  Node& nd = mut(leaf);
+  std::int32_t w = nd.begin;
+  for (std::int32_t s = nd.begin; s < nd.end; ++s)
+    if (order_[s] >= 0) order_[w++] = order_[s];
+  for (std::int32_t s = w; s < nd.end; ++s) order_[s] = kDeadRow;
+  nd.end = w;
+  // Unlink dead inserted entries.
+  std::int32_t* link = &extra_head_[leaf];
+  while (*link >= 0) {
+    if (extra_row_[*link] < 0) *link = extra_next_[*link];
+    else link = &extra_next_[*link];
+  }
+}
+
+template <class Box>
+Aabb Bvh<Box>::tight_aabb(std::int32_t node) const {
+  Aabb b;
+  const Points& p = *positions_;
+  const Values& r = *radii_;
+  for_each_row(node, [&](Index row) { b.expand(p.row(row).transpose(), radius_of(r, row)); });
+  if (nodes_[node].leaf() && params_.min_leaf_extent > 0.0 && !b.empty()) b.enforce_min_extent(params_.min_leaf_extent);
+  return b;
+}
+
+// Recomputes (from `tight`, plus inflation) each axis in `axes` along which `tight` leaves `box`;
+// returns the bit mask (1 = x, 2 = y, 4 = z) of the axes changed.
+template <class Box>
+unsigned Bvh<Box>::refit_axes(Aabb& box, const Aabb& tight, unsigned axes) const {
+  unsigned changed = 0;
+  for (int d = 0; d < 3; ++d) {
+    if (!(axes & (1u << d))) continue;
+    if (tight.lo[d] < box.lo[d] || tight.hi[d] > box.hi[d]) {
+      box.lo[d] = tight.lo[d] - params_.inflation;
+      box.hi[d] = tight.hi[d] + params_.inflation;
+      changed |= 1u << d;
+    }
+  }
+  return changed;
+}
+
+template <class Box>
+void Bvh<Box>::grow_ancestors(std::int32_t node) {
+  std::int32_t child = node;
+  std::int32_t p = nodes_[node].parent;
+  while (p >= 0 && !nodes_[p].box.contains(nodes_[child].box)) {
+    mut(p).box.enclose(nodes_[child].box);
+    refit_since_build_ = true;
+    child = p;
+    p = nodes_[p].parent;
+  }
+}
+
+template <class Box>
+int Bvh<Box>::bottom_up_levels() const {
+  switch (params_.update) {
+    case UpdateMode::BottomUp: return height_;
+    case UpdateMode::TopDown: return 0;
+    case UpdateMode::Hybrid: break;
+  }
+  return static_cast<int>(std::lround(params_.hybrid_f * height_));
+}
+
+template <class Box>
+template <class B, class>
+BvhCounters Bvh<Box>::refit(const Points& positions, const Values& radii) {
+  BvhCounters c;
+  positions_ = &positions;
+  radii_ = &radii;
+  ++step_;
+  cut_ = bottom_up_levels();
+  bool changed_any = false;
+  for (std::size_t k = nodes_.size(); k-- > 0;) {
+    const std::int32_t i = static_cast<std::int32_t>(k);
+    Node& nd = nodes_[k];
+    if (nd.level >= cut_) continue;  // refit lazily by touch()
+    unsigned m = 0;
+    if (nd.leaf() || nd.level == cut_ - 1) {
+      // Deepest bottom-up node: fit from its surfels (leaves drop their dead slots first).
+      if (nd.leaf()) compact_leaf(i);
+      const Aabb tight = tight_aabb(i);
+      ++c.nu;
+      if (!tight.empty()) {
+        m = refit_axes(nd.box, tight, 7u);
+      } else if (!nd.box.empty()) {
+        nd.box = Aabb{};  // no live surfel left: an empty box overlaps nothing and fits in any parent
+        m = 7u;
+      }
+    } else {
+      const unsigned child_mask = masks_[nd.first_child] | masks_[nd.first_child + 1];
+      if (child_mask) {
+        Aabb u = nodes_[nd.first_child].box;
+        u.expand(nodes_[nd.first_child + 1].box);
+        ++c.nu;
+        m = refit_axes(nd.box, u, child_mask);
+      }
+    }
+    masks_[k] = static_cast<std::uint8_t>(m);
+    stamp_[k] = step_;
+    changed_any |= m != 0;
+  }
+  if (changed_any) refit_since_build_ = true;
+  return c;
+}
+
+template <class Box>
+template <class B, class>
+void Bvh<Box>::touch(std::int32_t node, BvhCounters& counters) {
+  const std::size_t k = static_cast<std::size_t>(node);
+  if (stamp_[k] == step_) return;
+  stamp_[k] = step_;
+  if (positions_ == nullptr) return;  // never refit: the build is current
+  Node& nd = nodes_[k];
+  if (nd.leaf()) compact_leaf(node);
+  Aabb tight = tight_aabb(node);
+  ++counters.nu;
+  if (!tight.empty()) tight.inflate(params_.inflation);  // else: no live surfel, the box becomes empty
+  if (tight.lo != nd.box.lo || tight.hi != nd.box.hi) {
+    nd.box = tight;
+    refit_since_build_ = true;
+    grow_ancestors(node);
+  }
+}
+
+template <class Box>
+template <class B, class>
+void Bvh<Box>::touch_all(BvhCounters& counters) {
+  for (std::size_t k = 0; k < nodes_.size(); ++k) touch(static_cast<std::int32_t>(k), counters);
+}
+
+template <class Box>
+void Bvh<Box>::on_removed(const std::vector<bool>& keep) {
+  std::vector<Index> remap(keep.size(), kDeadRow);
+  Index next = 0;
+  for (std::size_t r = 0; r < keep.size(); ++r)
+    if (keep[r]) remap[r] = next++;
+  std::vector<std::int32_t> leaf_of(static_cast<std::size_t>(next), -1);
+  for (std::size_t r = 0; r < keep.size() && r < leaf_of_row_.size(); ++r)
+    if (keep[r]) leaf_of[static_cast<std::size_t>(remap[r])] = leaf_of_row_[r];
+  leaf_of_row_.swap(leaf_of);
+  bool removed = false;
+  auto apply = [&](Index& row) {
+    if (row < 0) return;
+    const Index nr = static_cast<std::size_t>(row) < remap.size() ? remap[static_cast<std::size_t>(row)] : kDeadRow;
+    if (nr < 0) {
+      removed = true;
+      --live_;
+    }
+    row = nr;
+  };
+  for (Index& row : order_) apply(row);
+  for (Index& row : extra_row_) {
+    const bool was = row >= 0;
+    apply(row);
+    if (was && row < 0) --extras_;
+  }
+  if (removed) refit_since_build_ = true;
+}
+
+template <class Box>
+BvhCounters Bvh<Box>::on_inserted(const Points& positions, const Values& radii, const IndexList& parents) {
+  BvhCounters c;
+  const Index first = static_cast<Index>(positions.rows() - static_cast<Eigen::Index>(parents.size()));
+  leaf_of_row_.resize(static_cast<std::size_t>(positions.rows()), -1);
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index parent = parents[k];
+    if (parent < 0 || static_cast<std::size_t>(parent) >= leaf_of_row_.size()) continue;
+    const std::int32_t leaf = leaf_of_row_[static_cast<std::size_t>(parent)];
+    if (leaf < 0) continue;
+    const Index row = first + static_cast<Index>(k);
+    const std::int32_t e = static_cast<std::int32_t>(extra_row_.size());
+    extra_row_.push_back(row);
+    extra_next_.push_back(extra_head_[leaf]);
+    extra_head_[leaf] = e;
+    leaf_of_row_[static_cast<std::size_t>(row)] = leaf;
+    ++extras_;
+    ++live_;
+    const Vec3 p = positions.row(row).transpose();
+    const double r = radius_of(radii, row);
+    Box& b = mut(leaf).box;
+    if (!b.contains(p, r)) {
+      b.expand(p, r);
+      ++c.nu;
+      grow_ancestors(leaf);
+    }
+    refit_since_build_ = true;
+  }
+  return c;
+}
+
+}  // namespace surfeledit::bvh
