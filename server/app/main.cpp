@@ -48,7 +48,14 @@ int main(int argc, char** argv) {
   app.add_option("--threads", config.threads, "Worker threads per session for batch work (0: all cores)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::uint64_t update_queue_mb = config.max_update_queue_bytes >> 20;
+  app.add_option("--max-update-queue-mb", update_queue_mb,
+                 "Update samples waiting for the publisher thread, in MiB; beyond it a session's queued updates "
+                 "are merged into one")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 20));
   CLI11_PARSE(app, argc, argv);
+  config.max_update_queue_bytes = update_queue_mb << 20;
 
   auto log = spdlog::stderr_color_mt("surfeledit");
   log->set_level(spdlog::level::from_str(log_level));

@@ -1,6 +1,8 @@
 #include "surfeledit/service/convert.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <variant>
 
 namespace surfeledit::service {
 
@@ -23,6 +25,17 @@ Seq borrow_one(T* element, bool present) {
   s._maximum = present ? 1 : 0;
   s._length = present ? 1 : 0;
   s._buffer = present ? element : nullptr;
+  s._release = false;
+  return s;
+}
+
+// A non-owning C sequence over `count` elements at `data`.
+template <typename Seq, typename T>
+Seq borrow_range(const T* data, std::size_t count) {
+  Seq s{};
+  s._maximum = static_cast<uint32_t>(count);
+  s._length = static_cast<uint32_t>(count);
+  s._buffer = count == 0 ? nullptr : const_cast<T*>(data);
   s._release = false;
   return s;
 }
@@ -94,6 +107,43 @@ DeformParams to_core(const surfeledit_proto_Deform& d, const std::string& field)
   return out;
 }
 
+std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std::string& field) {
+  std::vector<NamedSetting> out;
+  out.reserve(c.settings._length);
+  for (uint32_t i = 0; i < c.settings._length; ++i) {
+    const surfeledit_proto_Setting& s = c.settings._buffer[i];
+    NamedSetting named;
+    named.name = str(s.name);
+    switch (s.kind) {
+      case surfeledit_proto_SETTING_NUMBER: named.value = s.number; break;
+      case surfeledit_proto_SETTING_BOOL: named.value = static_cast<bool>(s.flag); break;
+      case surfeledit_proto_SETTING_TEXT: named.value = str(s.text); break;
+      default:
+        throw Error(ErrorCode::InvalidArgument,
+                    named.name.empty() ? field + ".settings[" + std::to_string(i) + "]" : named.name,
+                    "unknown setting kind " + std::to_string(static_cast<long>(s.kind)));
+    }
+    out.push_back(std::move(named));
+  }
+  return out;
+}
+
+Setting to_reply(const NamedSetting& s) {
+  Setting out;
+  out.name = s.name;
+  if (const double* number = std::get_if<double>(&s.value)) {
+    out.kind = SettingKind::Number;
+    out.number = *number;
+  } else if (const bool* flag = std::get_if<bool>(&s.value)) {
+    out.kind = SettingKind::Bool;
+    out.flag = *flag;
+  } else {
+    out.kind = SettingKind::Text;
+    out.text = std::get<std::string>(s.value);
+  }
+  return out;
+}
+
 ReplyView::ReplyView(const Reply& reply) {
   msg_.client_id = cstr(reply.client_id);
   msg_.request_id = reply.request_id;
@@ -130,6 +180,17 @@ ReplyView::ReplyView(const Reply& reply) {
     structures_.reserve(s.structures.size());
     for (const auto& [name, bytes] : s.structures) structures_.push_back(surfeledit_proto_Structure{cstr(name), bytes});
     session_info_.structures = borrow<dds_sequence_surfeledit_proto_Structure>(structures_);
+    settings_.reserve(s.settings.size());
+    for (const Setting& st : s.settings) {
+      surfeledit_proto_Setting m{};
+      m.name = cstr(st.name);
+      m.kind = static_cast<surfeledit_proto_SettingKind>(st.kind);
+      m.number = st.number;
+      m.flag = st.flag;
+      m.text = cstr(st.text);
+      settings_.push_back(m);
+    }
+    session_info_.settings = borrow<dds_sequence_surfeledit_proto_Setting>(settings_);
   }
   msg_.session_info =
       borrow_one<dds_sequence_surfeledit_proto_SessionInfo>(&session_info_, reply.session_info.has_value());
@@ -151,23 +212,36 @@ ReplyView::ReplyView(const Reply& reply) {
     step_.seq = reply.step->seq;
     step_.moved = reply.step->moved;
     step_.center = surfeledit_proto_Vec3{reply.step->center[0], reply.step->center[1], reply.step->center[2]};
+    step_.detected = reply.step->detected;
+    step_.colliding = borrow<dds_sequence_unsigned_long_long>(reply.step->colliding);
+    step_.depths = borrow<dds_sequence_double>(reply.step->depths);
+    const CollisionStatsInfo& cs = reply.step->stats;
+    step_.stats = surfeledit_proto_CollisionStats{cs.deformable, cs.tested,    cs.queries,
+                                                  cs.colliding,  cs.detect_ms, cs.preprocess_ms};
+    step_.inserted = borrow<dds_sequence_unsigned_long_long>(reply.step->inserted);
   }
   msg_.step = borrow_one<dds_sequence_surfeledit_proto_StepInfo>(&step_, reply.step.has_value());
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {
-  msg_.session = cstr(c.session);
-  msg_.version = c.version;
-  msg_.cause = cstr(c.cause);
-  msg_.full = c.full;
+  if (!c.update) throw std::invalid_argument("update chunk without its update");
+  const PreparedUpdate& u = *c.update;
+  if (c.begin + c.count > u.surfels()) throw std::out_of_range("update chunk beyond its update");
+  msg_.session = cstr(u.session);
+  msg_.version = u.version;
+  msg_.cause = cstr(u.cause);
+  msg_.full = u.full;
   msg_.part = c.part;
   msg_.parts = c.parts;
-  msg_.step = c.step;
-  msg_.ids = borrow<dds_sequence_unsigned_long_long>(c.ids);
-  msg_.positions = borrow<dds_sequence_double>(c.positions);
-  msg_.normals = borrow<dds_sequence_double>(c.normals);
-  msg_.radii = borrow<dds_sequence_double>(c.radii);
-  msg_.removed = borrow<dds_sequence_unsigned_long_long>(c.removed);
+  msg_.step = u.step;
+  msg_.ids = borrow_range<dds_sequence_unsigned_long_long>(u.ids.data() + c.begin, c.count);
+  msg_.positions = borrow_range<dds_sequence_double>(u.positions.data() + 3 * c.begin, 3 * c.count);
+  msg_.normals = borrow_range<dds_sequence_double>(u.normals.data() + 3 * c.begin, 3 * c.count);
+  msg_.radii = borrow_range<dds_sequence_double>(u.radii.data() + c.begin, c.count);
+  const bool first = c.part == 0;
+  msg_.removed = first ? borrow<dds_sequence_unsigned_long_long>(u.removed) : dds_sequence_unsigned_long_long{};
+  msg_.detected = first && u.detected;
+  msg_.colliding = first ? borrow<dds_sequence_unsigned_long_long>(u.colliding) : dds_sequence_unsigned_long_long{};
 }
 
 }  // namespace surfeledit::service

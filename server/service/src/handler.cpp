@@ -46,7 +46,8 @@ auto prefixed(const std::string& prefix, F&& f) -> decltype(f()) {
 std::string op_name(int op) {
   static const char* const names[] = {"OP_INFO",       "OP_OPEN_SESSION", "OP_JOIN_SESSION", "OP_CLOSE_SESSION",
                                       "OP_LOAD_BEGIN", "OP_LOAD_CHUNK",   "OP_LOAD_COMMIT",  "OP_LOAD_FILE",
-                                      "OP_SET_REGIONS", "OP_DEFORM",      "OP_GET_STATE"};
+                                      "OP_SET_REGIONS", "OP_DEFORM",      "OP_GET_STATE",    "OP_CONFIGURE",
+                                      "OP_REMOVE"};
   if (op >= 0 && op < static_cast<int>(sizeof(names) / sizeof(names[0]))) return names[op];
   return "OP_" + std::to_string(op);
 }
@@ -243,19 +244,73 @@ void Handler::dispatch(const surfeledit_proto_Request& request, Reply& reply, st
       const Clock::time_point t0 = Clock::now();
       StepOutcome result = prefixed("deform", [&] { return entry.session->deform(params); });
       reply.timings.emplace_back("apply", ms_since(t0));
+      if (result.detected) reply.timings.emplace_back("detect", result.stats.detect_ms);
+      if (!result.inserted.empty()) reply.timings.emplace_back("resample", result.resample_ms);
       entry.steps += 1;
+      const std::uint64_t seq = result.seq > 0 ? result.seq : entry.steps;
+      const SurfelModel& model = entry.session->model();
       StepInfo step;
-      step.seq = entry.steps;
+      step.seq = seq;
       step.moved = result.moved.size();
       step.center = {result.center.x(), result.center.y(), result.center.z()};
-      reply.step = step;
+      step.detected = result.detected;
+      if (result.depths.size() != result.colliding.size()) {
+        throw std::logic_error("step outcome has " + std::to_string(result.depths.size()) + " depths for " +
+                               std::to_string(result.colliding.size()) + " colliding ids");
+      }
+      step.colliding = result.colliding;
+      step.depths = result.depths;
+      const CollisionStats& cs = result.stats;
+      step.stats = CollisionStatsInfo{static_cast<std::uint64_t>(cs.deformable), static_cast<std::uint64_t>(cs.tested),
+                                      static_cast<std::uint64_t>(cs.queries),    static_cast<std::uint64_t>(cs.colliding),
+                                      cs.detect_ms,                              cs.preprocess_ms};
+      step.inserted = result.inserted;
       UpdateEvent event;
       event.session = session;
       event.version = entry.session->version();
       event.cause = "deform";
-      event.step = entry.steps;
+      event.step = seq;
+      event.detected = result.detected;
+      event.colliding = std::move(result.colliding);
+      // Changed rows: moved or split ones plus the rows of inserted surfels (new ids are changes too).
       event.rows = std::move(result.moved);
+      if (!result.inserted.empty()) {
+        for (SurfelId id : result.inserted) {
+          const Index row = model.row_of(id);
+          if (row < 0) throw std::logic_error("inserted id " + std::to_string(id) + " has no row");
+          event.rows.push_back(row);
+        }
+        std::sort(event.rows.begin(), event.rows.end());
+        event.rows.erase(std::unique(event.rows.begin(), event.rows.end()), event.rows.end());
+      }
+      reply.step = std::move(step);
       updates.push_back(std::move(event));
+      reply.version = entry.session->version();
+      return;
+    }
+    case surfeledit_proto_OP_CONFIGURE: {
+      const auto& args = the_argument(request.configure, "configure");
+      SessionEntry& entry = sessions_.attached(session, client);
+      const std::vector<NamedSetting> changes = to_core(args, "configure");
+      // Errors keep the core's field: the setting's name (PROTOCOL.md).
+      entry.session->configure(changes);
+      reply.session_info = session_info(entry);
+      reply.version = entry.session->version();
+      return;
+    }
+    case surfeledit_proto_OP_REMOVE: {
+      const auto& args = the_argument(request.remove, "remove");
+      SessionEntry& entry = sessions_.attached(session, client);
+      IdList ids;
+      if (args.ids._length > 0) ids.assign(args.ids._buffer, args.ids._buffer + args.ids._length);
+      const std::uint64_t before = entry.session->version();
+      prefixed("remove", [&] { entry.session->remove(ids); });
+      if (entry.session->version() != before) {
+        UpdateEvent event = changes_event(*entry.session, session, before);
+        event.cause = "remove";
+        updates.push_back(std::move(event));
+      }
+      reply.session_info = session_info(entry);
       reply.version = entry.session->version();
       return;
     }
@@ -297,7 +352,37 @@ SessionInfo Handler::session_info(const SessionEntry& entry) const {
     info.bytes_per_surfel = report.bytes_per_surfel;
     for (const StructureInfo& st : report.structures) info.structures.emplace_back(st.name, st.bytes);
   }
+  for (const NamedSetting& setting : describe(s.settings())) info.settings.push_back(to_reply(setting));
   return info;
+}
+
+UpdateEvent Handler::changes_event(const EditSession& s, const std::string& session, std::uint64_t since) const {
+  UpdateEvent event;
+  event.session = session;
+  event.version = s.version();
+  if (!s.has_model()) return event;
+  const SurfelModel& model = s.model();
+  const Changes changes = s.changes_since(since);
+  event.full = changes.full;
+  event.all_rows = changes.full;
+  if (!changes.full) {
+    event.rows.reserve(changes.changed.size());
+    for (SurfelId id : changes.changed) {
+      const Index row = model.row_of(id);
+      if (row < 0) throw std::logic_error("changed id " + std::to_string(id) + " has no row");
+      event.rows.push_back(row);
+    }
+    std::sort(event.rows.begin(), event.rows.end());
+    event.removed = changes.removed;
+    std::sort(event.removed.begin(), event.removed.end());
+  }
+  return event;
+}
+
+std::optional<UpdateEvent> Handler::changes_event(const std::string& session, std::uint64_t since) const {
+  const SessionEntry* entry = sessions_.find(session);
+  if (!entry) return std::nullopt;
+  return changes_event(*entry->session, session, since);
 }
 
 ServerInfo Handler::server_info() const {

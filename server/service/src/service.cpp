@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
 #include <stdexcept>
 
 #include "dds_handles.hpp"
@@ -10,6 +13,7 @@
 #include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/handler.hpp"
 #include "surfeledit/service/log.hpp"
+#include "surfeledit/service/update_publisher.hpp"
 
 namespace surfeledit::service {
 
@@ -43,6 +47,7 @@ HandlerConfig handler_config(const ServiceConfig& c) {
     throw std::invalid_argument("max_model_surfels must be at most 2147483647 (row index range)");
   }
   if (c.threads < 0) throw std::invalid_argument("threads must be >= 0");
+  if (c.max_update_queue_bytes == 0) throw std::invalid_argument("max_update_queue_bytes must be positive");
   return HandlerConfig{c.max_chunk_surfels, c.max_model_surfels, c.threads};
 }
 
@@ -62,14 +67,22 @@ struct Service::Impl {
         update_writer(dds::make_writer(participant, update_topic, qos)),
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
-        waitset(participant) {
+        waitset(participant),
+        publisher([this](const PreparedUpdate& u) { write_update(u); },
+                  static_cast<std::size_t>(c.max_update_queue_bytes)) {
     waitset.attach(requests, kRequestsTag);
     waitset.attach(stop_guard.entity(), kStopTag);
   }
 
   void serve_available();
   void serve(const surfeledit_proto_Request& request);
+  // Request thread: copies the event's surfels and queues them for the publisher thread.
   void publish(const UpdateEvent& event);
+  // The queue is full: merges the session's queued updates and this one into one update.
+  void coalesce(const UpdateEvent& event, PreparedUpdate& update);
+  // Publisher thread: writes every sample of one update.
+  void write_update(const PreparedUpdate& update);
+  void stop_publisher();
 
   ServiceConfig config;
   Handler handler;
@@ -86,6 +99,9 @@ struct Service::Impl {
   dds::Entity requests;  // read condition: the reader holds samples
   dds::GuardCondition stop_guard;
   dds::WaitSet waitset;
+  // Last: destroyed (drained and joined) first, while the update writer still exists.
+  UpdatePublisher publisher;
+  std::atomic<bool> publisher_stopped{false};
 };
 
 void Service::Impl::serve_available() {
@@ -135,17 +151,67 @@ void Service::Impl::publish(const UpdateEvent& event) {
   try {
     const bool has_surfels = event.all_rows || !event.rows.empty();
     const SurfelModel* model = has_surfels ? handler.model_of(event.session) : nullptr;
-    const std::uint32_t parts = update_parts(event, model, config.max_chunk_surfels);
-    for (std::uint32_t part = 0; part < parts; ++part) {
-      const UpdateChunk chunk = build_update_chunk(event, model, part, config.max_chunk_surfels);
-      const UpdateView view(chunk);
-      dds::write(update_writer, view.get(), "dds_write(update)");
-    }
-    logger()->debug("update '{}' v{} {}: {} part(s)", event.session, event.version, event.cause, parts);
+    PreparedUpdate update = prepare_update(event, model);
+    if (!publisher.push(update)) coalesce(event, update);
   } catch (const std::exception& e) {
     logger()->warn("update of session '{}' v{} ({}) not published: {}", event.session, event.version, event.cause,
                    e.what());
   }
+}
+
+void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
+  // Causes whose updates add up to "what changed since" (a load replaces the model and a close
+  // ends the session: those are never merged).
+  static const std::vector<std::string> kIncremental = {"deform", "remove", "regions"};
+  const std::size_t queued = publisher.queued_bytes();
+  std::vector<PreparedUpdate> pending =
+      std::find(kIncremental.begin(), kIncremental.end(), event.cause) == kIncremental.end()
+          ? std::vector<PreparedUpdate>{}
+          : publisher.take_pending(event.session, event.version, kIncremental);
+  if (pending.empty()) {
+    logger()->warn("update queue over its bound ({:.1f} of {:.1f} MB queued): session '{}' v{} ({}) queued anyway "
+                   "(nothing of this session to merge it with)",
+                   static_cast<double>(queued) / 1e6, static_cast<double>(publisher.max_queued_bytes()) / 1e6,
+                   event.session, event.version, event.cause);
+    publisher.push_anyway(std::move(update));
+    return;
+  }
+  // One update with everything that changed since the oldest merged one; the newest one's cause,
+  // step and collision state.
+  const std::uint64_t since = pending.front().version - 1;
+  std::optional<UpdateEvent> merged = handler.changes_event(event.session, since);
+  if (!merged) throw std::logic_error("session '" + event.session + "' vanished while its update was merged");
+  merged->cause = event.cause;
+  merged->step = event.step;
+  merged->detected = event.detected;
+  merged->colliding = event.colliding;
+  merged->removed.insert(merged->removed.end(), event.removed.begin(), event.removed.end());
+  std::sort(merged->removed.begin(), merged->removed.end());
+  merged->removed.erase(std::unique(merged->removed.begin(), merged->removed.end()), merged->removed.end());
+  const SurfelModel* model = handler.model_of(event.session);
+  PreparedUpdate combined = prepare_update(*merged, model);
+  logger()->warn("update queue over its bound ({:.1f} of {:.1f} MB queued): merged {} queued update(s) of session "
+                 "'{}' (v{}..v{}) and v{} into one update v{} ({} surfels)",
+                 static_cast<double>(queued) / 1e6, static_cast<double>(publisher.max_queued_bytes()) / 1e6,
+                 pending.size(), event.session, pending.front().version, pending.back().version, event.version,
+                 combined.version, combined.surfels());
+  publisher.push_anyway(std::move(combined));
+}
+
+void Service::Impl::write_update(const PreparedUpdate& update) {
+  const std::uint32_t parts = update_parts(update, config.max_chunk_surfels);
+  for (std::uint32_t part = 0; part < parts; ++part) {
+    const UpdateView view(update_chunk(update, part, config.max_chunk_surfels));
+    dds::write(update_writer, view.get(), "dds_write(update)");
+  }
+  logger()->debug("update '{}' v{} {}: {} part(s)", update.session, update.version, update.cause, parts);
+}
+
+void Service::Impl::stop_publisher() {
+  if (publisher_stopped.exchange(true)) return;
+  const UpdatePublisher::Counters c = publisher.shutdown();
+  logger()->debug("update publisher stopped: {} published, {} failed, {} merged, {} dropped; peak queue {:.1f} MB",
+                  c.published, c.failed, c.taken_back, c.dropped, static_cast<double>(c.max_queued_bytes) / 1e6);
 }
 
 Service::Service(ServiceConfig config) : impl_(std::make_unique<Impl>(config)) {}
@@ -160,6 +226,7 @@ void Service::run() {
     if (s.stopping.load()) break;
     s.serve_available();
   }
+  s.stop_publisher();
   logger()->info("stopped");
 }
 

@@ -61,6 +61,11 @@ SessionEntry* SessionRegistry::find(const std::string& name) {
   return it == sessions_.end() ? nullptr : &it->second;
 }
 
+const SessionEntry* SessionRegistry::find(const std::string& name) const {
+  auto it = sessions_.find(name);
+  return it == sessions_.end() ? nullptr : &it->second;
+}
+
 std::vector<std::string> SessionRegistry::names() const {
   std::vector<std::string> out;
   out.reserve(sessions_.size());

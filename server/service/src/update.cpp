@@ -5,54 +5,66 @@
 
 namespace surfeledit::service {
 
-namespace {
-
-std::uint64_t surfel_count(const UpdateEvent& event, const SurfelModel* model) {
-  if (!model) return 0;
-  return event.all_rows ? static_cast<std::uint64_t>(model->size()) : event.rows.size();
+std::size_t PreparedUpdate::bytes() const {
+  return sizeof(*this) + session.size() + cause.size() + ids.size() * sizeof(ids[0]) +
+         (positions.size() + normals.size() + radii.size()) * sizeof(double) +
+         (removed.size() + colliding.size()) * sizeof(std::uint64_t);
 }
 
-}  // namespace
+PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model) {
+  PreparedUpdate p;
+  p.session = event.session;
+  p.version = event.version;
+  p.cause = event.cause;
+  p.full = event.full;
+  p.step = event.step;
+  p.removed = event.removed;
+  p.detected = event.detected;
+  p.colliding = event.colliding;
 
-std::uint32_t update_parts(const UpdateEvent& event, const SurfelModel* model, std::uint64_t max_chunk_surfels) {
+  const bool has_surfels = event.all_rows || !event.rows.empty();
+  if (!has_surfels) return p;
+  if (!model) throw std::out_of_range("update of session '" + event.session + "' has surfels but no model");
+  const std::size_t n = event.all_rows ? static_cast<std::size_t>(model->size()) : event.rows.size();
+  p.ids.resize(n);
+  p.positions.resize(3 * n);
+  p.normals.resize(3 * n);
+  p.radii.resize(n);
+  const Points& pos = model->positions();
+  const Points& nrm = model->normals();
+  const Values& rad = model->radii();
+  const IdList& ids = model->ids();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Index row = event.all_rows ? static_cast<Index>(k) : event.rows[k];
+    if (row < 0 || row >= model->size()) throw std::out_of_range("update row out of range");
+    p.ids[k] = ids[static_cast<std::size_t>(row)];
+    // Points are row-major: the three coordinates of a row are contiguous.
+    std::copy_n(pos.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.positions.data() + 3 * k);
+    std::copy_n(nrm.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.normals.data() + 3 * k);
+    p.radii[k] = rad(row);
+  }
+  return p;
+}
+
+std::uint32_t update_parts(const PreparedUpdate& update, std::uint64_t max_chunk_surfels) {
   if (max_chunk_surfels == 0) throw std::invalid_argument("max_chunk_surfels must be positive");
-  const std::uint64_t n = surfel_count(event, model);
+  const std::uint64_t n = update.surfels();
   return static_cast<std::uint32_t>(std::max<std::uint64_t>(1, (n + max_chunk_surfels - 1) / max_chunk_surfels));
 }
 
-UpdateChunk build_update_chunk(const UpdateEvent& event, const SurfelModel* model, std::uint32_t part,
-                               std::uint64_t max_chunk_surfels) {
-  const std::uint32_t parts = update_parts(event, model, max_chunk_surfels);
+UpdateChunk update_chunk(const PreparedUpdate& update, std::uint32_t part, std::uint64_t max_chunk_surfels) {
+  const std::uint32_t parts = update_parts(update, max_chunk_surfels);
   if (part >= parts) throw std::out_of_range("update part out of range");
-  UpdateChunk chunk;
-  chunk.session = event.session;
-  chunk.version = event.version;
-  chunk.cause = event.cause;
-  chunk.full = event.full;
-  chunk.part = part;
-  chunk.parts = parts;
-  chunk.step = event.step;
-  if (part == 0) chunk.removed = event.removed;
-
-  const std::uint64_t n = surfel_count(event, model);
+  const std::uint64_t n = update.surfels();
   const std::uint64_t begin = std::min<std::uint64_t>(n, std::uint64_t(part) * max_chunk_surfels);
   const std::uint64_t end = std::min<std::uint64_t>(n, begin + max_chunk_surfels);
-  const std::size_t count = static_cast<std::size_t>(end - begin);
-  chunk.ids.resize(count);
-  chunk.positions.resize(count * 3);
-  chunk.normals.resize(count * 3);
-  chunk.radii.resize(count);
-  for (std::size_t k = 0; k < count; ++k) {
-    const Index row = event.all_rows ? static_cast<Index>(begin + k) : event.rows[begin + k];
-    if (row < 0 || row >= model->size()) throw std::out_of_range("update row out of range");
-    chunk.ids[k] = model->ids()[row];
-    for (int c = 0; c < 3; ++c) {
-      chunk.positions[3 * k + c] = model->positions()(row, c);
-      chunk.normals[3 * k + c] = model->normals()(row, c);
-    }
-    chunk.radii[k] = model->radii()(row);
-  }
-  return chunk;
+  UpdateChunk c;
+  c.update = &update;
+  c.part = part;
+  c.parts = parts;
+  c.begin = static_cast<std::size_t>(begin);
+  c.count = static_cast<std::size_t>(end - begin);
+  return c;
 }
 
 }  // namespace surfeledit::service

@@ -37,6 +37,13 @@ RegionSpec to_core(const surfeledit_proto_RegionSpec& r, const std::string& fiel
 // Validated deformation step; `field` e.g. "deform". An empty blend name means "smooth".
 DeformParams to_core(const surfeledit_proto_Deform& d, const std::string& field);
 
+// Settings of an OP_CONFIGURE, each by its kind (a number, a flag or a text). Throws
+// InvalidArgument for an unknown kind (field = the setting's name, or `field`.settings[i] when it
+// has none). Names and values are validated by the core (apply_settings).
+std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std::string& field);
+// A core setting in the reply's form (kind from the value's type).
+Setting to_reply(const NamedSetting& s);
+
 // Presents a Reply as a generated C sample whose buffers point into the Reply (no copy).
 // The Reply must outlive the view and stay unchanged; the view is for dds_write only.
 class ReplyView {
@@ -52,12 +59,14 @@ class ReplyView {
   surfeledit_proto_StatePage page_{};
   surfeledit_proto_SessionInfo session_info_{};
   std::vector<surfeledit_proto_Structure> structures_;
+  std::vector<surfeledit_proto_Setting> settings_;
   surfeledit_proto_ServerInfo server_info_{};
   std::vector<char*> session_names_;
   surfeledit_proto_StepInfo step_{};
 };
 
-// Presents an UpdateChunk as a generated C sample (same rules as ReplyView).
+// Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's
+// PreparedUpdate (same rules as ReplyView).
 class UpdateView {
  public:
   explicit UpdateView(const UpdateChunk& chunk);

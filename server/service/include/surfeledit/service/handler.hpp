@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,10 +37,15 @@ class Handler {
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);
   const HandlerConfig& config() const { return config_; }
+  // An event carrying what changed in the session since version `since` (ids changed or inserted,
+  // removed ids; the whole model when it was replaced since), at its current version; cause and
+  // step are left for the caller. nullopt when the session is gone.
+  std::optional<UpdateEvent> changes_event(const std::string& session, std::uint64_t since) const;
 
  private:
   void dispatch(const surfeledit_proto_Request& request, Reply& reply, std::vector<UpdateEvent>& updates);
   SessionInfo session_info(const SessionEntry& entry) const;
+  UpdateEvent changes_event(const EditSession& s, const std::string& session, std::uint64_t since) const;
   // Replaces the session's model, answers with its info and announces a full update.
   void replace_model(SessionEntry& entry, const std::string& session, SurfelModel model, Reply& reply,
                      std::vector<UpdateEvent>& updates);

@@ -35,6 +35,16 @@ struct StatePage {
   std::vector<std::uint64_t> removed;  // removed ids (first page only)
 };
 
+// One named session setting (proto Setting); the value is in the member its kind names.
+enum class SettingKind : std::uint32_t { Number = 0, Bool = 1, Text = 2 };
+struct Setting {
+  std::string name;
+  SettingKind kind = SettingKind::Number;
+  double number = 0.0;  // Number (integers too)
+  bool flag = false;    // Bool
+  std::string text;     // Text
+};
+
 struct SessionInfo {
   std::string name;
   std::uint64_t surfels = 0;
@@ -43,6 +53,7 @@ struct SessionInfo {
   std::uint32_t clients = 0;
   double bytes_per_surfel = 0.0;
   std::vector<std::pair<std::string, std::uint64_t>> structures;  // name -> bytes
+  std::vector<Setting> settings;  // every setting with its current value
 };
 
 struct ServerInfo {
@@ -53,10 +64,25 @@ struct ServerInfo {
   std::uint64_t max_model_surfels = 0;
 };
 
+// The collision detector's counters of one step (proto CollisionStats).
+struct CollisionStatsInfo {
+  std::uint64_t deformable = 0;  // deformable surfels considered
+  std::uint64_t tested = 0;      // surfels (re)evaluated this step
+  std::uint64_t queries = 0;     // nearest-neighbour queries made this step
+  std::uint64_t colliding = 0;   // surfels reported colliding
+  double detect_ms = 0.0;        // this step's detection time
+  double preprocess_ms = 0.0;    // last (re)initialisation of the detector
+};
+
 struct StepInfo {
   std::uint64_t seq = 0;    // 1-based step number in the session
   std::uint64_t moved = 0;  // surfels displaced
   std::array<double, 3> center{};  // rotation centre used, model units
+  bool detected = false;             // a collision detector ran
+  std::vector<std::uint64_t> colliding;  // colliding ids after the step, ascending
+  std::vector<double> depths;            // per colliding id: penetration depth estimate, model units
+  CollisionStatsInfo stats;
+  std::vector<std::uint64_t> inserted;   // ids inserted by dynamic resampling
 };
 
 struct Reply {

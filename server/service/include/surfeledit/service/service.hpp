@@ -1,5 +1,7 @@
 // The surfeledit DDS service: serves Request samples from clients with one Reply each and
 // publishes Update samples after every change (topics and semantics: proto/PROTOCOL.md).
+// Requests are served on the thread that calls run(); Update samples are written by a publisher
+// thread of the service, in order, from copies the request thread makes after the reply is sent.
 //
 // DDS stays behind the pimpl; this header needs nothing but the standard library.
 #pragma once
@@ -14,6 +16,9 @@ struct ServiceConfig {
   std::uint64_t max_chunk_surfels = 65536;       // surfels per LoadChunk, StatePage and Update sample
   std::uint64_t max_model_surfels = 20'000'000;  // surfels per model (LOAD_BEGIN total, loaded files)
   int threads = 0;                               // worker threads per session for batch work; 0 = all cores
+  // Bound of the Update samples waiting for the publisher thread (payload bytes). Beyond it, the
+  // queued updates of a session are coalesced into one (PROTOCOL.md, "Updates").
+  std::uint64_t max_update_queue_bytes = std::uint64_t(256) << 20;
 };
 
 class Service {
@@ -27,7 +32,8 @@ class Service {
 
   // Serves requests until stop() is called (blocks on a waitset; never polls).
   void run();
-  // Makes run() return after the request in progress; callable from any thread, also before run().
+  // Makes run() return after the request in progress (run() then writes the updates still queued,
+  // for at most 2 s, and stops the publisher thread); callable from any thread, also before run().
   void stop();
 
  private:

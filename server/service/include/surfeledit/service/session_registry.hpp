@@ -34,6 +34,7 @@ class SessionRegistry {
   bool close(const std::string& name, const std::string& client);
 
   SessionEntry* find(const std::string& name);
+  const SessionEntry* find(const std::string& name) const;
   // Names, sorted.
   std::vector<std::string> names() const;
   std::size_t size() const { return sessions_.size(); }

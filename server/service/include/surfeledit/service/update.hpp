@@ -1,7 +1,13 @@
 // Update samples (proto Update): what changed in a session, cut into chunks of at most
 // max_chunk_surfels surfels each.
+//
+// The request handler describes a change as an UpdateEvent (changed rows of the session's model).
+// Right after the reply is written, the request thread turns it into a PreparedUpdate: a
+// self-contained copy of the changed surfels, so that the session can move on while another
+// thread writes the samples (update_publisher.hpp). Samples are slices of a PreparedUpdate.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,40 +16,59 @@
 
 namespace surfeledit::service {
 
-// One change to publish, produced by the request handler. The surfels are read from the
-// session's model when the chunks are built (right after the request, on the same thread).
+// One change to publish, produced by the request handler. Refers to rows of the session's
+// model as it is right after the request.
 struct UpdateEvent {
   std::string session;
   std::uint64_t version = 0;     // session version after the change
-  std::string cause;             // "load" | "regions" | "deform" | "close"
+  std::string cause;             // "load" | "regions" | "deform" | "remove" | "close"
   bool full = false;             // a new model (load)
   std::uint64_t step = 0;        // deform: step number
   IndexList rows;                // changed rows of the model (ascending); ignored when all_rows
   bool all_rows = false;         // every row changed (load)
   IdList removed;                // ids removed by the change
+  bool detected = false;         // deform: a collision detector ran; `colliding` is its result
+  IdList colliding;              // deform: every colliding id after the step, ascending
 };
 
-// One Update sample in C++ form.
-struct UpdateChunk {
+// Everything the samples of one change carry, copied out of the model.
+struct PreparedUpdate {
   std::string session;
   std::uint64_t version = 0;
   std::string cause;
   bool full = false;
-  std::uint32_t part = 0;   // 0 .. parts-1
-  std::uint32_t parts = 1;
   std::uint64_t step = 0;
-  std::vector<std::uint64_t> ids;    // n
-  std::vector<double> positions;     // n*3, row-major
-  std::vector<double> normals;       // n*3, row-major
-  std::vector<double> radii;         // n
-  std::vector<std::uint64_t> removed;  // in part 0 only
+  std::vector<std::uint64_t> ids;      // n, in the event's row order
+  std::vector<double> positions;       // n*3, row-major
+  std::vector<double> normals;         // n*3, row-major
+  std::vector<double> radii;           // n
+  std::vector<std::uint64_t> removed;  // sent in part 0
+  bool detected = false;               // sent in part 0
+  std::vector<std::uint64_t> colliding;  // sent in part 0
+
+  std::size_t surfels() const { return ids.size(); }
+  // Payload bytes held (for the publisher's queue bound).
+  std::size_t bytes() const;
 };
 
-// Number of samples the event needs (at least 1: an event without surfels is one sample).
-// `model` is the session's model (nullptr when the event has no surfels, e.g. "close").
-std::uint32_t update_parts(const UpdateEvent& event, const SurfelModel* model, std::uint64_t max_chunk_surfels);
-// Builds sample `part` (0 .. update_parts()-1) of the event.
-UpdateChunk build_update_chunk(const UpdateEvent& event, const SurfelModel* model, std::uint32_t part,
-                               std::uint64_t max_chunk_surfels);
+// Copies the event's surfels out of `model` (the session's model right after the change; may be
+// nullptr when the event has no surfels, e.g. "regions" or "close"). Throws std::out_of_range
+// for a row outside the model.
+PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model);
+
+// One Update sample: a slice [begin, begin + count) of a PreparedUpdate's surfels. Refers to the
+// PreparedUpdate, which must outlive it.
+struct UpdateChunk {
+  const PreparedUpdate* update = nullptr;
+  std::uint32_t part = 0;   // 0 .. parts-1; part 0 also carries removed / detected / colliding
+  std::uint32_t parts = 1;
+  std::size_t begin = 0;
+  std::size_t count = 0;
+};
+
+// Number of samples (at least 1: an update without surfels is one sample).
+std::uint32_t update_parts(const PreparedUpdate& update, std::uint64_t max_chunk_surfels);
+// Sample `part` (0 .. update_parts()-1).
+UpdateChunk update_chunk(const PreparedUpdate& update, std::uint32_t part, std::uint64_t max_chunk_surfels);
 
 }  // namespace surfeledit::service
