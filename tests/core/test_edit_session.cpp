@@ -96,3 +96,86 @@ TEST(EditSession, FailuresChangeNothing) {
 
 }  // namespace
 }  // namespace surfeledit
+
+namespace surfeledit {
+namespace {
+
+TEST(EditSessionCollision, DetectsByDefaultAndReportsIds) {
+  Fixture f;
+  f.session.set_regions({f.zero, {}}, {f.one, {}});
+  DeformParams p;
+  p.translation = Vec3(0, 0, -0.1);
+  StepOutcome o;
+  for (int k = 0; k < 6; ++k) o = f.session.deform(p);
+  EXPECT_TRUE(o.detected);
+  EXPECT_EQ(o.seq, 6u);
+  EXPECT_FALSE(o.colliding.empty());
+  EXPECT_EQ(o.colliding, f.session.colliding());
+  EXPECT_EQ(o.depths.size(), o.colliding.size());
+  EXPECT_TRUE(std::is_sorted(o.colliding.begin(), o.colliding.end()));
+  for (SurfelId id : o.colliding) EXPECT_TRUE(std::binary_search(f.one.begin(), f.one.end(), id));
+  EXPECT_EQ(o.stats.deformable, static_cast<Index>(f.one.size()));
+  EXPECT_GT(o.stats.preprocess_ms, 0.0);
+}
+
+TEST(EditSessionCollision, ConfigureSwitchesAlgorithmWithoutTouchingTheModel) {
+  Fixture f;
+  f.session.set_regions({f.zero, {}}, {f.one, {}});
+  const auto h = f.session.state_hash();
+  const auto v = f.session.version();
+  f.session.configure({{"algorithm", std::string("temporal")}, {"threads", 1.0}});
+  EXPECT_EQ(f.session.settings().collision.algorithm, CollisionAlgorithm::Temporal);
+  EXPECT_EQ(f.session.state_hash(), h);
+  EXPECT_EQ(f.session.version(), v);
+  // A bad call changes nothing (the earlier valid setting in the same call is not applied either).
+  EXPECT_THROW(f.session.configure({{"algorithm", std::string("simple")}, {"boundary_n", -1.0}}), Error);
+  EXPECT_EQ(f.session.settings().collision.algorithm, CollisionAlgorithm::Temporal);
+  EXPECT_EQ(f.session.settings().collision.boundary_n, 10);
+  f.session.configure({{"algorithm", std::string("none")}});
+  DeformParams p;
+  p.translation = Vec3(0, 0, -0.6);
+  const StepOutcome o = f.session.deform(p);
+  EXPECT_FALSE(o.detected);
+  EXPECT_TRUE(o.colliding.empty());
+}
+
+TEST(EditSessionCollision, RemoveKeepsIdsAndDetection) {
+  Fixture f;
+  f.session.set_regions({f.zero, {}}, {f.one, {}});
+  DeformParams p;
+  p.translation = Vec3(0, 0, -0.1);
+  StepOutcome o;
+  for (int k = 0; k < 6; ++k) o = f.session.deform(p);
+  ASSERT_GE(o.colliding.size(), 3u);
+  const IdList gone = {o.colliding[0], o.colliding[2], f.zero[5]};
+  const auto v = f.session.version();
+  f.session.remove(gone);
+  EXPECT_EQ(f.session.version(), v + 1);
+  for (SurfelId id : gone) EXPECT_EQ(f.session.model().row_of(id), -1);
+  for (SurfelId id : f.session.colliding()) EXPECT_GE(f.session.model().row_of(id), 0);
+  EXPECT_EQ(f.session.colliding().size(), o.colliding.size() - 2);
+  const Changes c = f.session.changes_since(v);
+  EXPECT_EQ(c.removed.size(), 3u);
+  // Errors change nothing.
+  const auto h = f.session.state_hash();
+  EXPECT_THROW(f.session.remove({999999}), Error);
+  IdList rest_of_one;
+  for (SurfelId id : f.one)
+    if (f.session.model().row_of(id) >= 0) rest_of_one.push_back(id);
+  try {
+    f.session.remove(rest_of_one);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+  }
+  EXPECT_EQ(f.session.state_hash(), h);
+  EXPECT_EQ(f.session.version(), v + 1);
+  // Detection continues on the compacted rows.
+  o = f.session.deform(p);
+  EXPECT_TRUE(o.detected);
+  EXPECT_EQ(o.stats.deformable, static_cast<Index>(f.one.size() - 2));
+  for (SurfelId id : o.colliding) EXPECT_GE(f.session.model().row_of(id), 0);
+}
+
+}  // namespace
+}  // namespace surfeledit

@@ -1,0 +1,75 @@
+// Settings by name: kinds, validation, nothing changes on error, the listing.
+#include <gtest/gtest.h>
+
+#include "surfeledit/core/settings.hpp"
+
+namespace surfeledit {
+namespace {
+
+void expect_error(const SessionSettings& current, const std::vector<NamedSetting>& changes, const std::string& field) {
+  try {
+    apply_settings(current, changes);
+    FAIL() << "no error for " << field;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(e.field(), field);
+  }
+}
+
+TEST(Settings, DefaultsAndListingOrder) {
+  const SessionSettings s;
+  EXPECT_EQ(s.collision.algorithm, CollisionAlgorithm::Robust);
+  const auto d = describe(s);
+  std::vector<std::string> names;
+  for (const auto& n : d) names.push_back(n.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"algorithm", "threshold", "boundary", "boundary_n", "boundary_i",
+                                             "step_bound", "threads", "resample", "split_threshold"}));
+  EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
+  EXPECT_EQ(std::get<double>(d[3].value), 10.0);
+  // The listing applied to defaults is the identity.
+  const SessionSettings back = apply_settings(SessionSettings{}, d);
+  EXPECT_EQ(back.collision.boundary_n, 10);
+  EXPECT_EQ(back.resample.split_threshold, s.resample.split_threshold);
+}
+
+TEST(Settings, AppliesToACopy) {
+  const SessionSettings s;
+  const SessionSettings t = apply_settings(s, {{"algorithm", std::string("temporal")},
+                                               {"boundary_n", 3.0},
+                                               {"boundary_i", 2.0},
+                                               {"step_bound", false},
+                                               {"threshold", 0.01},
+                                               {"resample", true},
+                                               {"split_threshold", 2.0},
+                                               {"threads", 2.0}});
+  EXPECT_EQ(t.collision.algorithm, CollisionAlgorithm::Temporal);
+  EXPECT_EQ(t.collision.boundary_n, 3);
+  EXPECT_EQ(t.collision.boundary_i, 2);
+  EXPECT_FALSE(t.collision.step_bound);
+  EXPECT_EQ(t.collision.threshold, 0.01);
+  EXPECT_TRUE(t.resample.enabled);
+  EXPECT_EQ(t.resample.split_threshold, 2.0);
+  EXPECT_EQ(t.collision.threads, 2);
+  EXPECT_EQ(s.collision.algorithm, CollisionAlgorithm::Robust);  // untouched
+}
+
+TEST(Settings, TypedErrorsNameTheSetting) {
+  const SessionSettings s;
+  expect_error(s, {{"colour", true}}, "colour");
+  expect_error(s, {{"algorithm", std::string("fastest")}}, "algorithm");
+  expect_error(s, {{"algorithm", 1.0}}, "algorithm");
+  expect_error(s, {{"boundary_n", std::string("ten")}}, "boundary_n");
+  expect_error(s, {{"boundary_n", 2.5}}, "boundary_n");
+  expect_error(s, {{"boundary_n", -1.0}}, "boundary_n");
+  expect_error(s, {{"boundary_n", 3.0}}, "boundary_i");  // i = 5 > n = 3
+  expect_error(s, {{"boundary", 1.0}}, "boundary");
+  expect_error(s, {{"threshold", std::numeric_limits<double>::infinity()}}, "threshold");
+  expect_error(s, {{"threads", -2.0}}, "threads");
+  expect_error(s, {{"split_threshold", 1.0}}, "split_threshold");
+  expect_error(s, {{"resample", std::string("yes")}}, "resample");
+  // A later bad setting rejects the whole call.
+  expect_error(s, {{"algorithm", std::string("simple")}, {"boundary_i", 0.0}}, "boundary_i");
+}
+
+}  // namespace
+}  // namespace surfeledit
