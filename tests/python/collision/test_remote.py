@@ -1,0 +1,28 @@
+"""The scenario runner over DDS with a real server gives the same colliding ids as in-process."""
+
+import os
+
+import numpy as np
+import pytest
+
+import surfeledit
+from surfeledit import scenario as S
+
+
+def test_remote_equals_in_process(scenarios):
+    if not hasattr(surfeledit.Session, "configure"):
+        pytest.skip("the DDS client has no Session.configure yet")
+    if surfeledit.find_server_executable() is None:
+        pytest.skip("surfeledit-server is not built")
+    sc = S.Scenario(scenarios["concave"].scene, 40, scenarios["concave"].motion)
+    domain = 150 + os.getpid() % 50
+    with surfeledit.connect(domain=domain, spawn=True) as client:
+        backend = S.RemoteBackend(client, "scenario-test")
+        remote = {alg: S.run(sc, alg, backend=backend, settings={"threads": 1}) for alg in ("temporal", "robust")}
+        backend.close()
+    for alg, res in remote.items():
+        local = S.run(sc, alg, backend=S.LocalBackend(1), settings={"threads": 1})
+        assert max(len(c) for c in local.colliding) > 0
+        for k, (a, b) in enumerate(zip(res.colliding, local.colliding), 1):
+            assert np.array_equal(a, b), f"{alg} step {k}"
+        assert [r.precision for r in res.records] == [r.precision for r in local.records]
