@@ -4,7 +4,7 @@
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server and build/tests/surfeledit-proto-echo):
     .venv/bin/python bench/service/bench_step_rtt.py [--build-dir build] [--steps 200] [--warmup 20]
                                                      [--domain D] [--server-threads 1,0] [--max-load 1.0]
-                                                     [--json-out r.json]
+                                                     [--algorithm none] [--json-out r.json]
 
 What is timed (all in milliseconds, client side, time.perf_counter):
   step  Session.deform(...) against a real surfeledit-server started by this script on a private DDS
@@ -17,8 +17,12 @@ Both go through the same Python cyclonedds stack and QoS (reliable, keep-all, vo
 ratio is the server's overhead. Scenes (fixed seeds): "small" = make_default_scene() at spacing 0.05
 (~9.9k surfels), "60k" = slab (F0) + sphere of ~60k deformable surfels (as bench_deformation.cpp).
 Steps are sent back to back (the next request as soon as the reply arrives), or --gap-ms apart. The server writes the
-Reply BEFORE it publishes the step's Update samples (server/service/src/service.cpp), but on the same
-thread, so publishing the Update of step i delays the serving of step i+1 if it arrives meanwhile.
+Reply BEFORE it publishes the step's Update samples (server/service/src/service.cpp). Up to issue 2 it wrote
+them on the same thread, so publishing the Update of step i delayed the serving of step i+1; since issue 3 the
+request thread only copies the changed surfels and a publisher thread writes the samples.
+--algorithm: the session's collision algorithm (OP_CONFIGURE; default "none", so that the step is the
+deformation alone, as in the issue-2 figures; "default" leaves the server's default, robust). A server
+without OP_CONFIGURE (before issue 3) is left as it is (it has no detection).
 Per scene: ping block, then step block, then a second ping block (pings = both blocks).
 """
 
@@ -142,6 +146,11 @@ def run_scenes(client: "surfeledit.Client", echo: Echo, args: argparse.Namespace
         t0 = time.perf_counter()
         sess.load_points(sc["positions"], sc["normals"])
         sess.set_regions(zero=sc["zero"], one=sc["one"])
+        if args.algorithm != "default":
+            try:
+                sess.configure(algorithm=args.algorithm)
+            except surfeledit.SurfelEditError as e:  # a server before issue 3: no OP_CONFIGURE, no detection
+                print(f"  (configure(algorithm={args.algorithm!r}) refused: {e}; server left as it is)")
         print(f"server --threads {threads}, scene {name}: {len(sc['positions']):,} surfels, {sc['deformable']:,} "
               f"deformable, {len(sc['one']):,} in F1; upload + regions {time.perf_counter() - t0:.1f} s", flush=True)
         # The ping payload: a deform Request exactly as Session.deform builds it.
@@ -193,6 +202,9 @@ def main() -> int:
     ap.add_argument("--server-threads", default="1,0", help="comma list of surfeledit-server --threads values")
     ap.add_argument("--gap-ms", type=float, default=0.0,
                     help="pause before each step (ms): lets the server finish publishing the previous Update")
+    ap.add_argument("--algorithm", default="none",
+                    help="collision algorithm of the sessions (none, simple, improved, temporal, robust; "
+                         "'default': the server's)")
     ap.add_argument("--max-load", type=float, default=0.0)
     ap.add_argument("--json-out")
     args = ap.parse_args()
@@ -206,7 +218,8 @@ def main() -> int:
         return 2
     benchlib.wait_for_low_load(args.max_load, 600)
     print(benchlib.machine_line())
-    print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}; gap between steps {args.gap_ms} ms")
+    print(f"DDS domain {args.domain}; server {server}; echo {echo_exe}; gap between steps {args.gap_ms} ms; "
+          f"algorithm {args.algorithm}")
 
     echo = Echo(echo_exe, args.domain)
     results: Dict[str, dict] = {}
@@ -235,7 +248,8 @@ def main() -> int:
         ok = res["ratio_p50"] <= 2.0
         print(f"target step <= 2x bare ping ({name}): {'MET' if ok else 'MISSED'} at p50 ({res['ratio_p50']:.2f}x), "
               f"p99 {res['ratio_p99']:.2f}x")
-    print("reply vs update: the server writes the Reply first, then publishes the Update (same thread)")
+    print("reply vs update: the server writes the Reply first, then queues the Update (issue 3: written by a "
+          "publisher thread; before: on the request thread)")
     print(benchlib.machine_line())
     if args.json_out:
         Path(args.json_out).write_text(json.dumps(results, indent=2))

@@ -8,6 +8,8 @@ Quick start::
         s.set_regions(zero=slab_ids, one=sphere_ids)
         step = s.deform(translation=(0, 0, -0.05))
         print(step.seq, step.version, step.moved, s.positions().shape)
+        s.configure(algorithm="temporal")            # collision detection: simple/improved/temporal/robust
+        print(s.deform(translation=(0, 0, -0.05)).colliding)   # colliding ids after the step
 
 The library logs to ``logging.getLogger("surfeledit")`` and never prints.
 """
@@ -18,7 +20,7 @@ import logging
 
 from . import errors
 from ._protocol import proto
-from .client import (Changes, Client, Session, State, StepResult, UpdateEvent, Watcher, connect,
+from .client import (Changes, Client, CollisionStats, Session, State, StepResult, UpdateEvent, Watcher, connect,
                      find_server_executable)
 from .errors import (ConflictError, InternalServerError, InvalidArgumentError, NotFoundError, RequestTimeoutError,
                      ServerIOError, ServerStartError, SurfelEditError, TooLargeError)
@@ -28,7 +30,7 @@ logging.getLogger("surfeledit").addHandler(logging.NullHandler())
 __version__ = "0.1.0"
 
 __all__ = [
-    "connect", "Client", "Session", "StepResult", "State", "Changes", "UpdateEvent", "Watcher", "proto",
+    "connect", "Client", "Session", "StepResult", "CollisionStats", "State", "Changes", "UpdateEvent", "Watcher", "proto",
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
     "ServerStartError",

@@ -33,8 +33,8 @@ from . import errors
 from ._protocol import (REPO_ROOT, TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos,
                         update_qos)
 
-__all__ = ["connect", "Client", "Session", "StepResult", "State", "Changes", "UpdateEvent", "Watcher",
-           "find_server_executable"]
+__all__ = ["connect", "Client", "Session", "StepResult", "CollisionStats", "State", "Changes", "UpdateEvent",
+           "Watcher", "find_server_executable"]
 
 _log = logging.getLogger("surfeledit")
 
@@ -119,6 +119,28 @@ def find_server_executable() -> Optional[str]:
 # ---------------------------------------------------------------------------------------------
 
 
+_NO_IDS = np.zeros(0, np.uint64)
+_NO_IDS.setflags(write=False)
+
+
+@dataclasses.dataclass(frozen=True)
+class CollisionStats:
+    """The collision detector's counters of one step (all zero when no detector ran).
+
+    Attributes:
+        deformable: deformable surfels considered. tested: surfels (re)evaluated this step.
+        queries: nearest-neighbour queries made this step. colliding: surfels reported colliding.
+        detect_ms: this step's detection time. preprocess_ms: the detector's last (re)initialisation.
+    """
+
+    deformable: int = 0
+    tested: int = 0
+    queries: int = 0
+    colliding: int = 0
+    detect_ms: float = 0.0
+    preprocess_ms: float = 0.0
+
+
 @dataclasses.dataclass(frozen=True)
 class StepResult:
     """The outcome of one deformation step.
@@ -128,8 +150,14 @@ class StepResult:
         version: session version after the step.
         moved: number of surfels displaced.
         center: rotation centre used, (3,) float64, model units.
-        timings: server timings in ms (at least ``total``; deform adds ``apply``).
+        timings: server timings in ms (at least ``total``; deform adds ``apply``, and ``detect`` when a
+            detector ran, ``resample`` when surfels were split).
         round_trip_ms: client-measured time from sending the request to receiving the reply.
+        detected: a collision detector ran (the session's algorithm is not ``"none"``).
+        colliding: (C,) uint64 ids of the surfels colliding after the step, ascending.
+        depths: (C,) float64 penetration depth estimate per colliding id, model units.
+        stats: the detector's :class:`CollisionStats` for this step.
+        inserted: (I,) uint64 ids of surfels inserted by dynamic resampling in this step.
     """
 
     seq: int
@@ -138,6 +166,11 @@ class StepResult:
     center: np.ndarray
     timings: Dict[str, float]
     round_trip_ms: float
+    detected: bool = False
+    colliding: np.ndarray = dataclasses.field(default_factory=lambda: _NO_IDS)
+    depths: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.float64))
+    stats: CollisionStats = dataclasses.field(default_factory=CollisionStats)
+    inserted: np.ndarray = dataclasses.field(default_factory=lambda: _NO_IDS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -188,10 +221,16 @@ class UpdateEvent:
 
     Attributes:
         session: session name. version: version after the change.
-        cause: ``"load"``, ``"regions"``, ``"deform"`` or ``"close"``.
+        cause: ``"load"``, ``"regions"``, ``"deform"``, ``"remove"`` or ``"close"``.
         full: a new model (replaces everything the watcher had). step: deform step number (0 otherwise).
-        ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64 of the changed surfels;
-        removed (R,) uint64.
+        ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64 of the changed surfels
+        (for a deform: moved surfels and those inserted by resampling); removed (R,) uint64.
+        detected: deform: a collision detector ran, and ``colliding`` (K,) uint64 holds every id
+        colliding after the step, ascending (empty otherwise).
+
+    When the server's update queue backs up, it merges a session's queued updates into one (the
+    newest version, cause and step, with everything changed since the oldest merged one), so versions
+    may skip; applying updates in version order still gives the current state.
     """
 
     session: str
@@ -204,6 +243,34 @@ class UpdateEvent:
     normals: np.ndarray
     radii: np.ndarray
     removed: np.ndarray
+    detected: bool = False
+    colliding: np.ndarray = dataclasses.field(default_factory=lambda: _NO_IDS)
+
+
+SettingValue = Union[bool, int, float, str]
+
+
+def _setting(name: str, value: Any) -> "proto.Setting":
+    """One named setting by the Python type of its value (bool, int/float, str)."""
+    if not isinstance(name, str) or not name:
+        raise errors.InvalidArgumentError(f"setting names must be non-empty strings, got {name!r}", str(name))
+    if isinstance(value, (bool, np.bool_)):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_BOOL, flag=bool(value))
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_NUMBER, number=float(value))
+    if isinstance(value, str):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_TEXT, text=value)
+    raise errors.InvalidArgumentError(
+        f"setting {name!r} must be a bool, a number or a string, got {type(value).__name__}", name)
+
+
+def _setting_value(s: "proto.Setting") -> SettingValue:
+    kind = s.kind
+    if kind == proto.SettingKind.SETTING_BOOL:
+        return bool(s.flag)
+    if kind == proto.SettingKind.SETTING_TEXT:
+        return str(s.text)
+    return float(s.number)
 
 
 def _readonly(*arrays: np.ndarray) -> None:
@@ -634,9 +701,62 @@ class Session:
         reply = self._request(proto.Op.OP_DEFORM, deform=arg)
         rt = (time.perf_counter() - t0) * 1e3
         step = reply.step[0] if reply.step else proto.StepInfo()
+        colliding = np.asarray(step.colliding, dtype=np.uint64)
+        depths = np.asarray(step.depths, dtype=np.float64)
+        if depths.shape != colliding.shape:
+            raise errors.InternalServerError(
+                f"step reply has {depths.size} depths for {colliding.size} colliding ids", "step.depths")
+        inserted = np.asarray(step.inserted, dtype=np.uint64)
+        _readonly(colliding, depths, inserted)
+        st = step.stats
+        stats = CollisionStats(deformable=int(st.deformable), tested=int(st.tested), queries=int(st.queries),
+                               colliding=int(st.colliding), detect_ms=float(st.detect_ms),
+                               preprocess_ms=float(st.preprocess_ms))
         return StepResult(seq=int(step.seq), version=int(reply.version), moved=int(step.moved),
                           center=np.array([step.center.x, step.center.y, step.center.z]),
-                          timings=_timings(reply), round_trip_ms=rt)
+                          timings=_timings(reply), round_trip_ms=rt, detected=bool(step.detected),
+                          colliding=colliding, depths=depths, stats=stats, inserted=inserted)
+
+    # -- settings and removal ----------------------------------------------------------------
+    def configure(self, **settings: SettingValue) -> "proto.SessionInfo":
+        """Changes session settings, all or none, e.g. ``configure(algorithm="temporal", boundary_n=8)``.
+
+        Names and meanings: ``algorithm`` (``"none"``, ``"simple"``, ``"improved"``, ``"temporal"``,
+        ``"robust"``), ``threshold``, ``boundary``, ``boundary_n``, ``boundary_i``, ``step_bound``,
+        ``threads``, ``resample``, ``split_threshold`` (see :meth:`settings`). A bool is sent as a flag,
+        an int or float as a number, a str as text. The collision detector is re-initialised from the
+        current model; the model and the version do not change.
+
+        Returns the session info (its ``settings`` list every setting). Raises
+        :class:`~surfeledit.errors.InvalidArgumentError` naming the setting (``.field``) for an unknown
+        name, a value of the wrong kind or a bad value (nothing changes); a value of another Python
+        type is refused before sending.
+        """
+        arg = proto.Configure(settings=[_setting(name, value) for name, value in settings.items()])
+        reply = self._request(proto.Op.OP_CONFIGURE, configure=arg)
+        if reply.session_info:
+            self._info = reply.session_info[0]
+        return self._info
+
+    def settings(self) -> Dict[str, SettingValue]:
+        """Every session setting with its current value: ``{name: bool | float | str}`` (integers as float)."""
+        info = self.info()
+        return {s.name: _setting_value(s) for s in info.settings}
+
+    def remove(self, ids: ArrayLike) -> "proto.SessionInfo":
+        """Removes surfels by id ((K,) integer); the other ids stay as they are.
+
+        Raises :class:`~surfeledit.errors.NotFoundError` for an unknown id and
+        :class:`~surfeledit.errors.ConflictError` when the zero or the one region would be left empty
+        (nothing is removed then). Returns the session info.
+        """
+        id_list = _as_ids(ids, "ids")
+        if not id_list:
+            raise errors.InvalidArgumentError("remove needs at least one id", "ids")
+        reply = self._request(proto.Op.OP_REMOVE, remove=proto.Remove(ids=id_list))
+        if reply.session_info:
+            self._info = reply.session_info[0]
+        return self._info
 
     # -- state -------------------------------------------------------------------------------
     def _fetch(self, changes_only: bool, since: int) -> Changes:
@@ -835,7 +955,8 @@ class Watcher:
             session=first.session, version=int(first.version), cause=first.cause, full=bool(first.full),
             step=int(first.step), ids=cat("ids", np.uint64), positions=cat("positions", np.float64).reshape(-1, 3),
             normals=cat("normals", np.float64).reshape(-1, 3), radii=cat("radii", np.float64),
-            removed=cat("removed", np.uint64)))
+            removed=cat("removed", np.uint64), detected=bool(first.detected),
+            colliding=np.asarray(first.colliding, dtype=np.uint64)))
         self._ready.sort(key=lambda e: e.version)
 
     def poll(self) -> List[UpdateEvent]:
