@@ -47,6 +47,22 @@ void check_structure(const BvhParams& params) {
   EXPECT_EQ(t.height(), max_level + 1);
   EXPECT_FALSE(t.refit_since_build());
   EXPECT_GT(t.memory_bytes(), t.nodes().size() * sizeof(Box));
+  // Insertions: children split off random tree rows, placed nearby, are covered at once.
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> g(0.0, 0.05);
+  IndexList parents;
+  for (int k = 0; k < 100; ++k) parents.push_back(rows[static_cast<std::size_t>(k * 17) % rows.size()]);
+  const Index old = static_cast<Index>(p.rows());
+  p.conservativeResize(old + 100, 3);
+  r.conservativeResize(old + 100);
+  for (Index k = 0; k < 100; ++k) {
+    p.row(old + k) = p.row(parents[static_cast<std::size_t>(k)]) + Eigen::RowVector3d(g(rng), g(rng), g(rng));
+    r[old + k] = r[parents[static_cast<std::size_t>(k)]];
+  }
+  t.on_inserted(p, r, parents);
+  EXPECT_EQ(t.surfel_count(), static_cast<Index>(rows.size()) + 100);
+  EXPECT_TRUE(t.refit_since_build());
+  EXPECT_TRUE(check_invariants(t, p, r));
 }
 
 TEST(BvhTree, BuildInvariantsAllKinds) {

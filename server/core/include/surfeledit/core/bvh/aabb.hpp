@@ -40,6 +40,9 @@ struct Aabb {
     hi = hi.cwiseMax(b.hi);
   }
   void enclose(const Aabb& child) { expand(child); }
+  // A parent's box after the build: contains its children (§10.1.1, "at least as large").
+  static constexpr bool kContainsChildren = true;
+  void grow_over_child(const Aabb& child) { enclose(child); }
   // Adds a margin of `m` model units on every side.
   void inflate(double m) {
     lo.array() -= m;

@@ -4,14 +4,16 @@
 //   static Box fit(positions, radii, rows, n)          tight box over the balls of rows (kDeadRow skipped)
 //   static Vec3 split_direction(box, positions, rows, n) unit axis the build splits along
 //   expand(p, r), enclose(child), inflate(m), enforce_min_extent(e), contains(p, r), contains(child)
+//   grow_over_child(child) and kContainsChildren   how a parent is made "at least as large" (§10.1.1)
 //
 // Layout: nodes in one flat array; the children of a node are adjacent (first_child, first_child + 1)
 // and always have larger indices than their parent, so a reverse sweep visits children before
 // parents. Every node covers a range of slots of `order()`, a permutation of the tree's rows.
 //
 // Invariants (checked by the property tests): every live box contains the balls (position, radius)
-// of all surfels under it, and every parent contains its children -- after the build, after each
-// bottom-up refit, and for the nodes a top-down refit has visited in the current step.
+// of all surfels under it, and every parent contains its children (Box::kContainsChildren; OBB
+// parents are only at least as large, see obb.hpp) -- after the build, after each bottom-up refit,
+// and for the nodes a top-down refit has visited in the current step.
 //
 // Deforming trees (Box = Aabb): refit() starts a step; with UpdateMode TopDown / Hybrid the deeper
 // nodes are refit when a traversal calls touch() on them. Removed surfels are marked dead and dropped
@@ -217,8 +219,8 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
       if (nd.leaf()) {
         if (params.min_leaf_extent > 0.0) nd.box.enforce_min_extent(params.min_leaf_extent);
       } else {
-        nd.box.enclose(nodes_[nd.first_child].box);
-        nd.box.enclose(nodes_[nd.first_child + 1].box);
+        nd.box.grow_over_child(nodes_[nd.first_child].box);
+        nd.box.grow_over_child(nodes_[nd.first_child + 1].box);
       }
     }
   }
@@ -449,10 +451,23 @@ BvhCounters Bvh<Box>::on_inserted(const Points& positions, const Values& radii, 
     const Vec3 p = positions.row(row).transpose();
     const double r = radius_of(radii, row);
     Box& b = mut(leaf).box;
-    if (!b.contains(p, r)) {
-      b.expand(p, r);
-      ++c.nu;
-      grow_ancestors(leaf);
+    if constexpr (Box::kContainsChildren) {
+      if (!b.contains(p, r)) {
+        b.expand(p, r);
+        ++c.nu;
+        grow_ancestors(leaf);
+      }
+    } else {
+      // Parents need not contain their children here (see Obb): every ancestor is checked
+      // against the new surfel itself.
+      for (std::int32_t child = -1, a = leaf; a >= 0; child = a, a = nodes_[a].parent) {
+        Box& box = mut(a).box;
+        if (!box.contains(p, r)) {
+          box.expand(p, r);
+          ++c.nu;
+        }
+        if (child >= 0) box.grow_over_child(nodes_[child].box);  // still at least as large
+      }
     }
     refit_since_build_ = true;
   }

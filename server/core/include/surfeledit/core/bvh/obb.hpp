@@ -22,6 +22,13 @@ struct Obb {
   void expand(const Vec3& p, double r);
   // Grows (axes kept) to contain the 8 corners of a child box.
   void enclose(const Obb& child);
+  // §10.1.1 for OBBs: a parent is at least as large as its children (half extents at least the
+  // children's, axis by axis in variance order), but is NOT grown to contain their corners: a child
+  // turned against its parent overhangs at the corners, and enclosing them level by level inflated
+  // the root of a 3 x 3 slab to half extents of ~6.7 instead of ~2.1. Correctness needs only that
+  // every node contains its own surfels, which the fit guarantees.
+  static constexpr bool kContainsChildren = false;
+  void grow_over_child(const Obb& child) { ext = ext.cwiseMax(child.ext); }
   void inflate(double m) { ext.array() += m; }
   // Every axis at least `extent` wide (§10.1.1).
   void enforce_min_extent(double extent) { ext = ext.cwiseMax(Vec3::Constant(0.5 * extent)); }
