@@ -91,15 +91,16 @@ void refit(benchmark::State& state, UpdateMode mode) {
   BvhParams params;
   params.update = mode;
   Bvh<Aabb> t(g->positions, g->radii, g->def, params);
-  BvhCounters c;
+  BvhCounters sum;
   for (auto _ : state) {
     state.PauseTiming();
     move_deformable();
     state.ResumeTiming();
-    c = t.refit(g->positions, g->radii);
+    const BvhCounters c = t.refit(g->positions, g->radii);
     benchmark::DoNotOptimize(c);
+    sum += c;
   }
-  state.counters["Nu"] = static_cast<double>(c.nu);
+  state.counters["Nu"] = benchmark::Counter(static_cast<double>(sum.nu), benchmark::Counter::kAvgIterations);
 }
 
 void rebuild(benchmark::State& state) {
@@ -120,22 +121,23 @@ void step_tree_tree(benchmark::State& state, UpdateMode mode, SatMode sat) {
   BvhParams params;
   params.update = mode;
   Bvh<Aabb> def(g->positions, g->radii, g->def, params);
-  BvhCounters c;
-  std::size_t candidates = 0;
+  BvhCounters sum;
+  CollectRows narrow;
   for (auto _ : state) {
     state.PauseTiming();
     move_deformable();
+    narrow.rows.clear();
     state.ResumeTiming();
-    c = def.refit(g->positions, g->radii);
-    CollectRows narrow;
+    BvhCounters c = def.refit(g->positions, g->radii);
     collide(zero, def, sat, narrow, c);
-    candidates = narrow.rows.size();
     benchmark::DoNotOptimize(narrow.rows.data());
+    sum += c;
   }
-  state.counters["Nv"] = static_cast<double>(c.nv);
-  state.counters["Np"] = static_cast<double>(c.np);
-  state.counters["Nu"] = static_cast<double>(c.nu);
-  state.counters["candidates"] = static_cast<double>(candidates);
+  // Per step (averaged over iterations; the two alternating poses differ a little).
+  const auto avg = benchmark::Counter::kAvgIterations;
+  state.counters["Nv"] = benchmark::Counter(static_cast<double>(sum.nv), avg);
+  state.counters["Np"] = benchmark::Counter(static_cast<double>(sum.np), avg);
+  state.counters["Nu"] = benchmark::Counter(static_cast<double>(sum.nu), avg);
 }
 
 // One step without collision, zero tree only: every deformable surfel queries the zero tree.
@@ -149,8 +151,6 @@ void step_surfel_tree(benchmark::State& state) {
     state.PauseTiming();
     move_deformable();
     state.ResumeTiming();
-    c = {};
-    hits = 0;
     for (Index i : g->def) {
       const Sphere s{g->positions.row(i).transpose(), g->radii[i]};
       query_surfel(zero, s, [&](std::int32_t) {
@@ -160,8 +160,9 @@ void step_surfel_tree(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(hits);
   }
-  state.counters["Nv"] = static_cast<double>(c.nv);
-  state.counters["surfels_with_a_leaf"] = static_cast<double>(hits);
+  const auto avg = benchmark::Counter::kAvgIterations;
+  state.counters["Nv"] = benchmark::Counter(static_cast<double>(c.nv), avg);
+  state.counters["Np"] = benchmark::Counter(static_cast<double>(hits), avg);  // surfels reaching a leaf
 }
 
 }  // namespace

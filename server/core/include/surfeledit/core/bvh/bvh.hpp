@@ -24,7 +24,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -131,6 +133,7 @@ class Bvh {
   std::vector<std::int32_t> extra_head_, extra_next_;
   IndexList extra_row_;
   Index extras_ = 0;                       // live inserted surfels
+  Index dead_ = 0;                         // surfels removed since the build (their slots may linger)
   Index live_ = 0;
   int height_ = 0;
   double build_ms_ = 0.0;
@@ -160,6 +163,7 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
   const std::int32_t n = static_cast<std::int32_t>(order_.size());
   live_ = n;
   extras_ = 0;
+  dead_ = 0;
   extra_next_.clear();
   extra_row_.clear();
   refit_since_build_ = false;
@@ -272,6 +276,7 @@ void Bvh<Box>::for_each_row(std::int32_t node, F&& f) const {
 
 template <class Box>
 void Bvh<Box>::compact_leaf(std::int32_t leaf) {
+  if (dead_ == 0) return;  // nothing removed since the last build
   Node& nd = mut(leaf);
   std::int32_t w = nd.begin;
   for (std::int32_t s = nd.begin; s < nd.end; ++s)
@@ -288,10 +293,24 @@ void Bvh<Box>::compact_leaf(std::int32_t leaf) {
 
 template <class Box>
 Aabb Bvh<Box>::tight_aabb(std::int32_t node) const {
+  // Hot loop of every refit: raw row-major access, no temporaries.
+  const double* p = positions_->data();
+  const double* r = radii_->size() ? radii_->data() : nullptr;
+  double lo0 = std::numeric_limits<double>::infinity(), lo1 = lo0, lo2 = lo0;
+  double hi0 = -lo0, hi1 = -lo0, hi2 = -lo0;
+  for_each_row(node, [&](Index row) {
+    const double* q = p + 3 * static_cast<std::ptrdiff_t>(row);
+    const double rad = r ? r[row] : 0.0;
+    lo0 = std::min(lo0, q[0] - rad);
+    lo1 = std::min(lo1, q[1] - rad);
+    lo2 = std::min(lo2, q[2] - rad);
+    hi0 = std::max(hi0, q[0] + rad);
+    hi1 = std::max(hi1, q[1] + rad);
+    hi2 = std::max(hi2, q[2] + rad);
+  });
   Aabb b;
-  const Points& p = *positions_;
-  const Values& r = *radii_;
-  for_each_row(node, [&](Index row) { b.expand(p.row(row).transpose(), radius_of(r, row)); });
+  b.lo = Vec3(lo0, lo1, lo2);
+  b.hi = Vec3(hi0, hi1, hi2);
   if (nodes_[node].leaf() && params_.min_leaf_extent > 0.0 && !b.empty()) b.enforce_min_extent(params_.min_leaf_extent);
   return b;
 }
@@ -418,6 +437,7 @@ void Bvh<Box>::on_removed(const std::vector<bool>& keep) {
     if (nr < 0) {
       removed = true;
       --live_;
+      ++dead_;
     }
     row = nr;
   };
