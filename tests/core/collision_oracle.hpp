@@ -128,10 +128,12 @@ class Oracle {
     for (Index r = 0; r < n; ++r) {
       if (s.regions[r] == Region::Zero) continue;
       const Vec3 p = s.positions.row(r).transpose();
-      rho2_[r] = (p - s.positions.row(brute_nearest(s.positions, zero, p)).transpose()).squaredNorm();
+      const Index k = brute_nearest(s.positions, zero, p);
+      rho2_[r] = shrunk((p - s.positions.row(k).transpose()).squaredNorm(), s.radii[k]);
     }
     orig_pos_ = s.positions;
     orig_nrm_ = s.normals;
+    orig_rad_ = s.radii;
     orig_zero_.clear();
     for (Region g : s.regions) orig_zero_.push_back(g == Region::Zero);
     orig_alive_.assign(n, true);
@@ -159,7 +161,7 @@ class Oracle {
           }
           const double d2 = simple(s, previous, zero, r);
           center_.row(r) = p.transpose();
-          rho2_[r] = d2;
+          rho2_[r] = shrunk(d2, s.radii[last_nearest_]);
         }
         break;
       case CollisionAlgorithm::Robust: robust(s); break;
@@ -247,6 +249,7 @@ class Oracle {
   double simple(const TestScene& s, const Points& previous, const std::vector<Index>& zero, Index r) {
     const Vec3 p1 = s.positions.row(r).transpose();
     const Index k = brute_nearest(s.positions, zero, p1);
+    last_nearest_ = k;
     const Vec3 d = p1 - s.positions.row(k).transpose();
     const double d2 = d.squaredNorm();
     depth_[r] = std::sqrt(d2);
@@ -304,7 +307,7 @@ class Oracle {
         const Index k = brute_nearest(orig_pos_, orig, p1);
         ++queries;
         center_.row(r) = p1.transpose();
-        rho2_[r] = (p1 - orig_pos_.row(k).transpose()).squaredNorm();
+        rho2_[r] = shrunk((p1 - orig_pos_.row(k).transpose()).squaredNorm(), orig_rad_[k]);
         const bool now = (p1 - orig_pos_.row(k).transpose()).dot(orig_nrm_.row(k).transpose()) < p_.threshold;
         if (orig_zero_[k] && now != inside_[r]) colliding_[r] = !colliding_[r];
         inside_[r] = now;
@@ -323,6 +326,15 @@ class Oracle {
   std::vector<double> rho2_, depth_;
   double mean_dist2_ = 0.0;
   Points orig_pos_, orig_nrm_;
+  Values orig_rad_;
+  Index last_nearest_ = -1;  // zero surfel found by the last simple() test
+
+  // Sphere radius^2 of the definition: (|d| - sphere_margin * r2)^2, 0 when not positive.
+  double shrunk(double d2, double r2) const {
+    if (p_.sphere_margin == 0.0) return d2;
+    const double rho = std::sqrt(d2) - p_.sphere_margin * r2;
+    return rho > 0.0 ? rho * rho : 0.0;
+  }
   std::vector<bool> orig_zero_, orig_alive_;
   std::vector<Index> orig_of_row_;
 };

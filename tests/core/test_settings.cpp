@@ -23,7 +23,8 @@ TEST(Settings, DefaultsAndListingOrder) {
   std::vector<std::string> names;
   for (const auto& n : d) names.push_back(n.name);
   EXPECT_EQ(names, (std::vector<std::string>{"algorithm", "threshold", "boundary", "boundary_n", "boundary_i",
-                                             "step_bound", "threads", "resample", "split_threshold"}));
+                                             "step_bound", "sphere_margin", "threads", "resample",
+                                             "split_threshold"}));
   EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
   EXPECT_EQ(std::get<double>(d[3].value), 10.0);
   // The listing applied to defaults is the identity.

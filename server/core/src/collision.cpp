@@ -65,6 +65,11 @@ void validate(const CollisionParams& p) {
   if (p.threads < 0) {
     throw Error(ErrorCode::InvalidArgument, "threads", "must be >= 0, got " + std::to_string(p.threads));
   }
+  if (!std::isfinite(p.sphere_margin) || p.sphere_margin < 0.0) {
+    std::ostringstream msg;
+    msg << "must be finite and >= 0, got " << p.sphere_margin;
+    throw Error(ErrorCode::InvalidArgument, "sphere_margin", msg.str());
+  }
 }
 
 std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionParams& params) {

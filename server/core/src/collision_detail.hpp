@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -65,6 +66,16 @@ struct ZeroSet {
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
   std::size_t memory_bytes() const;
 };
+
+// Squared radius of a temporal-coherence sphere around a point at squared distance `dist2` from its
+// nearest reference surfel of radius `radius`: (|d| - margin * radius)^2, or 0 when that is not
+// positive (the surfel is then re-tested at the next step). With margin 1 the sphere cannot reach
+// into the nearest surfel's disc, so it does not poke through the sampled surface.
+inline double sphere_rho2(double dist2, double radius, double margin) {
+  if (margin == 0.0) return dist2;  // the thesis's sphere, bit for bit
+  const double rho = std::sqrt(dist2) - margin * radius;
+  return rho > 0.0 ? rho * rho : 0.0;
+}
 
 // One evaluation of the §4.1 test for deformable surfel s1 at p1 against zero surfel k.
 struct SimpleTest {

@@ -31,6 +31,7 @@ class RobustDetector final : public CollisionDetector {
     Snapshot orig;
     orig.positions = scene.positions;
     orig.normals = scene.normals;
+    orig.radii = scene.radii;
     orig.zero.resize(static_cast<std::size_t>(rows));
     for (Index r = 0; r < rows; ++r) orig.zero[r] = scene.regions[r] == Region::Zero;
     orig.alive.assign(static_cast<std::size_t>(rows), 1);
@@ -45,7 +46,8 @@ class RobustDetector final : public CollisionDetector {
     for (Index q = 0; q < n; ++q) {
       const Index r = deformable[q];
       const Vec3 p = row3(scene.positions, r);
-      rho2[r] = (p - row3(scene.positions, zero_tree.nearest(p))).squaredNorm();
+      const Index k = zero_tree.nearest(p);
+      rho2[r] = sphere_rho2((p - row3(scene.positions, k)).squaredNorm(), scene.radii[k], params_.sphere_margin);
     }
     orig_ = std::move(orig);
     orig_of_row_ = std::move(orig_of_row);
@@ -87,7 +89,7 @@ class RobustDetector final : public CollisionDetector {
         ++made;
         const Vec3 d = p1 - row3(orig_.positions, k);
         center_.row(r) = p1.transpose();
-        rho2_[r] = d.squaredNorm();
+        rho2_[r] = sphere_rho2(d.squaredNorm(), orig_.radii[k], params_.sphere_margin);
         const bool inside_now = d.dot(row3(orig_.normals, k)) < w;
         if (orig_.zero[k] && inside_now != static_cast<bool>(f & kInside)) f ^= kColliding;
         f = inside_now ? (f | kInside) : (f & static_cast<std::uint8_t>(~kInside));
@@ -203,7 +205,7 @@ class RobustDetector final : public CollisionDetector {
   }
 
   std::size_t memory_bytes() const override {
-    return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size()) * sizeof(double) +
+    return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size() + orig_.radii.size()) * sizeof(double) +
            orig_.zero.capacity() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : 0) +
            (orig_of_row_.capacity() + deformable_.capacity()) * sizeof(Index) +
            static_cast<std::size_t>(center_.size() + old_position_.size() + rho2_.size()) * sizeof(double) +
@@ -219,6 +221,7 @@ class RobustDetector final : public CollisionDetector {
   struct Snapshot {
     Points positions;                  // #O by 3
     Points normals;                    // #O by 3
+    Values radii;                      // #O
     std::vector<std::uint8_t> zero;    // #O: 1 = zero surfel
     std::vector<std::uint8_t> alive;   // #O: 0 once a zero surfel was removed from the model
     std::unique_ptr<KdTree> tree;      // over the alive rows of `positions`

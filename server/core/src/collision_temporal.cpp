@@ -34,7 +34,8 @@ class TemporalDetector final : public CollisionDetector {
     for (Index q = 0; q < n; ++q) {
       const Index r = deformable[q];
       const Vec3 p = row3(scene.positions, r);
-      rho2_[r] = (p - row3(zero.positions, zero.nearest(p))).squaredNorm();
+      const Index k = zero.nearest(p);
+      rho2_[r] = sphere_rho2((p - row3(zero.positions, k)).squaredNorm(), zero.radii[k], params_.sphere_margin);
     }
     zero_ = std::move(zero);
     deformable_ = std::move(deformable);
@@ -62,7 +63,7 @@ class TemporalDetector final : public CollisionDetector {
       const Index k = zero_.nearest(p1);
       const SimpleTest t = simple_test(params_, zero_, k, p1, scene.radii[r], row3(previous, r), colliding_[r]);
       center_.row(r) = p1.transpose();
-      rho2_[r] = t.dist2;
+      rho2_[r] = sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin);
       colliding_[r] = t.state;
       depth[q] = std::sqrt(t.dist2);
       return 1;

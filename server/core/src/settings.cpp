@@ -72,6 +72,8 @@ SessionSettings apply_settings(const SessionSettings& current, const std::vector
       c.boundary_i = integer(s);
     } else if (s.name == "step_bound") {
       c.step_bound = flag(s);
+    } else if (s.name == "sphere_margin") {
+      c.sphere_margin = number(s);
     } else if (s.name == "threads") {
       c.threads = integer(s);
     } else if (s.name == "resample") {
@@ -81,7 +83,7 @@ SessionSettings apply_settings(const SessionSettings& current, const std::vector
     } else {
       throw Error(ErrorCode::InvalidArgument, s.name,
                   "unknown setting '" + s.name +
-                      "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, threads, "
+                      "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, sphere_margin, threads, "
                       "resample or split_threshold)");
     }
   }
@@ -99,6 +101,7 @@ std::vector<NamedSetting> describe(const SessionSettings& s) {
       {"boundary_n", static_cast<double>(c.boundary_n)},
       {"boundary_i", static_cast<double>(c.boundary_i)},
       {"step_bound", c.step_bound},
+      {"sphere_margin", c.sphere_margin},
       {"threads", static_cast<double>(c.threads)},
       {"resample", s.resample.enabled},
       {"split_threshold", s.resample.split_threshold},

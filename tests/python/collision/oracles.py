@@ -42,8 +42,9 @@ class Reference:
     """Base: rest model, per-id arrays that grow with inserted ids, state bookkeeping."""
 
     def __init__(self, scene: SceneSetup, threshold: float = 0.0, boundary: bool = True, boundary_n: int = 10,
-                 boundary_i: int = 5, step_bound: bool = True) -> None:
+                 boundary_i: int = 5, step_bound: bool = True, sphere_margin: float = 0.5) -> None:
         self.W = float(threshold)
+        self.margin = float(sphere_margin)
         self.boundary = boundary
         self.n, self.i = int(boundary_n), int(boundary_i)
         self.step_bound = step_bound
@@ -76,6 +77,14 @@ class Reference:
     def _build_zero(self) -> None:
         self.zero_ids = np.flatnonzero(self.zero_alive[: self.rest_pos.shape[0]])
         self.zero_tree = cKDTree(self.rest_pos[self.zero_ids])
+
+    def sphere_rho2(self, d: np.ndarray, radius: np.ndarray) -> np.ndarray:
+        """Sphere radius^2 of the definition: (|d| - sphere_margin * r2)^2, 0 when not positive."""
+        dist2 = np.einsum("ij,ij->i", d, d)
+        if self.margin == 0.0:
+            return dist2
+        rho = np.sqrt(dist2) - self.margin * radius
+        return np.where(rho > 0.0, rho * rho, 0.0)
 
     def nearest_zero(self, p: np.ndarray):
         _, k = self.zero_tree.query(p, k=1)
@@ -205,8 +214,8 @@ class TemporalRef(SimpleRef):
         self.center = self.rest_pos.copy()
         self.rho2 = np.zeros(scene.size)
         dids = np.flatnonzero(~self.is_zero_rest)
-        _, d, _ = self.nearest_zero(self.rest_pos[dids])
-        self.rho2[dids] = np.einsum("ij,ij->i", d, d)
+        z, d, _ = self.nearest_zero(self.rest_pos[dids])
+        self.rho2[dids] = self.sphere_rho2(d, self.rest_rad[z])
 
     def _per_id(self):
         return tuple(super()._per_id()) + ("center", "rho2")
@@ -230,9 +239,10 @@ class TemporalRef(SimpleRef):
         self.last_tested = int(out.sum())
         if out.any():
             state, dist2 = self._test(ids[out], pos[out], rad[out])
+            z, d, _ = self.nearest_zero(pos[out])
             self.colliding[ids[out]] = state
             self.center[ids[out]] = pos[out]
-            self.rho2[ids[out]] = dist2
+            self.rho2[ids[out]] = self.sphere_rho2(d, self.rest_rad[z])
         return ids[self.colliding[ids]]
 
 
@@ -249,8 +259,8 @@ class RobustRef(Reference):
         self.center = self.rest_pos.copy()
         self.rho2 = np.zeros(P)
         dids = np.flatnonzero(~self.is_zero_rest)
-        _, d, _ = self.nearest_zero(self.rest_pos[dids])
-        self.rho2[dids] = np.einsum("ij,ij->i", d, d)
+        z, d, _ = self.nearest_zero(self.rest_pos[dids])
+        self.rho2[dids] = self.sphere_rho2(d, self.rest_rad[z])
         self.orig_alive = np.ones(P, bool)  # rows of the original model still in it
         self._build_orig()
 
@@ -301,7 +311,7 @@ class RobustRef(Reference):
             self.first[lid[first]] = False
         o, d, now_in = self._classify(lpos)
         self.center[lid] = lpos
-        self.rho2[lid] = np.einsum("ij,ij->i", d, d)
+        self.rho2[lid] = self.sphere_rho2(d, self.rest_rad[o])
         flip = self.is_zero_rest[o] & (now_in != self.inside[lid])
         self.colliding[lid[flip]] = ~self.colliding[lid[flip]]
         self.inside[lid] = now_in
@@ -311,7 +321,8 @@ class RobustRef(Reference):
 
 
 def make_reference(algorithm: str, scene: SceneSetup, **settings) -> Reference:
-    kw = {k: v for k, v in settings.items() if k in ("threshold", "boundary", "boundary_n", "boundary_i", "step_bound")}
+    kw = {k: v for k, v in settings.items()
+          if k in ("threshold", "boundary", "boundary_n", "boundary_i", "step_bound", "sphere_margin")}
     if algorithm == "simple":
         return SimpleRef(scene, improved=False, **kw)
     if algorithm == "improved":
@@ -319,7 +330,7 @@ def make_reference(algorithm: str, scene: SceneSetup, **settings) -> Reference:
     if algorithm == "temporal":
         return TemporalRef(scene, **kw)
     if algorithm == "robust":
-        return RobustRef(scene, **{k: v for k, v in kw.items() if k == "threshold"})
+        return RobustRef(scene, **{k: v for k, v in kw.items() if k in ("threshold", "sphere_margin")})
     raise ValueError(algorithm)
 
 

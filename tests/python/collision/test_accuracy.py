@@ -6,21 +6,16 @@ import pytest
 
 from surfeledit import scenario as S
 
-# Per-scene floors for Robust (min over steps). The issue asks for >= 0.99; measured (scales in
-# conftest, seed 1, threads 1) it is not reached on two scenes, for reasons in the algorithm as
-# specified (ALGORITHMS.md §4.4), not in the runner:
-# - piercing: a surfel's first sphere has the radius of its distance to the nearest zero *sample*,
-#   which pokes through the sampled face by up to ~l^2/(2 rho) (l = lateral offset to that sample).
-#   A surfel moving straight down that stops inside that sliver has its first update classify its
-#   old position as already inside the plate, so its parity is inverted for good (missed while in
-#   the plate, reported after leaving it): ~0.6 % of the ball at this scale (39 surfels), plus
-#   shallow exits reported one step late. Measured: precision >= 0.22 (on the last steps, where a
-#   handful of stuck surfels are all that is reported), recall >= 0.77 (first contact step).
-# - cup: the handle crosses the wall next to its own roots, where the nearest original surfel is an
-#   original handle (deformable) surfel, so entering the wall is not counted while leaving it into
-#   the cavity is (the thesis's Fig. 6.7 failure): measured precision >= 0.29, recall >= 0.52.
+# Per-scene floors for Robust with the default settings (min over steps; scales in conftest, seed 1,
+# threads 1). The issue asks for >= 0.99:
+# - piercing: 1.0 / 1.0 measured with the default sphere_margin 0.5 (see test_thesis_spheres below
+#   for what the thesis's spheres, margin 0, do here).
+# - cup: NOT reached: the handle crosses the wall next to its own roots, where the nearest original
+#   surfel is an original handle (deformable) surfel, so entering the wall is not counted while
+#   leaving it into the cavity is (the thesis's Fig. 6.7 failure, inherent to the definition):
+#   measured precision >= 0.2749, recall >= 0.5191 (margin 0: 0.29 / 0.52).
 # - concave: 1.0 / 1.0.
-ROBUST_FLOORS = {"piercing": (0.0, 0.76), "cup": (0.28, 0.51), "concave": (0.99, 0.99)}
+ROBUST_FLOORS = {"piercing": (0.99, 0.99), "cup": (0.27, 0.51), "concave": (0.99, 0.99)}
 
 
 def _table(res):
@@ -44,7 +39,27 @@ def test_robust_accuracy(scenarios, name):
     fn = sum(r.fn for r in res.records)
     print(f"{name} robust over all steps: precision {tp / (tp + fp):.4f} recall {tp / (tp + fn):.4f}")
     if name == "piercing":
-        assert tp / (tp + fp) > 0.93 and tp / (tp + fn) > 0.98
+        assert tp / (tp + fp) > 0.99 and tp / (tp + fn) > 0.99
+
+
+@pytest.mark.parametrize("algorithm", ["robust", "temporal"])
+def test_thesis_spheres_leak_and_the_margin_fixes_it(scenarios, algorithm):
+    """With the thesis's spheres (sphere_margin 0) a surfel's sphere, sized by its distance to the
+    nearest zero *sample*, pokes through the sampled face by up to ~l^2/(2 rho) (l: lateral offset
+    to that sample). A surfel that stops inside that sliver is never tested while entering: Robust's
+    first update then classifies its old position as already inside (parity inverted for good: missed
+    in the plate, reported after leaving it), Temporal keeps its stale state. Measured at this scale:
+    Robust min precision 0.0 / recall 0.77, Temporal 0.58 / 0.77. Shrinking each sphere by half the
+    nearest surfel's radius (the default) keeps it clear of the disc: 1.0 / 1.0 for both."""
+    sc = scenarios["piercing"]
+    worst = {}
+    for margin in (0.0, 0.5):
+        res = S.run(sc, algorithm, backend=S.LocalBackend(1), settings={"threads": 1, "sphere_margin": margin})
+        worst[margin] = (min(r.precision for r in res.records), min(r.recall for r in res.records))
+        print(f"piercing {algorithm} sphere_margin {margin}: min precision {worst[margin][0]:.4f} "
+              f"min recall {worst[margin][1]:.4f}")
+    assert min(worst[0.0]) < 0.9, "the thesis's spheres no longer leak here: revisit this test"
+    assert min(worst[0.5]) >= 0.99
 
 
 def test_truth_is_independent_of_the_detector(scenarios):

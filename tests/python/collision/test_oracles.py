@@ -57,6 +57,13 @@ def test_heuristics_off_equal_oracle(scenarios, alg):
     _check(scenarios["cup"], alg, settings=dict(boundary_n=16, boundary_i=12), steps=20)
 
 
+@pytest.mark.parametrize("margin", [0.0, 1.0])
+@pytest.mark.parametrize("alg", ["temporal", "robust"])
+def test_sphere_margins_equal_oracle(scenarios, alg, margin):
+    # The thesis's spheres (margin 0, bit for bit |d|^2) and fully shrunk ones reach the same definitions.
+    _check(scenarios["piercing"], alg, settings=dict(sphere_margin=margin))
+
+
 @pytest.mark.parametrize("alg", ALGS)
 def test_insertion_and_removal_mid_scenario(scenarios, alg):
     sc = scenarios["cup"]  # the blended handle stretches: splits happen

@@ -8,6 +8,8 @@ from surfeledit.errors import InvalidArgumentError
 
 BAD = [
     dict(algorithm="fastest"),
+    dict(sphere_margin=-0.5),
+    dict(sphere_margin=float("nan")),
     dict(boundary_n=-1),
     dict(boundary_n=0),
     dict(boundary_i=0),

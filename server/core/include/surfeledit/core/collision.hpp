@@ -33,6 +33,8 @@ struct CollisionParams {
   int boundary_n = 10;           // neighbours (whole model) looked at per deformable surfel, >= 1
   int boundary_i = 5;            // of those, the i nearest zero surfels are marked boundary, 1..n
   bool step_bound = true;        // Simple/Improved/Temporal: state may change only if |d| <= |t| + r1 + r2
+  double sphere_margin = 0.5;    // Temporal/Robust: a sphere's radius is |d| - margin * r2 (r2: radius of the
+                                 // nearest surfel), so it stays clear of that surfel's disc; 0 = the thesis's |d|
   int threads = 0;               // worker threads (0 = all); results do not depend on it
 };
 

@@ -7,6 +7,7 @@
 //   boundary_n       int     neighbours looked at for boundary marks
 //   boundary_i       int     zero neighbours marked boundary
 //   step_bound       bool    per-surfel step bound (simple/improved/temporal)
+//   sphere_margin    number  temporal/robust spheres shrink by this many radii of the nearest surfel
 //   threads          int     worker threads for detection (0 = all)
 //   resample         bool    dynamic resampling
 //   split_threshold  number  stretch ratio that splits a surfel
