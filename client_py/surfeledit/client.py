@@ -596,7 +596,7 @@ class Session:
     # -- info --------------------------------------------------------------------------------
     def info(self) -> "proto.SessionInfo":
         """Session info: ``surfels``, ``has_regions``, ``state_hash``, ``clients``, ``bytes_per_surfel``,
-        ``structures`` (name, bytes)."""
+        ``structures`` (name, bytes), ``settings`` (every setting; :meth:`settings` as a dict)."""
         reply = self.client.request(proto.Op.OP_INFO, self.name)
         if not reply.session_info:
             raise errors.NotFoundError(f"session {self.name!r} not reported by the server", "session")
