@@ -1,0 +1,176 @@
+// Approximate collision detection on the simplified deformable region (thesis §9.3): with cluster size
+// 1 it equals the exact detector of the same algorithm at every step of a scripted scene (a sphere
+// pushed through a slab, turned, pulled back), also across insertion and removal and with threads;
+// at larger cluster sizes its precision and recall against the exact detector are measured, printed
+// and asserted (the figures are recorded in bench/RESULTS.md).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "collision_oracle.hpp"
+#include "surfeledit/core/simplify/approximate_detector.hpp"
+
+namespace surfeledit {
+namespace {
+
+using testing::slab_and_sphere;
+using testing::slab_script;
+using testing::TestScene;
+
+// Counts of the approximate result against the exact one, summed over the steps.
+struct Agreement {
+  std::size_t tp = 0, fp = 0, fn = 0;
+  double worst_precision = 1.0, worst_recall = 1.0;
+  std::size_t member_tests = 0, exact_tests = 0;  // original surfels (re)evaluated, summed
+  std::size_t queries = 0, exact_queries = 0;     // nearest-neighbour queries (approx: clusters' included)
+  double precision() const { return tp + fp ? double(tp) / double(tp + fp) : 1.0; }
+  double recall() const { return tp + fn ? double(tp) / double(tp + fn) : 1.0; }
+};
+
+// Runs both detectors side by side on the script; `same` demands identical results every step.
+Agreement run_side_by_side(TestScene scene, const CollisionParams& cp, const SimplifyParams& sp, bool edits, bool same) {
+  auto exact = CollisionDetector::create(cp);
+  auto approx = make_approximate_detector(cp, sp);
+  exact->reset(scene.view());
+  approx->reset(scene.view());
+  approx->clusters().check();
+  Agreement a;
+  Vec3 centre = Vec3::Zero();
+  for (Index r = 0, n = 0; r < scene.rows(); ++r)
+    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
+  const auto script = slab_script();
+  for (std::size_t k = 0; k < script.size(); ++k) {
+    const Points before = scene.positions;
+    scene.move(script[k].t, Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix(), centre);
+    centre += script[k].t;
+    Points previous = before;
+    if (edits && k == 4) {  // split every 7th deformable surfel
+      IndexList parents;
+      for (Index r = 0, j = 0; r < scene.rows(); ++r)
+        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
+      for (Index q : parents) scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
+      previous.conservativeResize(scene.rows(), 3);
+      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(before.rows() + j) = previous.row(parents[j]);
+      exact->on_inserted(scene.view(), parents);
+      approx->on_inserted(scene.view(), parents);
+      for (std::size_t j = 0; j < parents.size(); ++j)
+        EXPECT_EQ(approx->clusters().cluster_of(before.rows() + static_cast<Index>(j)), approx->clusters().cluster_of(parents[j]));
+    }
+    if (edits && k == 7) {  // drop some zero and some deformable surfels
+      std::vector<bool> keep(scene.rows(), true);
+      for (Index r = 0, jd = 0, jz = 0; r < scene.rows(); ++r) {
+        if (scene.regions[r] == Region::Zero) {
+          if (jz++ % 40 == 39) keep[r] = false;
+        } else if (jd++ % 11 == 5) {
+          keep[r] = false;
+        }
+      }
+      scene.remove(keep);
+      Index j = 0;
+      for (Index r = 0; r < previous.rows(); ++r)
+        if (keep[r]) previous.row(j++) = previous.row(r);
+      previous.conservativeResize(j, 3);
+      exact->on_removed(keep);
+      approx->on_removed(keep);
+    }
+    approx->clusters().check();
+    const CollisionResult want = exact->detect(scene.view(), previous);
+    const CollisionResult got = approx->detect(scene.view(), previous);
+    a.member_tests += got.stats.tested;
+    a.exact_tests += want.stats.tested;
+    a.queries += got.stats.queries;
+    a.exact_queries += want.stats.queries;
+    if (same) {
+      EXPECT_EQ(got.colliding, want.colliding) << to_string(cp.algorithm) << " step " << k;
+      EXPECT_EQ(got.depths, want.depths) << to_string(cp.algorithm) << " step " << k;
+      EXPECT_EQ(got.stats.tested, want.stats.tested) << to_string(cp.algorithm) << " step " << k;
+    }
+    std::vector<char> hit(static_cast<std::size_t>(scene.rows()), 0);
+    for (Index r : want.colliding) hit[r] = 1;
+    std::size_t tp = 0;
+    for (Index r : got.colliding) tp += hit[r];
+    const std::size_t fp = got.colliding.size() - tp, fn = want.colliding.size() - tp;
+    a.tp += tp;
+    a.fp += fp;
+    a.fn += fn;
+    if (tp + fp) a.worst_precision = std::min(a.worst_precision, double(tp) / double(tp + fp));
+    if (tp + fn) a.worst_recall = std::min(a.worst_recall, double(tp) / double(tp + fn));
+  }
+  return a;
+}
+
+CollisionParams collision_params(CollisionAlgorithm a, int threads = 1) {
+  CollisionParams p;
+  p.algorithm = a;
+  p.threads = threads;
+  return p;
+}
+
+SimplifyParams simplify_params(SimplifyMethod m, int size, double margin = 1.0) {
+  SimplifyParams p;
+  p.method = m;
+  p.cluster_size = size;
+  p.member_margin = margin;
+  return p;
+}
+
+TEST(ApproximateDetection, ClusterSizeOneEqualsExactEveryStep) {
+  for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Temporal, CollisionAlgorithm::Robust}) {
+    for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical, SimplifyMethod::None}) {
+      for (bool edits : {false, true}) {
+        for (int threads : {1, 2}) {
+          const Agreement g = run_side_by_side(slab_and_sphere(0.05), collision_params(a, threads),
+                                               simplify_params(m, 1), edits, true);
+          EXPECT_GT(g.tp, 100u) << to_string(a);  // the scene does collide
+          EXPECT_EQ(g.fp + g.fn, 0u) << to_string(a);
+        }
+      }
+    }
+  }
+}
+
+TEST(ApproximateDetection, ImprovedIsRejectedNoneGivesNothing) {
+  EXPECT_THROW(make_approximate_detector(collision_params(CollisionAlgorithm::Improved), SimplifyParams{}), Error);
+  EXPECT_EQ(make_approximate_detector(collision_params(CollisionAlgorithm::None), SimplifyParams{}), nullptr);
+  SimplifyParams bad;
+  bad.cluster_size = 0;
+  EXPECT_THROW(make_approximate_detector(collision_params(CollisionAlgorithm::Robust), bad), Error);
+}
+
+TEST(ApproximateDetection, PrecisionAndRecallAgainstExact) {
+  // Spacing 0.04: ~1,950 deformable surfels on the ball, ~13,600 zero surfels on the slab.
+  std::printf("[ approx ] algorithm method size margin: precision recall (over all steps; worst step) member tests / exact, queries / exact\n");
+  for (auto a : {CollisionAlgorithm::Robust, CollisionAlgorithm::Temporal}) {
+    for (auto m : {SimplifyMethod::Hierarchical, SimplifyMethod::RegionGrowing}) {
+      for (int size : {1, 18, 100}) {
+        for (double margin : {0.0, 1.0}) {
+          const Agreement g = run_side_by_side(slab_and_sphere(0.04), collision_params(a, 2),
+                                               simplify_params(m, size, margin), true, false);
+          std::printf("[ approx ] %-8s %-14s %3d %.0f: P %.4f R %.4f (worst %.3f %.3f) tests %zu / %zu, queries %zu / %zu\n",
+                      to_string(a), to_string(m), size, margin, g.precision(), g.recall(), g.worst_precision,
+                      g.worst_recall, g.member_tests, g.exact_tests, g.queries, g.exact_queries);
+          if (size == 1) {
+            EXPECT_EQ(g.fp + g.fn, 0u);
+            continue;
+          }
+          // With the margin the members of every cluster near the slab are tested: nearly exact.
+          // Without it (the thesis) clusters whose centroid has not yet entered miss their members.
+          // Thresholds: measured figures (bench/RESULTS.md) minus a margin.
+          // Measured (spacing 0.04, both algorithms, both clusterings): margin 1 gives P = R = 1.0000;
+          // margin 0 gives P = 1.0000 and R 0.93-0.94 at size 18, 0.85-0.88 at size 100 (the worst
+          // single step: a cluster of 100 whose centroid is still outside while members are inside).
+          EXPECT_GE(g.precision(), 0.99);
+          if (margin > 0.0) {
+            EXPECT_GE(g.recall(), 0.99);
+          } else {
+            EXPECT_GE(g.recall(), size <= 18 ? 0.90 : 0.80);
+          }
+          EXPECT_LT(g.member_tests, g.exact_tests);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace surfeledit
