@@ -47,7 +47,8 @@ pyb::dict settings_dict(const SessionSettings& settings) {
       d[pyb::str(s.name)] = *t;
     } else {
       const double v = std::get<double>(s.value);
-      const bool integral = s.name == "boundary_n" || s.name == "boundary_i" || s.name == "threads";
+      const bool integral = s.name == "boundary_n" || s.name == "boundary_i" || s.name == "threads" ||
+                            s.name == "leaf_max_surfels" || s.name == "leaf_min_surfels" || s.name == "max_level";
       if (integral) {
         d[pyb::str(s.name)] = static_cast<long long>(v);
       } else {
@@ -66,6 +67,9 @@ pyb::dict stats_dict(const CollisionStats& s) {
   d["colliding"] = s.colliding;
   d["detect_ms"] = s.detect_ms;
   d["preprocess_ms"] = s.preprocess_ms;
+  d["nv"] = s.nv;
+  d["np"] = s.np;
+  d["nu"] = s.nu;
   return d;
 }
 
@@ -130,8 +134,32 @@ void bind_edit_session(pyb::module_& m) {
             s.configure(changes);
           },
           "Session settings by keyword (algorithm=, threshold=, boundary=, boundary_n=, boundary_i=, step_bound=, "
-          "threads=, resample=, split_threshold=); validated before anything changes")
+          "threads=, resample=, split_threshold=, zero_hierarchy=, deformable_hierarchy=, update=, hybrid_f=, sat=, "
+          "extended=, leaf_max_surfels=, leaf_min_surfels=, max_level=, min_leaf_extent=, inflation=); validated before "
+          "anything changes")
       .def("settings", [](const EditSession& s) { return settings_dict(s.settings()); })
+      .def(
+          "rebuild",
+          [](EditSession& s) {
+            pyb::gil_scoped_release release;
+            return s.rebuild_hierarchies();
+          },
+          "Starts a background rebuild of the deformable tree (adopted at a later step, never waited for); "
+          "False when there is none or one is under way")
+      .def(
+          "hierarchy",
+          [](const EditSession& s) {
+            const HierarchyInfo h = s.hierarchy_info();
+            pyb::dict d;
+            d["status"] = h.status;
+            d["zero_build_ms"] = h.zero_build_ms;
+            d["deformable_build_ms"] = h.deformable_build_ms;
+            d["last_rebuild_ms"] = h.last_rebuild_ms;
+            d["rebuilds_adopted"] = h.rebuilds_adopted;
+            return d;
+          },
+          "Trees of the detector: status ('fresh' | 'refit' | 'rebuilding', '' without a hierarchy), build times, "
+          "rebuilds adopted")
       .def("colliding", [](const EditSession& s) { return ids_array(s.colliding()); },
            "Colliding ids after the last step, ascending")
       .def(
@@ -156,6 +184,7 @@ void bind_edit_session(pyb::module_& m) {
         d["structures"] = structures;
         d["total_bytes"] = r.total_bytes;
         d["bytes_per_surfel"] = r.bytes_per_surfel;
+        d["hierarchy_status"] = r.hierarchy_status;
         return d;
       }, "What the session holds: surfels, structures {name: bytes}, total_bytes, bytes_per_surfel");
 }

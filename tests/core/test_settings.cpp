@@ -24,7 +24,9 @@ TEST(Settings, DefaultsAndListingOrder) {
   for (const auto& n : d) names.push_back(n.name);
   EXPECT_EQ(names, (std::vector<std::string>{"algorithm", "threshold", "boundary", "boundary_n", "boundary_i",
                                              "step_bound", "sphere_margin", "threads", "resample",
-                                             "split_threshold"}));
+                                             "split_threshold", "zero_hierarchy", "deformable_hierarchy", "update",
+                                             "hybrid_f", "sat", "extended", "leaf_max_surfels", "leaf_min_surfels",
+                                             "max_level", "min_leaf_extent", "inflation"}));
   EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
   EXPECT_EQ(std::get<double>(d[3].value), 10.0);
   // The listing applied to defaults is the identity.

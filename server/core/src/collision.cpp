@@ -12,10 +12,9 @@
 
 namespace surfeledit {
 
-// Defined in collision_simple.cpp, collision_temporal.cpp, collision_robust.cpp.
-std::unique_ptr<CollisionDetector> make_simple_detector(const CollisionParams& params, bool improved);
-std::unique_ptr<CollisionDetector> make_temporal_detector(const CollisionParams& params);
-std::unique_ptr<CollisionDetector> make_robust_detector(const CollisionParams& params);
+using detail::make_robust_detector;
+using detail::make_simple_detector;
+using detail::make_temporal_detector;
 
 CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field) {
   if (name == "none") return CollisionAlgorithm::None;
@@ -72,17 +71,29 @@ void validate(const CollisionParams& p) {
   }
 }
 
-std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionParams& params) {
+std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionParams& params,
+                                                             const HierarchyParams& hierarchy) {
   validate(params);
+  validate(hierarchy, params);
+  std::unique_ptr<detail::NarrowDetector> narrow;
   switch (params.algorithm) {
     case CollisionAlgorithm::None: return nullptr;
-    case CollisionAlgorithm::Simple: return make_simple_detector(params, false);
-    case CollisionAlgorithm::Improved: return make_simple_detector(params, true);
-    case CollisionAlgorithm::Temporal: return make_temporal_detector(params);
-    case CollisionAlgorithm::Robust: return make_robust_detector(params);
+    case CollisionAlgorithm::Simple: narrow = make_simple_detector(params, false); break;
+    case CollisionAlgorithm::Improved: narrow = make_simple_detector(params, true); break;
+    case CollisionAlgorithm::Temporal: narrow = make_temporal_detector(params); break;
+    case CollisionAlgorithm::Robust: narrow = make_robust_detector(params); break;
   }
-  return nullptr;
+  if (!hierarchy.any()) return narrow;
+  return detail::make_hierarchical_detector(params, hierarchy, std::move(narrow));
 }
+
+std::vector<std::pair<std::string, std::size_t>> CollisionDetector::structures() const {
+  return {{std::string("collision_") + to_string(params_.algorithm), memory_bytes()}};
+}
+
+bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
+
+HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
 
 namespace detail {
 

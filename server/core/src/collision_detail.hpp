@@ -11,6 +11,32 @@
 
 namespace surfeledit::detail {
 
+// A detector whose per-surfel test can be limited to candidate rows: the narrow phase of the
+// hierarchies (collision_bvh.cpp) runs the very same code as the detector without a hierarchy.
+class NarrowDetector : public CollisionDetector {
+ public:
+  // detect() where only rows with candidate[r] != 0 are tested (`candidate`: one flag per row;
+  // nullptr = every row). The other deformable rows keep their collision state; what happens to
+  // their spheres is documented by each detector.
+  virtual CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
+                                            const std::vector<std::uint8_t>* candidate) = 0;
+  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+    return detect_candidates(scene, previous, nullptr);
+  }
+
+ protected:
+  using CollisionDetector::CollisionDetector;
+};
+
+// Defined in collision_simple.cpp, collision_temporal.cpp, collision_robust.cpp.
+std::unique_ptr<NarrowDetector> make_simple_detector(const CollisionParams& params, bool improved);
+std::unique_ptr<NarrowDetector> make_temporal_detector(const CollisionParams& params);
+std::unique_ptr<NarrowDetector> make_robust_detector(const CollisionParams& params);
+// Defined in collision_bvh.cpp: `narrow` behind the broad phase of `hierarchy` (validated by the caller).
+std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionParams& params,
+                                                              const HierarchyParams& hierarchy,
+                                                              std::unique_ptr<NarrowDetector> narrow);
+
 // Worker threads for `threads` (0 = all hardware threads).
 int resolve_threads(int threads);
 

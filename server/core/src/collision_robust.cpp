@@ -16,9 +16,9 @@ namespace {
 
 using namespace detail;
 
-class RobustDetector final : public CollisionDetector {
+class RobustDetector final : public NarrowDetector {
  public:
-  explicit RobustDetector(const CollisionParams& params) : CollisionDetector(params) {}
+  explicit RobustDetector(const CollisionParams& params) : NarrowDetector(params) {}
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
@@ -60,7 +60,13 @@ class RobustDetector final : public CollisionDetector {
     preprocess_ms_ = ms_since(start);
   }
 
-  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+  // A row that is not a candidate keeps its collision state. If it left its sphere and does not
+  // collide, its inside state is forgotten (first update: re-derived at its previous position when
+  // it is tested next) and its sphere emptied, so that it is tested as soon as it is a candidate
+  // again; a colliding one keeps everything (it is still inside, farther than its step from the
+  // zero surface).
+  CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
+                                    const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     require_scene_rows(scene, rows_, "detect");
     if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
@@ -76,7 +82,11 @@ class RobustDetector final : public CollisionDetector {
       std::uint8_t& f = flags_[r];
       Index made = 0;
       const double moved2 = (p1 - row3(center_, r)).squaredNorm();
-      if (moved2 >= rho2_[r]) {  // left its sphere
+      if (moved2 >= rho2_[r] && candidate && !(*candidate)[r] && !(f & kColliding)) {
+        f |= kFirstUpdate;
+        center_.row(r) = p1.transpose();
+        rho2_[r] = 0.0;
+      } else if (moved2 >= rho2_[r] && (!candidate || (*candidate)[r])) {  // left its sphere
         if (f & kFirstUpdate) {
           f &= static_cast<std::uint8_t>(~kFirstUpdate);
           const Vec3 old = row3(old_position_, r);
@@ -240,8 +250,10 @@ class RobustDetector final : public CollisionDetector {
 
 }  // namespace
 
-std::unique_ptr<CollisionDetector> make_robust_detector(const CollisionParams& params) {
+namespace detail {
+std::unique_ptr<NarrowDetector> make_robust_detector(const CollisionParams& params) {
   return std::make_unique<RobustDetector>(params);
 }
+}  // namespace detail
 
 }  // namespace surfeledit

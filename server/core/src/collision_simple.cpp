@@ -21,9 +21,9 @@ namespace {
 
 using namespace detail;
 
-class SimpleDetector final : public CollisionDetector {
+class SimpleDetector final : public NarrowDetector {
  public:
-  SimpleDetector(const CollisionParams& params, bool improved) : CollisionDetector(params), improved_(improved) {}
+  SimpleDetector(const CollisionParams& params, bool improved) : NarrowDetector(params), improved_(improved) {}
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
@@ -43,15 +43,19 @@ class SimpleDetector final : public CollisionDetector {
     preprocess_ms_ = ms_since(start);
   }
 
-  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+  // A row that is not a candidate keeps its state and depth (Simple only: Improved's spatial
+  // coherence needs every query, so hierarchies refuse it).
+  CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
+                                    const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     require_scene_rows(scene, rows_, "detect");
     if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
     CollisionResult result;
     if (improved_) {
+      if (candidate) throw Error(ErrorCode::Internal, "algorithm", "improved cannot run on candidates only");
       detect_improved(scene, previous, result.stats);
     } else {
-      detect_simple(scene, previous, result.stats);
+      detect_simple(scene, previous, candidate, result.stats);
     }
     for (Index r : deformable_) {
       if (!colliding_[r]) continue;
@@ -101,25 +105,29 @@ class SimpleDetector final : public CollisionDetector {
   }
 
  private:
-  void detect_simple(const CollisionScene& scene, const Points& previous, CollisionStats& stats) {
+  void detect_simple(const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
+                     CollisionStats& stats) {
     const Index n = static_cast<Index>(deformable_.size());
     const int threads = resolve_threads(params_.threads);
-    auto one = [&](Index q) {
+    Index tested = 0;
+    auto one = [&](Index q) -> Index {
       const Index r = deformable_[q];
+      if (candidate && !(*candidate)[r]) return 0;
       const Vec3 p1 = row3(scene.positions, r);
       const Index k = zero_.nearest(p1);
       const SimpleTest t = simple_test(params_, zero_, k, p1, scene.radii[r], row3(previous, r), colliding_[r]);
       colliding_[r] = t.state;
       depth_[r] = std::sqrt(t.dist2);
+      return 1;
     };
     if (threads == 1 || n < 2048) {
-      for (Index q = 0; q < n; ++q) one(q);
+      for (Index q = 0; q < n; ++q) tested += one(q);
     } else {
-#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
-      for (Index q = 0; q < n; ++q) one(q);
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads) reduction(+ : tested)
+      for (Index q = 0; q < n; ++q) tested += one(q);
     }
-    stats.tested = n;
-    stats.queries = n;
+    stats.tested = tested;
+    stats.queries = tested;
   }
 
   void detect_improved(const CollisionScene& scene, const Points& previous, CollisionStats& stats) {
@@ -171,8 +179,10 @@ class SimpleDetector final : public CollisionDetector {
 
 }  // namespace
 
-std::unique_ptr<CollisionDetector> make_simple_detector(const CollisionParams& params, bool improved) {
+namespace detail {
+std::unique_ptr<NarrowDetector> make_simple_detector(const CollisionParams& params, bool improved) {
   return std::make_unique<SimpleDetector>(params, improved);
 }
+}  // namespace detail
 
 }  // namespace surfeledit

@@ -14,9 +14,9 @@ namespace {
 
 using namespace detail;
 
-class TemporalDetector final : public CollisionDetector {
+class TemporalDetector final : public NarrowDetector {
  public:
-  explicit TemporalDetector(const CollisionParams& params) : CollisionDetector(params) {}
+  explicit TemporalDetector(const CollisionParams& params) : NarrowDetector(params) {}
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
@@ -44,7 +44,11 @@ class TemporalDetector final : public CollisionDetector {
     preprocess_ms_ = ms_since(start);
   }
 
-  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+  // `candidate` is not used: a surfel that leaves its sphere needs the distance to its nearest zero
+  // surfel for its next sphere whether or not a broad phase could tell that its state is unchanged
+  // (the step bound then keeps it), so behind a hierarchy Temporal does exactly what it does alone.
+  CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
+                                    const std::vector<std::uint8_t>* /*candidate*/) override {
     const auto start = std::chrono::steady_clock::now();
     require_scene_rows(scene, rows_, "detect");
     if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
@@ -158,8 +162,10 @@ class TemporalDetector final : public CollisionDetector {
 
 }  // namespace
 
-std::unique_ptr<CollisionDetector> make_temporal_detector(const CollisionParams& params) {
+namespace detail {
+std::unique_ptr<NarrowDetector> make_temporal_detector(const CollisionParams& params) {
   return std::make_unique<TemporalDetector>(params);
 }
+}  // namespace detail
 
 }  // namespace surfeledit

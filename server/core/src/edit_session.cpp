@@ -19,10 +19,11 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
 }
 
-// A detector for `params` reset from the model as it is now (nullptr for algorithm none).
-std::unique_ptr<CollisionDetector> make_detector(const CollisionParams& params, const SurfelModel& m,
+// A detector for `settings` reset from the model as it is now (nullptr for algorithm none); it
+// builds only the trees the settings ask for.
+std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings, const SurfelModel& m,
                                                  const DeformationFields& f) {
-  std::unique_ptr<CollisionDetector> d = CollisionDetector::create(params);
+  std::unique_ptr<CollisionDetector> d = CollisionDetector::create(settings.collision, settings.hierarchy);
   if (d) d->reset(scene_of(m, f));
   return d;
 }
@@ -93,7 +94,7 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
     r = Region::One;
   }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
-  std::unique_ptr<CollisionDetector> detector = make_detector(settings_.collision, model_, *fields);
+  std::unique_ptr<CollisionDetector> detector = make_detector(settings_, model_, *fields);
   fields_ = std::move(fields);
   detector_ = std::move(detector);
   colliding_.clear();
@@ -180,11 +181,18 @@ StepOutcome EditSession::deform(const DeformParams& params) {
 void EditSession::configure(const std::vector<NamedSetting>& changes) {
   const SessionSettings next = apply_settings(settings_, changes);
   std::unique_ptr<CollisionDetector> detector;
-  if (fields_ && !model_.empty()) detector = make_detector(next.collision, model_, *fields_);
+  if (fields_ && !model_.empty()) detector = make_detector(next, model_, *fields_);
   settings_ = next;
   detector_ = std::move(detector);
   colliding_.clear();
 }
+
+bool EditSession::rebuild_hierarchies() {
+  if (!detector_ || !fields_) return false;
+  return detector_->start_rebuild(scene_of(model_, *fields_));
+}
+
+HierarchyInfo EditSession::hierarchy_info() const { return detector_ ? detector_->hierarchy_info() : HierarchyInfo{}; }
 
 void EditSession::remove(const IdList& ids) {
   const SurfelModel& m = model();
@@ -265,8 +273,8 @@ SessionReport EditSession::report() const {
                                             removed_log_.size() * sizeof(removed_log_[0])});
   if (fields_) rep.structures.push_back({"deformation_fields", fields_->memory_bytes()});
   if (detector_) {
-    rep.structures.push_back({std::string("collision_") + to_string(detector_->params().algorithm),
-                              detector_->memory_bytes()});
+    for (auto& [name, bytes] : detector_->structures()) rep.structures.push_back({name, bytes});
+    rep.hierarchy_status = detector_->hierarchy_info().status;
   }
   if (rest_radius_.size() > 0) {
     rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});

@@ -59,6 +59,7 @@ const std::string& text(const NamedSetting& s) {
 SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes) {
   SessionSettings next = current;
   CollisionParams& c = next.collision;
+  HierarchyParams& h = next.hierarchy;
   for (const NamedSetting& s : changes) {
     if (s.name == "algorithm") {
       c.algorithm = parse_algorithm(text(s), s.name);
@@ -80,20 +81,45 @@ SessionSettings apply_settings(const SessionSettings& current, const std::vector
       next.resample.enabled = flag(s);
     } else if (s.name == "split_threshold") {
       next.resample.split_threshold = number(s);
+    } else if (s.name == "zero_hierarchy") {
+      h.zero = parse_zero_hierarchy(text(s), s.name);
+    } else if (s.name == "deformable_hierarchy") {
+      h.deformable = parse_deformable_hierarchy(text(s), s.name);
+    } else if (s.name == "update") {
+      h.tree.update = bvh::parse_update(text(s), s.name);
+    } else if (s.name == "hybrid_f") {
+      h.tree.hybrid_f = number(s);
+    } else if (s.name == "sat") {
+      h.sat = bvh::parse_sat(text(s), s.name);
+    } else if (s.name == "extended") {
+      h.extended = flag(s);
+    } else if (s.name == "leaf_max_surfels") {
+      h.tree.leaf_max_surfels = integer(s);
+    } else if (s.name == "leaf_min_surfels") {
+      h.tree.leaf_min_surfels = integer(s);
+    } else if (s.name == "max_level") {
+      h.tree.max_level = integer(s);
+    } else if (s.name == "min_leaf_extent") {
+      h.tree.min_leaf_extent = number(s);
+    } else if (s.name == "inflation") {
+      h.tree.inflation = number(s);
     } else {
       throw Error(ErrorCode::InvalidArgument, s.name,
                   "unknown setting '" + s.name +
                       "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, sphere_margin, threads, "
-                      "resample or split_threshold)");
+                      "resample, split_threshold, zero_hierarchy, deformable_hierarchy, update, hybrid_f, sat, extended, "
+                      "leaf_max_surfels, leaf_min_surfels, max_level, min_leaf_extent or inflation)");
     }
   }
   validate(next.collision);
   validate(next.resample);
+  validate(next.hierarchy, next.collision);
   return next;
 }
 
 std::vector<NamedSetting> describe(const SessionSettings& s) {
   const CollisionParams& c = s.collision;
+  const HierarchyParams& h = s.hierarchy;
   return {
       {"algorithm", std::string(to_string(c.algorithm))},
       {"threshold", c.threshold},
@@ -105,6 +131,17 @@ std::vector<NamedSetting> describe(const SessionSettings& s) {
       {"threads", static_cast<double>(c.threads)},
       {"resample", s.resample.enabled},
       {"split_threshold", s.resample.split_threshold},
+      {"zero_hierarchy", std::string(to_string(h.zero))},
+      {"deformable_hierarchy", std::string(to_string(h.deformable))},
+      {"update", std::string(bvh::to_string(h.tree.update))},
+      {"hybrid_f", h.tree.hybrid_f},
+      {"sat", std::string(bvh::to_string(h.sat))},
+      {"extended", h.extended},
+      {"leaf_max_surfels", static_cast<double>(h.tree.leaf_max_surfels)},
+      {"leaf_min_surfels", static_cast<double>(h.tree.leaf_min_surfels)},
+      {"max_level", static_cast<double>(h.tree.max_level)},
+      {"min_leaf_extent", h.tree.min_leaf_extent},
+      {"inflation", h.tree.inflation},
   };
 }
 

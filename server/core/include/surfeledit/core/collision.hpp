@@ -9,8 +9,11 @@
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/hierarchy.hpp"
 
 namespace surfeledit {
 
@@ -48,6 +51,9 @@ struct CollisionStats {
   Index colliding = 0;       // surfels reported colliding
   double detect_ms = 0.0;    // time of this step's detection
   double preprocess_ms = 0.0;  // time of the last reset (building trees, spheres, boundary marks)
+  Index nv = 0;              // hierarchies: bounding-volume overlap tests this step (Eq. 8.11); 0 without
+  Index np = 0;              // hierarchies: candidates handed to the narrow phase this step; 0 without
+  Index nu = 0;              // hierarchies: boxes updated this step (refit, insertion); 0 without
 };
 
 struct CollisionResult {
@@ -64,10 +70,22 @@ struct CollisionScene {
   const std::vector<Region>& regions;  // #P; deformable = not Zero
 };
 
+// What a detector's hierarchies look like now.
+struct HierarchyInfo {
+  std::string status;              // "fresh" | "refit" | "rebuilding" (deformable tree; "fresh" for a zero
+                                   // tree alone, which is never refit); "" without a hierarchy
+  double zero_build_ms = 0.0;      // build of the zero tree at the last reset
+  double deformable_build_ms = 0.0;  // build of the deformable tree at the last reset (0 without one)
+  double last_rebuild_ms = 0.0;    // the last background rebuild that finished (0 before any)
+  Index rebuilds_adopted = 0;      // background rebuilds swapped in since the last reset
+};
+
 class CollisionDetector {
  public:
-  // A detector for `params.algorithm` (nullptr for None). Validates params.
-  static std::unique_ptr<CollisionDetector> create(const CollisionParams& params);
+  // A detector for `params.algorithm` (nullptr for None). Validates params (and `hierarchy`); with
+  // hierarchy.zero != None the detector runs that broad phase before the algorithm's narrow test.
+  static std::unique_ptr<CollisionDetector> create(const CollisionParams& params,
+                                                   const HierarchyParams& hierarchy = {});
   virtual ~CollisionDetector() = default;
 
   const CollisionParams& params() const { return params_; }
@@ -87,6 +105,15 @@ class CollisionDetector {
   virtual void on_inserted(const CollisionScene& scene, const IndexList& parents) = 0;
   // Bytes held (trees, per-surfel state).
   virtual std::size_t memory_bytes() const = 0;
+  // What it holds, by name, for a session report (default: one entry "collision_<algorithm>").
+  virtual std::vector<std::pair<std::string, std::size_t>> structures() const;
+
+  // Hierarchies only: starts a background rebuild of the deformable tree from the model as it is
+  // now; the next detect() that finds it finished adopts it. Never waits. False when there is no
+  // deformable tree or a rebuild is already under way.
+  virtual bool start_rebuild(const CollisionScene& scene);
+  // State of the hierarchies (all empty / zero without one).
+  virtual HierarchyInfo hierarchy_info() const;
 
  protected:
   explicit CollisionDetector(CollisionParams params) : params_(params) {}

@@ -40,6 +40,7 @@ struct SessionReport {
   std::vector<StructureInfo> structures;  // model arrays first, then what was built
   std::size_t total_bytes = 0;
   double bytes_per_surfel = 0.0;
+  std::string hierarchy_status;  // "fresh" | "refit" | "rebuilding", "" without a hierarchy
 };
 
 // What one deformation step did.
@@ -91,6 +92,12 @@ class EditSession {
   // "original" model is the current one); the model and the version do not change.
   void configure(const std::vector<NamedSetting>& changes);
   const SessionSettings& settings() const { return settings_; }
+  // Starts a background rebuild of the deformable tree from the model as it is now (rebuild on
+  // idle, e.g. when a drag ends); the next step that finds it finished swaps it in. Never waits.
+  // False when there is no deformable tree or a rebuild is under way.
+  bool rebuild_hierarchies();
+  // Status and build times of the detector's trees (empty without a hierarchy).
+  HierarchyInfo hierarchy_info() const;
   // Colliding ids after the last step (empty before any step / after a reset), ascending.
   const IdList& colliding() const { return colliding_; }
   // Removes surfels (validated first: unknown ids, or leaving the zero or one region empty, throw

@@ -11,6 +11,17 @@
 //   threads          int     worker threads for detection (0 = all)
 //   resample         bool    dynamic resampling
 //   split_threshold  number  stretch ratio that splits a surfel
+//   zero_hierarchy   text    "none" | "aabb" | "obb" | "sphere": tree over the zero region (hierarchy.hpp)
+//   deformable_hierarchy text "none" | "aabb": tree over the deformable region (needs zero_hierarchy)
+//   update           text    "bottom_up" | "top_down" | "hybrid": refit of the deformable tree
+//   hybrid_f         number  hybrid: fraction of the levels refit bottom-up, [0, 1]
+//   sat              text    "lite" | "full": OBB/AABB overlap test
+//   extended         bool    narrow phase against the original model (needs algorithm robust)
+//   leaf_max_surfels int     a tree node with at most this many surfels is a leaf
+//   leaf_min_surfels int     no split leaves a child with fewer surfels
+//   max_level        int     deepest tree level (root = 0)
+//   min_leaf_extent  number  leaf boxes at least this wide per axis, model units
+//   inflation        number  margin added to a box when a refit recomputes it, model units
 #pragma once
 
 #include <string>
@@ -25,6 +36,7 @@ namespace surfeledit {
 struct SessionSettings {
   CollisionParams collision;
   ResampleParams resample;
+  HierarchyParams hierarchy;
 };
 
 // A setting's value as it arrives: number (also for ints), bool or text.

@@ -1,0 +1,52 @@
+// Bounding volume hierarchies of a collision detector (ALGORITHMS.md §5, issue 4): which trees a
+// session builds and how, chosen per session by name (settings.hpp).
+//
+// With a hierarchy the detector runs a broad phase first: a deformable surfel is a *candidate* when
+// its ball (position, radius + its own displacement this step) overlaps a zero leaf box (surfel/tree)
+// or lies in a deformable leaf whose box overlaps a zero leaf box (tree/tree). Only candidates get the
+// configured algorithm's narrow test (the same code as without a hierarchy); the others keep their
+// collision state. A surfel whose ball reaches no zero surfel ball cannot have crossed the zero
+// surface this step, which is exactly the step bound of Simple/Temporal (§4.1), so those give the
+// same colliding set as without a hierarchy by construction; for Robust see collision_bvh.cpp.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "surfeledit/core/bvh/overlap.hpp"
+#include "surfeledit/core/bvh/params.hpp"
+
+namespace surfeledit {
+
+struct CollisionParams;
+
+// Box kind of the tree over the zero region.
+enum class ZeroHierarchy : std::uint8_t { None = 0, Aabb = 1, Obb = 2, Sphere = 3 };
+// Box kind of the tree over the deformable region (AABB only: it is refit every step).
+enum class DeformableHierarchy : std::uint8_t { None = 0, Aabb = 1 };
+
+// "none" | "aabb" | "obb" | "sphere"; throws InvalidArgument naming `field`.
+ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field = "zero_hierarchy");
+// "none" | "aabb"; throws InvalidArgument naming `field`.
+DeformableHierarchy parse_deformable_hierarchy(const std::string& name,
+                                               const std::string& field = "deformable_hierarchy");
+const char* to_string(ZeroHierarchy kind);
+const char* to_string(DeformableHierarchy kind);
+
+struct HierarchyParams {
+  ZeroHierarchy zero = ZeroHierarchy::None;                    // tree over the zero region (none = no hierarchy)
+  DeformableHierarchy deformable = DeformableHierarchy::None;  // tree over the deformable region (needs `zero`)
+  bvh::BvhParams tree;                                         // build and update parameters of both trees
+  bvh::SatMode sat = bvh::SatMode::Lite;                       // OBB/AABB overlap test of tree/tree
+  bool extended = false;  // narrow phase against the original model (§5 "Extended"); needs algorithm robust
+
+  bool any() const { return zero != ZeroHierarchy::None; }
+};
+
+// Throws InvalidArgument naming the offending setting: tree parameters (bvh::validate), a deformable
+// tree without a zero tree, `extended` without a zero tree or with another algorithm than robust, and
+// algorithms the broad phase cannot serve exactly (improved: its spatial coherence settles surfels
+// from other surfels' queries; simple/temporal with step_bound off: a far surfel may still change).
+void validate(const HierarchyParams& hierarchy, const CollisionParams& collision);
+
+}  // namespace surfeledit

@@ -1,0 +1,376 @@
+// Collision detection with bounding volume hierarchies (ALGORITHMS.md §5, thesis ch. 7-8): a broad
+// phase over a zero tree (AABB, OBB or sphere boxes, one std::visit per step) and optionally a
+// deformable AABB tree, in front of the configured algorithm's narrow test (collision_detail.hpp:
+// NarrowDetector, the same code as without a hierarchy) or of the extended narrow phase.
+//
+// Broad phase. Each deformable surfel is bounded by the ball (p, r + |t|): its radius grown by its
+// own displacement t this step, so the ball covers the whole path of its disc during the step. The
+// zero tree bounds the balls (p2, r2) of the zero surfels. A surfel is a candidate when
+//  - surfel/tree (no deformable tree): its ball overlaps a zero leaf box (Code 7.6);
+//  - tree/tree: it lies in a deformable leaf whose box (refit each step over those balls, update =
+//    bottom_up | top_down | hybrid) overlaps a zero leaf box (Code 8.4).
+// A non-candidate's ball misses every zero surfel ball: |p - p2| > r + |t| + r2 for all zero surfels,
+// which is the step bound of §4.1, so Simple leaves its state unchanged -- the same colliding set
+// as without a hierarchy, by construction. Temporal needs the nearest zero distance of every surfel
+// that leaves its sphere anyway (for the next sphere), so it ignores the candidates and is exactly
+// Temporal. Robust has no step bound; a non-candidate did
+// not come within its step of the zero surface, so its parity cannot have changed by crossing it (its
+// inside state is re-derived once it is a candidate again, see collision_robust.cpp); the tests check
+// the equality on every step of the scenario scenes.
+//
+// Rebuild on idle (thesis §8.3.3): start_rebuild() builds a fresh deformable tree on a background
+// thread (bvh::BvhRebuilder); detect() adopts it at its start when it is finished and the rows were
+// neither inserted nor removed meanwhile (topology tag), then refits it as usual. No step waits.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <variant>
+
+#include "collision_detail.hpp"
+#include "surfeledit/core/bvh/bvh.hpp"
+#include "surfeledit/core/bvh/extended.hpp"
+#include "surfeledit/core/bvh/obb.hpp"
+#include "surfeledit/core/bvh/rebuilder.hpp"
+#include "surfeledit/core/bvh/sphere.hpp"
+#include "surfeledit/core/bvh/traversal.hpp"
+#include "surfeledit/core/inside_outside.hpp"
+
+namespace surfeledit {
+
+ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field) {
+  if (name == "none") return ZeroHierarchy::None;
+  if (name == "aabb") return ZeroHierarchy::Aabb;
+  if (name == "obb") return ZeroHierarchy::Obb;
+  if (name == "sphere") return ZeroHierarchy::Sphere;
+  throw Error(ErrorCode::InvalidArgument, field,
+              "unknown zero hierarchy '" + name + "' (expected none, aabb, obb or sphere)");
+}
+
+DeformableHierarchy parse_deformable_hierarchy(const std::string& name, const std::string& field) {
+  if (name == "none") return DeformableHierarchy::None;
+  if (name == "aabb") return DeformableHierarchy::Aabb;
+  throw Error(ErrorCode::InvalidArgument, field, "unknown deformable hierarchy '" + name + "' (expected none or aabb)");
+}
+
+const char* to_string(ZeroHierarchy kind) {
+  switch (kind) {
+    case ZeroHierarchy::None: return "none";
+    case ZeroHierarchy::Aabb: return "aabb";
+    case ZeroHierarchy::Obb: return "obb";
+    case ZeroHierarchy::Sphere: return "sphere";
+  }
+  return "unknown";
+}
+
+const char* to_string(DeformableHierarchy kind) {
+  switch (kind) {
+    case DeformableHierarchy::None: return "none";
+    case DeformableHierarchy::Aabb: return "aabb";
+  }
+  return "unknown";
+}
+
+void validate(const HierarchyParams& h, const CollisionParams& c) {
+  bvh::validate(h.tree);
+  if (h.zero > ZeroHierarchy::Sphere) {
+    throw Error(ErrorCode::InvalidArgument, "zero_hierarchy",
+                "unknown zero hierarchy value " + std::to_string(static_cast<int>(h.zero)));
+  }
+  if (h.deformable > DeformableHierarchy::Aabb) {
+    throw Error(ErrorCode::InvalidArgument, "deformable_hierarchy",
+                "unknown deformable hierarchy value " + std::to_string(static_cast<int>(h.deformable)));
+  }
+  if (h.sat != bvh::SatMode::Lite && h.sat != bvh::SatMode::Full) {
+    throw Error(ErrorCode::InvalidArgument, "sat", "unknown sat value " + std::to_string(static_cast<int>(h.sat)));
+  }
+  if (h.deformable != DeformableHierarchy::None && h.zero == ZeroHierarchy::None) {
+    throw Error(ErrorCode::InvalidArgument, "deformable_hierarchy",
+                std::string("deformable_hierarchy=") + to_string(h.deformable) +
+                    " requires a zero_hierarchy (aabb, obb or sphere): the deformable tree is tested against the zero tree");
+  }
+  if (h.extended && h.zero == ZeroHierarchy::None) {
+    throw Error(ErrorCode::InvalidArgument, "extended", "extended=true requires a zero_hierarchy (aabb, obb or sphere)");
+  }
+  if (!h.any() || c.algorithm == CollisionAlgorithm::None) return;
+  if (h.extended && c.algorithm != CollisionAlgorithm::Robust) {
+    throw Error(ErrorCode::InvalidArgument, "extended",
+                std::string("extended=true tests against the original model as robust does: requires algorithm=robust, got ") +
+                    to_string(c.algorithm));
+  }
+  if (c.algorithm == CollisionAlgorithm::Improved) {
+    throw Error(ErrorCode::InvalidArgument, "zero_hierarchy",
+                "algorithm=improved cannot run behind a hierarchy (its spatial coherence settles surfels from the "
+                "queries of surfels the broad phase skips); use simple, temporal or robust, or zero_hierarchy=none");
+  }
+  if (!c.step_bound &&
+      (c.algorithm == CollisionAlgorithm::Simple || c.algorithm == CollisionAlgorithm::Temporal)) {
+    throw Error(ErrorCode::InvalidArgument, "zero_hierarchy",
+                std::string("a hierarchy with algorithm=") + to_string(c.algorithm) +
+                    " requires step_bound=true (the broad phase skips exactly the surfels the step bound keeps)");
+  }
+}
+
+namespace detail {
+
+namespace {
+
+using ZeroTree = std::variant<bvh::Bvh<bvh::Aabb>, bvh::Bvh<bvh::Obb>, bvh::Bvh<bvh::Sphere>>;
+
+class HierarchicalDetector final : public CollisionDetector {
+ public:
+  HierarchicalDetector(const CollisionParams& params, const HierarchyParams& h, std::unique_ptr<NarrowDetector> narrow)
+      : CollisionDetector(params), h_(h), narrow_(std::move(narrow)) {}
+
+  void reset(const CollisionScene& scene) override {
+    const auto start = std::chrono::steady_clock::now();
+    IndexList deformable, zero_rows;
+    split_rows(scene, deformable, zero_rows);
+    if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
+    const Index rows = static_cast<Index>(scene.regions.size());
+    // Narrow phase first (it validates the scene too).
+    std::unique_ptr<bvh::ExtendedNarrow> extended;
+    std::size_t extended_bytes = 0;
+    if (h_.extended) {
+      std::vector<std::uint8_t> is_zero(static_cast<std::size_t>(rows));
+      for (Index r = 0; r < rows; ++r) is_zero[r] = scene.regions[r] == Region::Zero;
+      KdTreeParams tp;
+      tp.threads = resolve_threads(params_.threads);
+      auto original = std::make_shared<const InsideOutside>(scene.positions, scene.normals, tp);
+      // Positions and normals copied by InsideOutside, its k-d tree, zero flags, cache and state per row.
+      extended_bytes = original->tree().memory_bytes() + static_cast<std::size_t>(rows) * (6 * sizeof(double) + 18);
+      extended = std::make_unique<bvh::ExtendedNarrow>(std::move(original), std::move(is_zero), rows, params_.threshold);
+    } else {
+      narrow_->reset(scene);
+    }
+    const auto t_zero = std::chrono::steady_clock::now();
+    ZeroTree zero = build_zero(scene, zero_rows);
+    zero_build_ms_ = ms_since(t_zero);
+    std::unique_ptr<bvh::Bvh<bvh::Aabb>> def;
+    def_build_ms_ = 0.0;
+    if (h_.deformable == DeformableHierarchy::Aabb) {
+      const auto t_def = std::chrono::steady_clock::now();
+      def = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, h_.tree);
+      def_build_ms_ = ms_since(t_def);
+    }
+    zero_ = std::move(zero);
+    def_ = std::move(def);
+    extended_ = std::move(extended);
+    deformable_ = std::move(deformable);
+    rows_ = rows;
+    reach_ = scene.radii;
+    candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    inserted_nu_ = 0;
+    rebuilds_adopted_ = 0;
+    extended_bytes_ = extended_bytes;
+    ++topology_;  // a rebuild started before the reset must not be adopted
+    preprocess_ms_ = ms_since(start);
+  }
+
+  CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
+    const auto start = std::chrono::steady_clock::now();
+    require_scene_rows(scene, rows_, "detect");
+    if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
+    adopt_rebuilt_tree();
+    // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
+    for (Index r : deformable_) {
+      const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
+      reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
+    }
+    std::fill(candidate_.begin(), candidate_.end(), 0);
+    bvh::BvhCounters counters;
+    counters.nu = inserted_nu_;  // boxes grown by insertions since the last step
+    inserted_nu_ = 0;
+    Index candidates = 0;
+    if (def_) {
+      counters += def_->refit(scene.positions, reach_);
+      auto mark = [&](Index row) { candidate_[static_cast<std::size_t>(row)] = 1; };
+      std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
+      candidates = counters.np;
+    } else {
+      std::visit(
+          [&](const auto& zero) {
+            for (Index r : deformable_) {
+              const bvh::Sphere ball{row3(scene.positions, r), reach_[r]};
+              bvh::query_surfel(zero, ball, [&](std::int32_t) {
+                candidate_[static_cast<std::size_t>(r)] = 1;
+                ++candidates;
+                return false;  // one overlapping leaf makes it a candidate
+              }, counters, fifo_);
+            }
+          },
+          zero_);
+      counters.np = candidates;
+    }
+    CollisionResult result;
+    if (extended_) {
+      extended_->begin_step(++step_, scene.positions, previous);
+      Index tested = 0;
+      for (Index r : deformable_) {
+        if (!candidate_[static_cast<std::size_t>(r)]) continue;
+        (*extended_)(r);
+        ++tested;
+      }
+      const std::vector<std::uint8_t>& colliding = extended_->colliding();
+      for (Index r : deformable_) {
+        if (!colliding[static_cast<std::size_t>(r)]) continue;
+        result.colliding.push_back(r);
+        result.depths.push_back(0.0);  // the extended test keeps no spheres: no depth estimate
+      }
+      result.stats.deformable = static_cast<Index>(deformable_.size());
+      result.stats.tested = tested;
+      result.stats.queries = extended_->evaluations() - evaluations_;
+      evaluations_ = extended_->evaluations();
+      result.stats.colliding = static_cast<Index>(result.colliding.size());
+    } else {
+      result = narrow_->detect_candidates(scene, previous, &candidate_);
+    }
+    result.stats.nv = counters.nv;
+    result.stats.np = candidates;
+    result.stats.nu = counters.nu;
+    result.stats.preprocess_ms = preprocess_ms_;
+    result.stats.detect_ms = ms_since(start);
+    return result;
+  }
+
+  void on_removed(const std::vector<bool>& keep) override {
+    if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
+    if (extended_) {
+      extended_->on_removed(keep);
+    } else {
+      narrow_->on_removed(keep);
+    }
+    const IndexList new_row = remap_rows(keep);
+    std::visit([&](auto& zero) { zero.on_removed(keep); }, zero_);
+    if (def_) def_->on_removed(keep);
+    IndexList deformable;
+    for (Index r : deformable_)
+      if (keep[r]) deformable.push_back(new_row[r]);
+    deformable_ = std::move(deformable);
+    compact(reach_, keep);
+    rows_ = static_cast<Index>(reach_.size());
+    candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    ++topology_;
+  }
+
+  void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
+    const Index added = static_cast<Index>(parents.size());
+    require_scene_rows(scene, rows_ + added, "on_inserted");
+    if (extended_) {
+      for (Index k = 0; k < added; ++k) {
+        const Index q = parents[k];
+        if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
+          throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
+        }
+      }
+      extended_->on_inserted(parents);
+    } else {
+      narrow_->on_inserted(scene, parents);  // validates the parents
+    }
+    reach_.conservativeResize(rows_ + added);
+    for (Index k = 0; k < added; ++k) {
+      reach_[rows_ + k] = scene.radii[rows_ + k];
+      deformable_.push_back(rows_ + k);
+    }
+    // Each child joins its parent's leaf (zero tree: ignored, the parents are deformable).
+    std::visit([&](auto& zero) { zero.on_inserted(scene.positions, scene.radii, parents); }, zero_);
+    if (def_) inserted_nu_ += def_->on_inserted(scene.positions, reach_, parents).nu;
+    rows_ += added;
+    candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    ++topology_;
+  }
+
+  std::size_t memory_bytes() const override {
+    std::size_t total = 0;
+    for (const auto& s : structures()) total += s.second;
+    return total;
+  }
+
+  std::vector<std::pair<std::string, std::size_t>> structures() const override {
+    std::vector<std::pair<std::string, std::size_t>> out;
+    if (extended_) {
+      // The original model's inside/outside structure plus the per-row cache and state.
+      out.emplace_back("collision_extended", extended_bytes_);
+    } else {
+      out.emplace_back(std::string("collision_") + to_string(params_.algorithm), narrow_->memory_bytes());
+    }
+    out.emplace_back(std::string("bvh_zero_") + to_string(h_.zero),
+                     std::visit([](const auto& zero) { return zero.memory_bytes(); }, zero_));
+    if (def_) out.emplace_back("bvh_deformable_aabb", def_->memory_bytes());
+    out.emplace_back("bvh_scratch", static_cast<std::size_t>(reach_.size()) * sizeof(double) + candidate_.capacity() +
+                                        deformable_.capacity() * sizeof(Index));
+    return out;
+  }
+
+  bool start_rebuild(const CollisionScene& scene) override {
+    if (!def_) return false;
+    require_scene_rows(scene, rows_, "start_rebuild");
+    return rebuilder_.start(scene.positions, scene.radii, deformable_, h_.tree, topology_);
+  }
+
+  HierarchyInfo hierarchy_info() const override {
+    HierarchyInfo info;
+    info.status = def_ ? bvh::to_string(bvh::status_of(*def_, rebuilder_)) : "fresh";  // a zero tree is never refit
+    info.zero_build_ms = zero_build_ms_;
+    info.deformable_build_ms = def_build_ms_;
+    info.last_rebuild_ms = last_rebuild_ms_;
+    info.rebuilds_adopted = rebuilds_adopted_;
+    return info;
+  }
+
+ private:
+  ZeroTree build_zero(const CollisionScene& scene, const IndexList& zero_rows) const {
+    switch (h_.zero) {
+      case ZeroHierarchy::Obb: return ZeroTree(std::in_place_index<1>, scene.positions, scene.radii, zero_rows, h_.tree);
+      case ZeroHierarchy::Sphere:
+        return ZeroTree(std::in_place_index<2>, scene.positions, scene.radii, zero_rows, h_.tree);
+      case ZeroHierarchy::Aabb:
+      case ZeroHierarchy::None: break;
+    }
+    return ZeroTree(std::in_place_index<0>, scene.positions, scene.radii, zero_rows, h_.tree);
+  }
+
+  // Swaps in a finished background rebuild (never waits); dropped when rows changed since it started.
+  void adopt_rebuilt_tree() {
+    if (!def_ || !rebuilder_.ready()) return;
+    std::uint64_t tag = 0;
+    std::unique_ptr<bvh::Bvh<bvh::Aabb>> tree = rebuilder_.take(&tag);
+    if (!tree) return;
+    last_rebuild_ms_ = rebuilder_.last_build_ms();
+    if (tag != topology_) return;
+    def_ = std::move(tree);
+    ++rebuilds_adopted_;
+  }
+
+  HierarchyParams h_;
+  std::unique_ptr<NarrowDetector> narrow_;          // the algorithm's test (unused with extended)
+  std::unique_ptr<bvh::ExtendedNarrow> extended_;   // extended narrow phase (extended = true)
+  std::size_t extended_bytes_ = 0;                  // estimate of what extended_ holds
+  ZeroTree zero_;                                   // over the zero rows; never refit (zero surfels do not move)
+  std::unique_ptr<bvh::Bvh<bvh::Aabb>> def_;        // over the deformable rows (deformable_hierarchy = aabb)
+  bvh::BvhRebuilder<bvh::Aabb> rebuilder_;          // background rebuild of def_
+  IndexList deformable_;                            // rows with region != Zero, ascending
+  Index rows_ = 0;                                  // rows of the model the state refers to
+  Values reach_;                                    // #P: radius + own displacement this step (deformable rows)
+  std::vector<std::uint8_t> candidate_;             // #P: 1 = candidate this step
+  std::vector<std::int32_t> fifo_;                  // scratch of the surfel/tree queue
+  std::uint64_t topology_ = 0;                      // bumped by reset, insertions and removals
+  std::int64_t step_ = 0;                           // steps of the extended narrow phase
+  std::int64_t evaluations_ = 0;                    // extended evaluations counted so far
+  Index inserted_nu_ = 0;                           // boxes grown by insertions (reported with the next step)
+  double preprocess_ms_ = 0.0;                      // whole reset: narrow phase and trees
+  double zero_build_ms_ = 0.0;                      // build of the zero tree
+  double def_build_ms_ = 0.0;                       // build of the deformable tree
+  double last_rebuild_ms_ = 0.0;                    // the last finished background rebuild
+  Index rebuilds_adopted_ = 0;                      // background rebuilds swapped in since the reset
+};
+
+}  // namespace
+
+std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionParams& params,
+                                                              const HierarchyParams& hierarchy,
+                                                              std::unique_ptr<NarrowDetector> narrow) {
+  return std::make_unique<HierarchicalDetector>(params, hierarchy, std::move(narrow));
+}
+
+}  // namespace detail
+}  // namespace surfeledit
