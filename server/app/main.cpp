@@ -54,7 +54,16 @@ int main(int argc, char** argv) {
                  "are merged into one")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 20));
+  std::string update_thread = "auto";
+  app.add_option("--update-thread", update_thread,
+                 "Write Update samples on a publisher thread (on), on the request thread (off), or on a thread "
+                 "when a core is left beyond --threads (auto)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   CLI11_PARSE(app, argc, argv);
+  config.update_thread = update_thread == "on"    ? surfeledit::service::UpdateThread::On
+                         : update_thread == "off" ? surfeledit::service::UpdateThread::Off
+                                                  : surfeledit::service::UpdateThread::Auto;
   config.max_update_queue_bytes = update_queue_mb << 20;
 
   auto log = spdlog::stderr_color_mt("surfeledit");

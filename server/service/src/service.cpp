@@ -5,6 +5,7 @@
 #include <numeric>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 #include <stdexcept>
 
@@ -68,8 +69,7 @@ struct Service::Impl {
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
         waitset(participant),
-        publisher([this](const PreparedUpdate& u) { write_update(u); },
-                  static_cast<std::size_t>(c.max_update_queue_bytes)) {
+        publisher(make_publisher(c)) {
     waitset.attach(requests, kRequestsTag);
     waitset.attach(stop_guard.entity(), kStopTag);
   }
@@ -100,8 +100,20 @@ struct Service::Impl {
   dds::GuardCondition stop_guard;
   dds::WaitSet waitset;
   // Last: destroyed (drained and joined) first, while the update writer still exists.
-  UpdatePublisher publisher;
+  // nullptr: updates are written on the request thread (UpdateThread::Off, or Auto without a spare core).
+  std::unique_ptr<UpdatePublisher> publisher;
   std::atomic<bool> publisher_stopped{false};
+
+  std::unique_ptr<UpdatePublisher> make_publisher(const ServiceConfig& c) {
+    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+    const unsigned workers = c.threads == 0 ? hw : static_cast<unsigned>(c.threads);
+    const bool on = c.update_thread == UpdateThread::On || (c.update_thread == UpdateThread::Auto && workers < hw);
+    logger()->info("updates are written {} ({} core(s), {} worker thread(s) per session)",
+                   on ? "by a publisher thread" : "on the request thread", hw, workers);
+    if (!on) return nullptr;
+    return std::make_unique<UpdatePublisher>([this](const PreparedUpdate& u) { write_update(u); },
+                                             static_cast<std::size_t>(c.max_update_queue_bytes));
+  }
 };
 
 void Service::Impl::serve_available() {
@@ -152,7 +164,11 @@ void Service::Impl::publish(const UpdateEvent& event) {
     const bool has_surfels = event.all_rows || !event.rows.empty();
     const SurfelModel* model = has_surfels ? handler.model_of(event.session) : nullptr;
     PreparedUpdate update = prepare_update(event, model);
-    if (!publisher.push(update)) coalesce(event, update);
+    if (!publisher) {
+      write_update(update);
+    } else if (!publisher->push(update)) {
+      coalesce(event, update);
+    }
   } catch (const std::exception& e) {
     logger()->warn("update of session '{}' v{} ({}) not published: {}", event.session, event.version, event.cause,
                    e.what());
@@ -163,17 +179,17 @@ void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
   // Causes whose updates add up to "what changed since" (a load replaces the model and a close
   // ends the session: those are never merged).
   static const std::vector<std::string> kIncremental = {"deform", "remove", "regions"};
-  const std::size_t queued = publisher.queued_bytes();
+  const std::size_t queued = publisher->queued_bytes();
   std::vector<PreparedUpdate> pending =
       std::find(kIncremental.begin(), kIncremental.end(), event.cause) == kIncremental.end()
           ? std::vector<PreparedUpdate>{}
-          : publisher.take_pending(event.session, event.version, kIncremental);
+          : publisher->take_pending(event.session, event.version, kIncremental);
   if (pending.empty()) {
     logger()->warn("update queue over its bound ({:.1f} of {:.1f} MB queued): session '{}' v{} ({}) queued anyway "
                    "(nothing of this session to merge it with)",
-                   static_cast<double>(queued) / 1e6, static_cast<double>(publisher.max_queued_bytes()) / 1e6,
+                   static_cast<double>(queued) / 1e6, static_cast<double>(publisher->max_queued_bytes()) / 1e6,
                    event.session, event.version, event.cause);
-    publisher.push_anyway(std::move(update));
+    publisher->push_anyway(std::move(update));
     return;
   }
   // One update with everything that changed since the oldest merged one; the newest one's cause,
@@ -192,10 +208,10 @@ void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
   PreparedUpdate combined = prepare_update(*merged, model);
   logger()->warn("update queue over its bound ({:.1f} of {:.1f} MB queued): merged {} queued update(s) of session "
                  "'{}' (v{}..v{}) and v{} into one update v{} ({} surfels)",
-                 static_cast<double>(queued) / 1e6, static_cast<double>(publisher.max_queued_bytes()) / 1e6,
+                 static_cast<double>(queued) / 1e6, static_cast<double>(publisher->max_queued_bytes()) / 1e6,
                  pending.size(), event.session, pending.front().version, pending.back().version, event.version,
                  combined.version, combined.surfels());
-  publisher.push_anyway(std::move(combined));
+  publisher->push_anyway(std::move(combined));
 }
 
 void Service::Impl::write_update(const PreparedUpdate& update) {
@@ -208,8 +224,8 @@ void Service::Impl::write_update(const PreparedUpdate& update) {
 }
 
 void Service::Impl::stop_publisher() {
-  if (publisher_stopped.exchange(true)) return;
-  const UpdatePublisher::Counters c = publisher.shutdown();
+  if (!publisher || publisher_stopped.exchange(true)) return;
+  const UpdatePublisher::Counters c = publisher->shutdown();
   logger()->debug("update publisher stopped: {} published, {} failed, {} merged, {} dropped; peak queue {:.1f} MB",
                   c.published, c.failed, c.taken_back, c.dropped, static_cast<double>(c.max_queued_bytes) / 1e6);
 }

@@ -28,6 +28,22 @@ def load(session: surfeledit.Session, s: Any) -> None:
     session.set_regions(zero=np.flatnonzero(part == 0), one=np.flatnonzero(part == 1))
 
 
+def synced_watcher(sess: surfeledit.Session, zero: np.ndarray, one: np.ndarray) -> surfeledit.Watcher:
+    """A watcher the server's update writer has surely matched: Update is volatile, and the watcher only
+    knows that its reader matched the writer, not the reverse. Re-sets the (same) regions until their
+    update arrives; this changes nothing but the version."""
+    w = sess.watch()
+    for _ in range(20):
+        sess.set_regions(zero=zero, one=one)
+        ev = w.get(timeout=0.5)
+        if ev is not None:
+            while w.get(timeout=0.2) is not None:  # drain the other probes' updates
+                pass
+            return w
+    w.close()
+    pytest.fail("the server's update writer never matched the watcher")
+
+
 def in_process_session(s: Any) -> Any:
     if not hasattr(core, "EditSession") or not hasattr(core.EditSession, "configure"):
         pytest.skip("surfeledit.core.EditSession.configure (in-process collision detection) is not built yet")
@@ -114,9 +130,9 @@ def test_remove_over_dds(client: surfeledit.Client) -> None:
         load(sess, s)
         ids0 = sess.ids().copy()
         pos0 = sess.positions().copy()
-        hash0 = int(sess.info().state_hash)
-        version0 = sess.version
-        with sess.watch() as w:
+        with synced_watcher(sess, np.flatnonzero(part == 0), np.flatnonzero(part == 1)) as w:
+            version0 = sess.version
+            hash0 = int(sess.info().state_hash)
             with pytest.raises(NotFoundError) as e:
                 sess.remove([3, 10**9])
             assert e.value.field.startswith("remove")
@@ -163,8 +179,13 @@ def test_scripted_scenario_matches_in_process(client: surfeledit.Client, algorit
     with client.open_session(f"scenario-{algorithm}") as sess:
         load(sess, s)
         sess.configure(algorithm=algorithm)
-        assert sess.settings() == local.settings()
-        with sess.watch() as w:
+        remote_settings, local_settings = sess.settings(), local.settings()
+        assert remote_settings["algorithm"] == local_settings["algorithm"] == algorithm
+        for name in set(remote_settings) & set(local_settings):  # both builds' settings agree
+            assert remote_settings[name] == local_settings[name], name
+        part = np.asarray(s.part)
+        with synced_watcher(sess, np.flatnonzero(part == 0), np.flatnonzero(part == 1)) as w:
+            sess.configure(algorithm=algorithm)  # a fresh detector after the probes (as in-process)
             remote_steps: List[surfeledit.StepResult] = []
             for i in range(STEPS):
                 r = sess.deform(translation=PUSH)
@@ -183,7 +204,6 @@ def test_scripted_scenario_matches_in_process(client: surfeledit.Client, algorit
             np.testing.assert_array_equal(np.asarray(local.colliding(), dtype=np.uint64), remote_steps[-1].colliding)
             assert remote_steps[-1].colliding.size > 0, f"{algorithm}: the sphere pushed into the slab never collides"
             assert remote_steps[0].colliding.size == 0, "nothing collides before contact"
-            part = np.asarray(s.part)
             assert np.all(part[remote_steps[-1].colliding.astype(np.int64)] == 1)
 
             # The update stream carries each step's collision state.
@@ -206,9 +226,9 @@ def test_inserted_surfels_reach_the_reply_and_the_update(client: surfeledit.Clie
     with client.open_session("resample") as sess:
         sess.load_points(s.positions, s.normals, s.radii)
         sess.set_regions(zero=np.flatnonzero(part == 0), one=np.flatnonzero((part == 1) & (pos[:, 2] > 1.25)))
-        sess.configure(resample=True)
         n0 = len(pos)
-        with sess.watch() as w:
+        with synced_watcher(sess, np.flatnonzero(part == 0), np.flatnonzero((part == 1) & (pos[:, 2] > 1.25))) as w:
+            sess.configure(resample=True)
             inserted = []
             for _ in range(4):
                 r = sess.deform(translation=(0.0, 0.0, 0.15))  # stretches the sphere's middle

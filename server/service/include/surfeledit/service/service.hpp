@@ -1,7 +1,8 @@
 // The surfeledit DDS service: serves Request samples from clients with one Reply each and
 // publishes Update samples after every change (topics and semantics: proto/PROTOCOL.md).
-// Requests are served on the thread that calls run(); Update samples are written by a publisher
-// thread of the service, in order, from copies the request thread makes after the reply is sent.
+// Requests are served on the thread that calls run(); Update samples are written, in order, from
+// copies the request thread makes after the reply is sent, by a publisher thread of the service or
+// by the request thread (ServiceConfig::update_thread).
 //
 // DDS stays behind the pimpl; this header needs nothing but the standard library.
 #pragma once
@@ -11,6 +12,12 @@
 
 namespace surfeledit::service {
 
+// Who writes the Update samples: a publisher thread (the request loop only copies the changed
+// surfels) or the request thread itself. Auto: the thread when there is a core to spare beyond the
+// per-session worker threads (on 2 cores with 2 OpenMP workers, a publisher thread made the step
+// several times slower: bench/RESULTS.md §3).
+enum class UpdateThread { Auto, On, Off };
+
 struct ServiceConfig {
   int domain = 0;                                // DDS domain id of all three topics
   std::uint64_t max_chunk_surfels = 65536;       // surfels per LoadChunk, StatePage and Update sample
@@ -19,6 +26,7 @@ struct ServiceConfig {
   // Bound of the Update samples waiting for the publisher thread (payload bytes). Beyond it, the
   // queued updates of a session are coalesced into one (PROTOCOL.md, "Updates").
   std::uint64_t max_update_queue_bytes = std::uint64_t(256) << 20;
+  UpdateThread update_thread = UpdateThread::Auto;
 };
 
 class Service {
