@@ -120,6 +120,35 @@ TEST(CollisionBvh, EveryConfigurationEqualsNoHierarchyEveryStep) {
   }
 }
 
+// Sphere cluster trees (issue 5) adopted as the zero hierarchy: the same colliding set as without a
+// hierarchy on every step, alone and with a deformable AABB tree, at two cluster sizes.
+TEST(CollisionBvh, SphereClusterTreesEqualNoHierarchyEveryStep) {
+  for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Temporal, CollisionAlgorithm::Robust})
+    for (auto zero : {ZeroHierarchy::SphereHierarchical, ZeroHierarchy::SphereIncremental})
+      for (auto def : {DeformableHierarchy::None, DeformableHierarchy::Aabb})
+        for (int size : {4, 18}) {
+          HierarchyParams h;
+          h.zero = zero;
+          h.deformable = def;
+          h.clusters.cluster_size = size;
+          h.clusters.threads = 1;
+          Index candidates = 0;
+          EXPECT_EQ(run_pair(params_of(a), h, params_of(a), &candidates), 0) << describe(params_of(a), h) << " size " << size;
+          EXPECT_GT(candidates, 0) << describe(params_of(a), h);
+        }
+}
+
+// knn_eps = 0 set explicitly (behind an AABB zero tree, which run_pair needs) is the exact detector.
+TEST(CollisionBvh, KnnEpsZeroEqualsExact) {
+  for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Temporal, CollisionAlgorithm::Robust}) {
+    CollisionParams p = params_of(a);
+    p.knn_eps = 0.0;
+    HierarchyParams h;
+    h.zero = ZeroHierarchy::Aabb;
+    EXPECT_EQ(run_pair(p, h, params_of(a)), 0) << to_string(a);
+  }
+}
+
 // The extended variants (narrow phase against the original model) equal Robust without a hierarchy.
 TEST(CollisionBvh, ExtendedEqualsRobustEveryStep) {
   for (const HierarchyParams& h : every_configuration(true)) {

@@ -303,6 +303,52 @@ TEST(KdTree, PrecisionFarFromTheOrigin) {
   }
 }
 
+// Approximate search: eps = 0 is exact; eps > 0 returns, for each of the k slots, a neighbour whose squared
+// distance is at most (1 + eps) x the true one's (hence its distance at most (1 + eps) x the true distance).
+TEST(KdTree, ApproximateSearchWithinEpsOfBruteForce) {
+  const Points pts = random_cloud(3000, 91);
+  const Points queries = random_cloud(300, 92, 1.2);
+  for (double eps : {0.0, 0.1, 0.5, 1.0, 2.0}) {
+    KdTreeParams p;
+    p.eps = eps;
+    const KdTree tree(pts, p);
+    const KdTree exact(pts);
+    Index differing = 0;
+    for (Eigen::Index q = 0; q < queries.rows(); ++q) {
+      const Vec3 x = queries.row(q).transpose();
+      const std::vector<double> truth = brute_dist2(pts, x);
+      double d2 = 0.0;
+      const Index k = tree.nearest(x, &d2);
+      ASSERT_GE(k, 0);
+      EXPECT_NEAR(d2, (pts.row(k).transpose() - x).squaredNorm(), 1e-12);
+      EXPECT_LE(d2, (1.0 + eps) * truth.front() * (1.0 + 1e-12) + 1e-15) << "eps " << eps;
+      EXPECT_LE(std::sqrt(d2), (1.0 + eps) * std::sqrt(truth.front()) + 1e-12) << "eps " << eps;
+      if (eps == 0.0) {
+        double e2 = 0.0;
+        EXPECT_EQ(k, exact.nearest(x, &e2));
+        EXPECT_EQ(d2, e2);
+        EXPECT_NEAR(d2, truth.front(), 1e-12);  // the tree works in a local frame: rounding only
+      }
+      differing += d2 > truth.front() + 1e-12;
+      IndexList idx;
+      std::vector<double> kd2;
+      tree.knn(x, 8, idx, kd2);
+      ASSERT_EQ(kd2.size(), 8u);
+      for (std::size_t j = 0; j < kd2.size(); ++j)
+        EXPECT_LE(kd2[j], (1.0 + eps) * truth[j] * (1.0 + 1e-12) + 1e-15) << "eps " << eps << " slot " << j;
+    }
+    if (eps == 0.0) EXPECT_EQ(differing, 0);
+  }
+  KdTreeParams bad;
+  bad.eps = -0.1;
+  try {
+    KdTree t(pts, bad);
+    FAIL() << "negative eps accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "eps");
+  }
+}
+
 TEST(KdTree, RejectsBadInput) {
   Points pts = random_cloud(10, 1);
   EXPECT_THROW(KdTree(pts, KdTreeParams{0, 0}), Error);

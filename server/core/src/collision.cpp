@@ -64,6 +64,11 @@ void validate(const CollisionParams& p) {
   if (p.threads < 0) {
     throw Error(ErrorCode::InvalidArgument, "threads", "must be >= 0, got " + std::to_string(p.threads));
   }
+  if (!std::isfinite(p.knn_eps) || p.knn_eps < 0.0) {
+    std::ostringstream msg;
+    msg << "must be finite and >= 0, got " << p.knn_eps;
+    throw Error(ErrorCode::InvalidArgument, "knn_eps", msg.str());
+  }
   if (!std::isfinite(p.sphere_margin) || p.sphere_margin < 0.0) {
     std::ostringstream msg;
     msg << "must be finite and >= 0, got " << p.sphere_margin;
@@ -150,7 +155,8 @@ void append_value(Values& a, double v) {
   a[a.size() - 1] = v;
 }
 
-void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows) {
+void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, double eps) {
+  knn_eps = eps;
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
   const Eigen::Index z = static_cast<Eigen::Index>(zero_rows.size());
   positions.resize(z, 3);
@@ -164,7 +170,7 @@ void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows) {
   }
   rows = zero_rows;
   marked.assign(zero_rows.size(), 0);
-  tree = std::make_unique<KdTree>(positions);
+  tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
 }
 
 void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {
@@ -213,7 +219,7 @@ void ZeroSet::on_removed(const std::vector<bool>& keep, const IndexList& new_row
   compact(rows, keep_zero);
   for (Index& r : rows) r = new_row[r];
   if (rows.empty()) throw Error(ErrorCode::Internal, "regions", "every zero surfel was removed");
-  tree = std::make_unique<KdTree>(positions);
+  tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
 }
 
 std::size_t ZeroSet::memory_bytes() const {

@@ -34,6 +34,7 @@
 #include "surfeledit/core/bvh/sphere.hpp"
 #include "surfeledit/core/bvh/traversal.hpp"
 #include "surfeledit/core/inside_outside.hpp"
+#include "surfeledit/core/simplify/sphere_tree.hpp"
 
 namespace surfeledit {
 
@@ -42,8 +43,11 @@ ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& f
   if (name == "aabb") return ZeroHierarchy::Aabb;
   if (name == "obb") return ZeroHierarchy::Obb;
   if (name == "sphere") return ZeroHierarchy::Sphere;
+  if (name == "sphere_hierarchical") return ZeroHierarchy::SphereHierarchical;
+  if (name == "sphere_incremental") return ZeroHierarchy::SphereIncremental;
   throw Error(ErrorCode::InvalidArgument, field,
-              "unknown zero hierarchy '" + name + "' (expected none, aabb, obb or sphere)");
+              "unknown zero hierarchy '" + name +
+                  "' (expected none, aabb, obb, sphere, sphere_hierarchical or sphere_incremental)");
 }
 
 DeformableHierarchy parse_deformable_hierarchy(const std::string& name, const std::string& field) {
@@ -58,6 +62,8 @@ const char* to_string(ZeroHierarchy kind) {
     case ZeroHierarchy::Aabb: return "aabb";
     case ZeroHierarchy::Obb: return "obb";
     case ZeroHierarchy::Sphere: return "sphere";
+    case ZeroHierarchy::SphereHierarchical: return "sphere_hierarchical";
+    case ZeroHierarchy::SphereIncremental: return "sphere_incremental";
   }
   return "unknown";
 }
@@ -72,7 +78,8 @@ const char* to_string(DeformableHierarchy kind) {
 
 void validate(const HierarchyParams& h, const CollisionParams& c) {
   bvh::validate(h.tree);
-  if (h.zero > ZeroHierarchy::Sphere) {
+  if (h.zero == ZeroHierarchy::SphereHierarchical || h.zero == ZeroHierarchy::SphereIncremental) validate(h.clusters);
+  if (h.zero > ZeroHierarchy::SphereIncremental) {
     throw Error(ErrorCode::InvalidArgument, "zero_hierarchy",
                 "unknown zero hierarchy value " + std::to_string(static_cast<int>(h.zero)));
   }
@@ -86,10 +93,10 @@ void validate(const HierarchyParams& h, const CollisionParams& c) {
   if (h.deformable != DeformableHierarchy::None && h.zero == ZeroHierarchy::None) {
     throw Error(ErrorCode::InvalidArgument, "deformable_hierarchy",
                 std::string("deformable_hierarchy=") + to_string(h.deformable) +
-                    " requires a zero_hierarchy (aabb, obb or sphere): the deformable tree is tested against the zero tree");
+                    " requires a zero_hierarchy (any but none): the deformable tree is tested against the zero tree");
   }
   if (h.extended && h.zero == ZeroHierarchy::None) {
-    throw Error(ErrorCode::InvalidArgument, "extended", "extended=true requires a zero_hierarchy (aabb, obb or sphere)");
+    throw Error(ErrorCode::InvalidArgument, "extended", "extended=true requires a zero_hierarchy (any but none)");
   }
   if (!h.any() || c.algorithm == CollisionAlgorithm::None) return;
   if (h.extended && c.algorithm != CollisionAlgorithm::Robust) {
@@ -135,6 +142,7 @@ class HierarchicalDetector final : public CollisionDetector {
       for (Index r = 0; r < rows; ++r) is_zero[r] = scene.regions[r] == Region::Zero;
       KdTreeParams tp;
       tp.threads = resolve_threads(params_.threads);
+      tp.eps = params_.knn_eps;
       auto original = std::make_shared<const InsideOutside>(scene.positions, scene.normals, tp);
       // Positions and normals copied by InsideOutside, its k-d tree, zero flags, cache and state per row.
       extended_bytes = original->tree().memory_bytes() + static_cast<std::size_t>(rows) * (6 * sizeof(double) + 18);
@@ -323,6 +331,29 @@ class HierarchicalDetector final : public CollisionDetector {
       case ZeroHierarchy::Obb: return ZeroTree(std::in_place_index<1>, scene.positions, scene.radii, zero_rows, h_.tree);
       case ZeroHierarchy::Sphere:
         return ZeroTree(std::in_place_index<2>, scene.positions, scene.radii, zero_rows, h_.tree);
+      case ZeroHierarchy::SphereHierarchical:
+      case ZeroHierarchy::SphereIncremental: {
+        const SphereClusterTree clusters =
+            h_.zero == ZeroHierarchy::SphereHierarchical
+                ? SphereClusterTree::build_hierarchical(scene.positions, scene.radii, zero_rows, h_.clusters)
+                : SphereClusterTree::build_region_growing(scene.positions, scene.radii, zero_rows, h_.clusters);
+        // Same layout as a Bvh: copy the nodes and let the tree derive its leaf map and step arrays.
+        std::vector<bvh::BvhNode<bvh::Sphere>> nodes;
+        nodes.reserve(clusters.nodes().size());
+        for (const SphereTreeNode& c : clusters.nodes()) {
+          bvh::BvhNode<bvh::Sphere> n;
+          n.box = c.sphere;
+          n.first_child = c.first_child;
+          n.parent = c.parent;
+          n.begin = c.begin;
+          n.end = c.end;
+          n.level = c.level;
+          nodes.push_back(n);
+        }
+        ZeroTree tree(std::in_place_index<2>);
+        std::get<2>(tree).adopt(std::move(nodes), clusters.order(), h_.tree);
+        return tree;
+      }
       case ZeroHierarchy::Aabb:
       case ZeroHierarchy::None: break;
     }

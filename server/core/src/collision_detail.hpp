@@ -69,6 +69,13 @@ void compact(Values& a, const std::vector<bool>& keep);
 void append_row(Points& a, const Vec3& v);
 void append_value(Values& a, double v);
 
+// Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact).
+inline KdTreeParams nearest_tree_params(double eps) {
+  KdTreeParams p;
+  p.eps = eps;
+  return p;
+}
+
 // The zero region as the Simple / Improved / Temporal detectors see it: a private copy of the zero
 // surfels (they do not move), their k-d tree and their boundary marks (§4.1).
 struct ZeroSet {
@@ -78,9 +85,11 @@ struct ZeroSet {
   std::vector<std::uint8_t> marked;  // #Z: 1 = boundary surfel
   IndexList rows;                    // #Z: row in the model
   std::unique_ptr<KdTree> tree;      // over `positions`
+  double knn_eps = 0.0;              // approximate search of `tree` (CollisionParams::knn_eps)
 
-  // Copies the zero rows of `scene` and builds the tree. Throws InvalidArgument when there are none.
-  void build(const CollisionScene& scene, const IndexList& zero_rows);
+  // Copies the zero rows of `scene` and builds the tree (approximate search `eps`). Throws
+  // InvalidArgument when there are none.
+  void build(const CollisionScene& scene, const IndexList& zero_rows, double eps);
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.

@@ -35,11 +35,11 @@ class RobustDetector final : public NarrowDetector {
     orig.zero.resize(static_cast<std::size_t>(rows));
     for (Index r = 0; r < rows; ++r) orig.zero[r] = scene.regions[r] == Region::Zero;
     orig.alive.assign(static_cast<std::size_t>(rows), 1);
-    orig.tree = std::make_unique<KdTree>(orig.positions);
+    orig.tree = std::make_unique<KdTree>(orig.positions, nearest_tree_params(params_.knn_eps));
     IndexList orig_of_row(static_cast<std::size_t>(rows));
     for (Index r = 0; r < rows; ++r) orig_of_row[r] = r;
     // Spheres start with the distance to the nearest zero surfel (a temporary tree).
-    const KdTree zero_tree(scene.positions, zero_rows);
+    const KdTree zero_tree(scene.positions, zero_rows, nearest_tree_params(params_.knn_eps));
     Values rho2 = Values::Zero(rows);
     const Index n = static_cast<Index>(deformable.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -159,7 +159,7 @@ class RobustDetector final : public NarrowDetector {
       IndexList alive;
       for (std::size_t o = 0; o < orig_.alive.size(); ++o)
         if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
-      orig_.tree = std::make_unique<KdTree>(orig_.positions, alive);
+      orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
     }
     IndexList deformable;
     for (Index r : deformable_)

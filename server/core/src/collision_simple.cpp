@@ -30,7 +30,7 @@ class SimpleDetector final : public NarrowDetector {
     IndexList deformable, zero_rows;
     split_rows(scene, deformable, zero_rows);
     ZeroSet zero;
-    zero.build(scene, zero_rows);
+    zero.build(scene, zero_rows, params_.knn_eps);
     if (params_.boundary) {
       zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, resolve_threads(params_.threads));
     }

@@ -45,7 +45,7 @@ class SimplifiedDetector final : public ApproximateDetector {
     const Index rows = static_cast<Index>(scene.regions.size());
     const int threads = resolve_threads(params_.threads);
     ZeroSet zero;
-    zero.build(scene, zero_rows);
+    zero.build(scene, zero_rows, params_.knn_eps);
     const bool robust = params_.algorithm == CollisionAlgorithm::Robust;
     if (!robust && params_.boundary) {
       zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads);
@@ -59,7 +59,7 @@ class SimplifiedDetector final : public ApproximateDetector {
       orig.zero.resize(static_cast<std::size_t>(rows));
       for (Index r = 0; r < rows; ++r) orig.zero[r] = scene.regions[r] == Region::Zero;
       orig.alive.assign(static_cast<std::size_t>(rows), 1);
-      orig.tree = std::make_unique<KdTree>(orig.positions);
+      orig.tree = std::make_unique<KdTree>(orig.positions, nearest_tree_params(params_.knn_eps));
       orig_of_row.resize(static_cast<std::size_t>(rows));
       for (Index r = 0; r < rows; ++r) orig_of_row[r] = r;
     }
@@ -226,7 +226,7 @@ class SimplifiedDetector final : public ApproximateDetector {
         IndexList alive;
         for (std::size_t o = 0; o < orig_.alive.size(); ++o)
           if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
-        orig_.tree = std::make_unique<KdTree>(orig_.positions, alive);
+        orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
       }
       compact(orig_of_row_, keep);
     }
@@ -276,6 +276,20 @@ class SimplifiedDetector final : public ApproximateDetector {
     }
     clusters_.on_inserted(parents);  // children join their parent's cluster
     rows_ += added;
+  }
+
+  // The clusters (members and row -> cluster map, cluster states) apart from the exact algorithm's state.
+  std::size_t cluster_bytes() const {
+    std::size_t members = 0;
+    for (Index c = 0; c < clusters_.cluster_count(); ++c) members += clusters_.members(c).capacity() * sizeof(Index);
+    return members + static_cast<std::size_t>(clusters_.rows()) * sizeof(Index) +
+           cluster_state_.capacity() * sizeof(PointState);
+  }
+
+  std::vector<std::pair<std::string, std::size_t>> structures() const override {
+    const std::size_t clusters = cluster_bytes();
+    return {{std::string("collision_") + to_string(params_.algorithm), memory_bytes() - clusters},
+            {std::string("clusters_") + to_string(simplify_.method), clusters}};
   }
 
   std::size_t memory_bytes() const override {

@@ -23,7 +23,7 @@ class TemporalDetector final : public NarrowDetector {
     IndexList deformable, zero_rows;
     split_rows(scene, deformable, zero_rows);
     ZeroSet zero;
-    zero.build(scene, zero_rows);
+    zero.build(scene, zero_rows, params_.knn_eps);
     const int threads = resolve_threads(params_.threads);
     if (params_.boundary) zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads);
     const Index rows = static_cast<Index>(scene.regions.size());

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "surfeledit/core/resampling.hpp"
+#include "surfeledit/core/simplify/approximate_detector.hpp"
 
 namespace surfeledit {
 
@@ -23,7 +24,16 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
 // builds only the trees the settings ask for.
 std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings, const SurfelModel& m,
                                                  const DeformationFields& f) {
-  std::unique_ptr<CollisionDetector> d = CollisionDetector::create(settings.collision, settings.hierarchy);
+  std::unique_ptr<CollisionDetector> d;
+  SimplifyParams clusters = settings.simplify;
+  clusters.threads = settings.collision.threads;
+  if (clusters.method != SimplifyMethod::None && settings.collision.algorithm != CollisionAlgorithm::None) {
+    d = make_approximate_detector(settings.collision, clusters);  // clusters of the deformable region
+  } else {
+    HierarchyParams h = settings.hierarchy;
+    h.clusters = clusters;  // leaves of sphere cluster trees (unused by the other kinds)
+    d = CollisionDetector::create(settings.collision, h);
+  }
   if (d) d->reset(scene_of(m, f));
   return d;
 }

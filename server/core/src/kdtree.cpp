@@ -63,6 +63,10 @@ void check_params(const KdTreeParams& params) {
     throw Error(ErrorCode::InvalidArgument, "threads",
                 "thread count must be >= 0, got " + std::to_string(params.threads));
   }
+  if (!(params.eps >= 0.0) || !std::isfinite(params.eps)) {
+    throw Error(ErrorCode::InvalidArgument, "eps",
+                "approximate-search eps must be finite and >= 0, got " + std::to_string(params.eps));
+  }
 }
 
 void check_query(const Vec3& q) {
@@ -133,7 +137,7 @@ struct KdTree::Impl {
     const double local[3] = {q.x() - origin.x(), q.y() - origin.y(), q.z() - origin.z()};
     nanoflann::KNNResultSet<double, std::uint32_t> set(k);
     set.init(idx, d2);
-    tree->findNeighbors(set, local, nanoflann::SearchParams());
+    tree->findNeighbors(set, local, nanoflann::SearchParams(32, static_cast<float>(params.eps)));
     return set.size();
   }
 

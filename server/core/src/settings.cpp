@@ -103,17 +103,43 @@ SessionSettings apply_settings(const SessionSettings& current, const std::vector
       h.tree.min_leaf_extent = number(s);
     } else if (s.name == "inflation") {
       h.tree.inflation = number(s);
+    } else if (s.name == "knn_eps") {
+      c.knn_eps = number(s);
+    } else if (s.name == "simplify") {
+      next.simplify.method = parse_simplify_method(text(s), s.name);
+    } else if (s.name == "cluster_size") {
+      next.simplify.cluster_size = integer(s);
+    } else if (s.name == "max_variation") {
+      next.simplify.max_variation = number(s);
+    } else if (s.name == "member_margin") {
+      next.simplify.member_margin = number(s);
     } else {
       throw Error(ErrorCode::InvalidArgument, s.name,
                   "unknown setting '" + s.name +
                       "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, sphere_margin, threads, "
                       "resample, split_threshold, zero_hierarchy, deformable_hierarchy, update, hybrid_f, sat, extended, "
-                      "leaf_max_surfels, leaf_min_surfels, max_level, min_leaf_extent or inflation)");
+                      "leaf_max_surfels, leaf_min_surfels, max_level, min_leaf_extent, inflation, knn_eps, simplify, cluster_size, "
+                      "max_variation or member_margin)");
     }
   }
   validate(next.collision);
   validate(next.resample);
   validate(next.hierarchy, next.collision);
+  validate(next.simplify);
+  // Approximate detection runs the algorithm's own per-surfel test on clusters, without a broad phase.
+  if (next.simplify.method != SimplifyMethod::None && c.algorithm != CollisionAlgorithm::None) {
+    if (c.algorithm == CollisionAlgorithm::Improved) {
+      throw Error(ErrorCode::InvalidArgument, "simplify",
+                  std::string("simplify=") + to_string(next.simplify.method) +
+                      " cannot run with algorithm=improved (order-dependent spatial coherence); use simple, temporal or "
+                      "robust, or simplify=none");
+    }
+    if (h.any()) {
+      throw Error(ErrorCode::InvalidArgument, "simplify",
+                  std::string("simplify=") + to_string(next.simplify.method) + " cannot run behind zero_hierarchy=" +
+                      to_string(h.zero) + " (approximate detection has no broad phase); set one of them to none");
+    }
+  }
   return next;
 }
 
@@ -142,6 +168,11 @@ std::vector<NamedSetting> describe(const SessionSettings& s) {
       {"max_level", static_cast<double>(h.tree.max_level)},
       {"min_leaf_extent", h.tree.min_leaf_extent},
       {"inflation", h.tree.inflation},
+      {"knn_eps", c.knn_eps},
+      {"simplify", std::string(to_string(s.simplify.method))},
+      {"cluster_size", static_cast<double>(s.simplify.cluster_size)},
+      {"max_variation", s.simplify.max_variation},
+      {"member_margin", s.simplify.member_margin},
   };
 }
 

@@ -39,6 +39,8 @@ struct CollisionParams {
   double sphere_margin = 0.5;    // Temporal/Robust: a sphere's radius is |d| - margin * r2 (r2: radius of the
                                  // nearest surfel), so it stays clear of that surfel's disc; 0 = the thesis's |d|
   int threads = 0;               // worker threads (0 = all); results do not depend on it
+  double knn_eps = 0.0;          // approximate nearest-surfel queries (nanoflann's eps, >= 0): the surfel found
+                                 // is at most sqrt(1 + eps) x as far as the nearest one; 0 = exact (default)
 };
 
 // Throws InvalidArgument naming the field (e.g. "boundary_n") and the value.

@@ -15,17 +15,26 @@
 
 #include "surfeledit/core/bvh/overlap.hpp"
 #include "surfeledit/core/bvh/params.hpp"
+#include "surfeledit/core/simplify/params.hpp"
 
 namespace surfeledit {
 
 struct CollisionParams;
 
-// Box kind of the tree over the zero region.
-enum class ZeroHierarchy : std::uint8_t { None = 0, Aabb = 1, Obb = 2, Sphere = 3 };
+// Box kind of the tree over the zero region: a top-down Bvh, or a sphere cluster tree (ALGORITHMS.md §6,
+// simplify/sphere_tree.hpp) whose leaves are clusters of the zero surfels (HierarchyParams::clusters).
+enum class ZeroHierarchy : std::uint8_t {
+  None = 0,                // no hierarchy
+  Aabb = 1,                // top-down tree of axis-aligned boxes
+  Obb = 2,                 // top-down tree of oriented boxes
+  Sphere = 3,              // top-down tree of spheres
+  SphereHierarchical = 4,  // sphere cluster tree from hierarchical clustering (the split tree)
+  SphereIncremental = 5,   // sphere cluster tree built bottom-up from region-growing clusters
+};
 // Box kind of the tree over the deformable region (AABB only: it is refit every step).
 enum class DeformableHierarchy : std::uint8_t { None = 0, Aabb = 1 };
 
-// "none" | "aabb" | "obb" | "sphere"; throws InvalidArgument naming `field`.
+// "none" | "aabb" | "obb" | "sphere" | "sphere_hierarchical" | "sphere_incremental"; throws InvalidArgument naming `field`.
 ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field = "zero_hierarchy");
 // "none" | "aabb"; throws InvalidArgument naming `field`.
 DeformableHierarchy parse_deformable_hierarchy(const std::string& name,
@@ -39,6 +48,8 @@ struct HierarchyParams {
   bvh::BvhParams tree;                                         // build and update parameters of both trees
   bvh::SatMode sat = bvh::SatMode::Lite;                       // OBB/AABB overlap test of tree/tree
   bool extended = false;  // narrow phase against the original model (§5 "Extended"); needs algorithm robust
+  SimplifyParams clusters;  // sphere cluster trees: leaf clustering (cluster_size, max_variation; the session
+                            // copies its simplify settings here); ignored by the other kinds
 
   bool any() const { return zero != ZeroHierarchy::None; }
 };

@@ -11,7 +11,9 @@
 //   threads          int     worker threads for detection (0 = all)
 //   resample         bool    dynamic resampling
 //   split_threshold  number  stretch ratio that splits a surfel
-//   zero_hierarchy   text    "none" | "aabb" | "obb" | "sphere": tree over the zero region (hierarchy.hpp)
+//   knn_eps          number  approximate nearest-surfel search (nanoflann eps, >= 0; 0 = exact)
+//   zero_hierarchy   text    "none" | "aabb" | "obb" | "sphere" | "sphere_hierarchical" | "sphere_incremental":
+//                            tree over the zero region (hierarchy.hpp; sphere_* = sphere cluster trees)
 //   deformable_hierarchy text "none" | "aabb": tree over the deformable region (needs zero_hierarchy)
 //   update           text    "bottom_up" | "top_down" | "hybrid": refit of the deformable tree
 //   hybrid_f         number  hybrid: fraction of the levels refit bottom-up, [0, 1]
@@ -22,6 +24,12 @@
 //   max_level        int     deepest tree level (root = 0)
 //   min_leaf_extent  number  leaf boxes at least this wide per axis, model units
 //   inflation        number  margin added to a box when a refit recomputes it, model units
+//   simplify         text    "none" | "region_growing" | "hierarchical": approximate detection on clusters of
+//                            the deformable region (simplify/approximate_detector.hpp; simple/temporal/robust,
+//                            no hierarchy)
+//   cluster_size     int     surfels per cluster, >= 1 (1 = the exact result); also the leaves of sphere_* trees
+//   max_variation    number  largest surface variation of a cluster, [0, 1]; also for sphere_* trees
+//   member_margin    number  approximate detection: members tested within this many cluster radii of the zero region
 #pragma once
 
 #include <string>
@@ -30,6 +38,7 @@
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/resampling.hpp"
+#include "surfeledit/core/simplify/params.hpp"
 
 namespace surfeledit {
 
@@ -37,6 +46,14 @@ struct SessionSettings {
   CollisionParams collision;
   ResampleParams resample;
   HierarchyParams hierarchy;
+  SimplifyParams simplify = no_simplification();  // clustering (approximate detection when method != None;
+                                                  // cluster_size / max_variation also shape sphere_* trees)
+
+  static SimplifyParams no_simplification() {
+    SimplifyParams p;
+    p.method = SimplifyMethod::None;
+    return p;
+  }
 };
 
 // A setting's value as it arrives: number (also for ints), bool or text.

@@ -27,6 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -65,6 +66,11 @@ class Bvh {
   // positions; stop at max_level or at <= leaf_max_surfels; a child never gets fewer than
   // leaf_min_surfels. Then leaf boxes get min_leaf_extent and parents are grown over their children.
   void build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params);
+  // Takes a tree built elsewhere in this layout (e.g. a sphere cluster tree): `nodes` (root 0, children
+  // adjacent and after their parent, ranges over slots of `order`) and `order` (the rows). Rebuilds the
+  // per-row leaf map and the step arrays; `params` are kept for later refits. Throws Internal naming the
+  // node when the layout is broken. Boxes are taken as they are (they must bound their surfels' balls).
+  void adopt(std::vector<Node> nodes, IndexList order, const BvhParams& params);
 
   const BvhParams& params() const { return params_; }
   const std::vector<Node>& nodes() const { return nodes_; }
@@ -230,6 +236,61 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
   }
   Index max_row = -1;
   for (Index r : order_) max_row = std::max(max_row, r);
+  leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    if (nodes_[k].leaf())
+      for (std::int32_t s = nodes_[k].begin; s < nodes_[k].end; ++s) leaf_of_row_[order_[s]] = static_cast<std::int32_t>(k);
+  extra_head_.assign(nodes_.size(), -1);
+  stamp_.assign(nodes_.size(), 0);
+  masks_.assign(nodes_.size(), 0);
+  marks_.assign(nodes_.size(), 0);
+  mark_ = 1;
+  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <class Box>
+void Bvh<Box>::adopt(std::vector<Node> nodes, IndexList order, const BvhParams& params) {
+  validate(params);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::int32_t n_nodes = static_cast<std::int32_t>(nodes.size());
+  const std::int32_t n_rows = static_cast<std::int32_t>(order.size());
+  auto broken = [](std::int32_t k, const char* what) {
+    throw Error(ErrorCode::Internal, "node " + std::to_string(k), std::string("adopted tree: ") + what);
+  };
+  if (n_nodes > 0 && (nodes[0].parent != -1 || nodes[0].begin != 0 || nodes[0].end != n_rows)) broken(0, "bad root");
+  int height = 0;
+  for (std::int32_t k = 0; k < n_nodes; ++k) {
+    const Node& nd = nodes[static_cast<std::size_t>(k)];
+    if (nd.begin < 0 || nd.end < nd.begin || nd.end > n_rows) broken(k, "slot range out of bounds");
+    height = std::max(height, nd.level + 1);
+    if (nd.leaf()) continue;
+    const std::int32_t c = nd.first_child;
+    if (c <= k || c + 1 >= n_nodes) broken(k, "children must follow their parent");
+    const Node& l = nodes[static_cast<std::size_t>(c)];
+    const Node& r = nodes[static_cast<std::size_t>(c + 1)];
+    if (l.parent != k || r.parent != k || l.begin != nd.begin || l.end != r.begin || r.end != nd.end ||
+        l.level != nd.level + 1 || r.level != nd.level + 1)
+      broken(k, "children do not split the parent's range");
+  }
+  Index max_row = -1;
+  for (Index r : order) {
+    if (r < 0) throw Error(ErrorCode::Internal, "order", "adopted tree: negative row");
+    max_row = std::max(max_row, r);
+  }
+  params_ = params;
+  nodes_ = std::move(nodes);
+  order_ = std::move(order);
+  live_ = n_rows;
+  extras_ = 0;
+  dead_ = 0;
+  extra_next_.clear();
+  extra_row_.clear();
+  refit_since_build_ = false;
+  step_ = 0;
+  height_ = height;
+  cut_ = 0;
+  positions_ = nullptr;
+  radii_ = nullptr;
   leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
   for (std::size_t k = 0; k < nodes_.size(); ++k)
     if (nodes_[k].leaf())
