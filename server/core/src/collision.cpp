@@ -123,6 +123,24 @@ void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& z
     (scene.regions[r] == Region::Zero ? zero : deformable).push_back(static_cast<Index>(r));
 }
 
+IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const IndexList& new_row) {
+  IndexList out;
+  out.reserve(rows.size());
+  for (Index r : rows)
+    if (keep[r]) out.push_back(new_row[r]);
+  return out;
+}
+
+void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents) {
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index q = parents[k];
+    if (q < 0 || q >= rows || scene.regions[q] == Region::Zero ||
+        scene.regions[rows + static_cast<Index>(k)] == Region::Zero) {
+      throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
+    }
+  }
+}
+
 IndexList remap_rows(const std::vector<bool>& keep) {
   IndexList out(keep.size(), -1);
   Index j = 0;

@@ -250,10 +250,7 @@ class HierarchicalDetector final : public CollisionDetector {
     const IndexList new_row = remap_rows(keep);
     std::visit([&](auto& zero) { zero.on_removed(keep); }, zero_);
     if (def_) def_->on_removed(keep);
-    IndexList deformable;
-    for (Index r : deformable_)
-      if (keep[r]) deformable.push_back(new_row[r]);
-    deformable_ = std::move(deformable);
+    deformable_ = remap_list(deformable_, keep, new_row);
     compact(reach_, keep);
     rows_ = static_cast<Index>(reach_.size());
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
@@ -264,12 +261,7 @@ class HierarchicalDetector final : public CollisionDetector {
     const Index added = static_cast<Index>(parents.size());
     require_scene_rows(scene, rows_ + added, "on_inserted");
     if (extended_) {
-      for (Index k = 0; k < added; ++k) {
-        const Index q = parents[k];
-        if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
-          throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
-        }
-      }
+      require_deformable_parents(scene, rows_, parents);
       extended_->on_inserted(parents);
     } else {
       narrow_->on_inserted(scene, parents);  // validates the parents

@@ -56,6 +56,13 @@ void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& z
 // Old row -> new row after a removal (`keep`: one flag per old row), -1 for removed rows.
 IndexList remap_rows(const std::vector<bool>& keep);
 
+// The rows of `rows` that survive a removal, renumbered (`keep`, `new_row` as from remap_rows).
+IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const IndexList& new_row);
+
+// Checks the rows appended after `rows` existing ones: each split from a deformable parent row and
+// deformable itself; InvalidArgument ("parents") otherwise.
+void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
+
 // Keeps the entries of a per-row array whose flag is set (order kept).
 template <typename T>
 void compact(std::vector<T>& v, const std::vector<bool>& keep) {

@@ -161,10 +161,7 @@ class RobustDetector final : public NarrowDetector {
         if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
       orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
     }
-    IndexList deformable;
-    for (Index r : deformable_)
-      if (keep[r]) deformable.push_back(new_row[r]);
-    deformable_ = std::move(deformable);
+    deformable_ = remap_list(deformable_, keep, new_row);
     compact(orig_of_row_, keep);
     compact(center_, keep);
     compact(old_position_, keep);
@@ -176,12 +173,7 @@ class RobustDetector final : public NarrowDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     const Index added = static_cast<Index>(parents.size());
     require_scene_rows(scene, rows_ + added, "on_inserted");
-    for (Index k = 0; k < added; ++k) {
-      const Index q = parents[k];
-      if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
-        throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
-      }
-    }
+    require_deformable_parents(scene, rows_, parents);
     const Index total = rows_ + added;
     center_.conservativeResize(total, 3);
     old_position_.conservativeResize(total, 3);

@@ -73,10 +73,7 @@ class SimpleDetector final : public NarrowDetector {
     if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
     const IndexList new_row = remap_rows(keep);
     zero_.on_removed(keep, new_row);
-    IndexList deformable;
-    for (Index r : deformable_)
-      if (keep[r]) deformable.push_back(new_row[r]);
-    deformable_ = std::move(deformable);
+    deformable_ = remap_list(deformable_, keep, new_row);
     compact(colliding_, keep);
     compact(depth_, keep);
     rows_ = static_cast<Index>(colliding_.size());
@@ -85,12 +82,7 @@ class SimpleDetector final : public NarrowDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     const Index added = static_cast<Index>(parents.size());
     require_scene_rows(scene, rows_ + added, "on_inserted");
-    for (Index k = 0; k < added; ++k) {
-      const Index q = parents[k];
-      if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
-        throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
-      }
-    }
+    require_deformable_parents(scene, rows_, parents);
     for (Index k = 0; k < added; ++k) {
       colliding_.push_back(colliding_[parents[k]]);
       depth_.push_back(depth_[parents[k]]);

@@ -231,10 +231,7 @@ class SimplifiedDetector final : public ApproximateDetector {
       compact(orig_of_row_, keep);
     }
     zero_.on_removed(keep, new_row);
-    IndexList deformable;
-    for (Index r : deformable_)
-      if (keep[r]) deformable.push_back(new_row[r]);
-    deformable_ = std::move(deformable);
+    deformable_ = remap_list(deformable_, keep, new_row);
     compact(state_, keep);
     clusters_.on_removed(keep);
     rows_ = static_cast<Index>(state_.size());
@@ -243,12 +240,7 @@ class SimplifiedDetector final : public ApproximateDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     const Index added = static_cast<Index>(parents.size());
     require_scene_rows(scene, rows_ + added, "on_inserted");
-    for (Index k = 0; k < added; ++k) {
-      const Index q = parents[k];
-      if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
-        throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
-      }
-    }
+    require_deformable_parents(scene, rows_, parents);
     const bool spheres = params_.algorithm != CollisionAlgorithm::Simple;
     for (Index k = 0; k < added; ++k) {
       const Index q = parents[k], b = rows_ + k;

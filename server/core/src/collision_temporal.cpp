@@ -99,10 +99,7 @@ class TemporalDetector final : public NarrowDetector {
     const IndexList new_row = remap_rows(keep);
     // Removing zero surfels only empties spheres further: they stay valid.
     zero_.on_removed(keep, new_row);
-    IndexList deformable;
-    for (Index r : deformable_)
-      if (keep[r]) deformable.push_back(new_row[r]);
-    deformable_ = std::move(deformable);
+    deformable_ = remap_list(deformable_, keep, new_row);
     compact(center_, keep);
     compact(rho2_, keep);
     compact(colliding_, keep);
@@ -112,12 +109,7 @@ class TemporalDetector final : public NarrowDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     const Index added = static_cast<Index>(parents.size());
     require_scene_rows(scene, rows_ + added, "on_inserted");
-    for (Index k = 0; k < added; ++k) {
-      const Index q = parents[k];
-      if (q < 0 || q >= rows_ || scene.regions[q] == Region::Zero || scene.regions[rows_ + k] == Region::Zero) {
-        throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
-      }
-    }
+    require_deformable_parents(scene, rows_, parents);
     center_.conservativeResize(rows_ + added, 3);
     rho2_.conservativeResize(rows_ + added);
     for (Index k = 0; k < added; ++k) {
