@@ -219,16 +219,13 @@ class HierarchicalDetector final : public CollisionDetector {
         ++tested;
       }
       const std::vector<std::uint8_t>& colliding = extended_->colliding();
-      for (Index r : deformable_) {
-        if (!colliding[static_cast<std::size_t>(r)]) continue;
-        result.colliding.push_back(r);
-        result.depths.push_back(0.0);  // the extended test keeps no spheres: no depth estimate
-      }
-      result.stats.deformable = static_cast<Index>(deformable_.size());
       result.stats.tested = tested;
       result.stats.queries = extended_->evaluations() - evaluations_;
       evaluations_ = extended_->evaluations();
-      result.stats.colliding = static_cast<Index>(result.colliding.size());
+      // The extended test keeps no spheres: no depth estimate. Timing is set below for both branches.
+      collect_result(
+          result, deformable_, [&](std::size_t, Index r) { return colliding[static_cast<std::size_t>(r)] != 0; },
+          [](std::size_t, Index) { return 0.0; }, preprocess_ms_, start);
     } else {
       result = narrow_->detect_candidates(scene, previous, &candidate_);
     }

@@ -109,6 +109,24 @@ struct ZeroSet {
   std::size_t memory_bytes() const;
 };
 
+// The end of every detector's detect(): appends the colliding deformable rows (ascending, as
+// `deformable` is) with their depth estimates and fills the stats all detectors report alike.
+// `colliding(q, r)` and `depth(q, r)` receive the position q in `deformable` and the row r.
+template <typename Colliding, typename Depth>
+void collect_result(CollisionResult& result, const IndexList& deformable, Colliding colliding, Depth depth,
+                    double preprocess_ms, std::chrono::steady_clock::time_point start) {
+  for (std::size_t q = 0; q < deformable.size(); ++q) {
+    const Index r = deformable[q];
+    if (!colliding(q, r)) continue;
+    result.colliding.push_back(r);
+    result.depths.push_back(depth(q, r));
+  }
+  result.stats.deformable = static_cast<Index>(deformable.size());
+  result.stats.colliding = static_cast<Index>(result.colliding.size());
+  result.stats.preprocess_ms = preprocess_ms;
+  result.stats.detect_ms = ms_since(start);
+}
+
 // Squared radius of a temporal-coherence sphere around a point at squared distance `dist2` from its
 // nearest reference surfel of radius `radius`: (|d| - margin * radius)^2, or 0 when that is not
 // positive (the surfel is then re-tested at the next step). With margin 1 the sphere cannot reach

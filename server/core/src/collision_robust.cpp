@@ -127,18 +127,11 @@ class RobustDetector final : public NarrowDetector {
       }
     }
     CollisionResult result;
-    for (Index q = 0; q < n; ++q) {
-      const Index r = deformable_[q];
-      if (!(flags_[r] & kColliding)) continue;
-      result.colliding.push_back(r);
-      result.depths.push_back(depth[q]);
-    }
-    result.stats.deformable = n;
     result.stats.tested = tested;
     result.stats.queries = queries;
-    result.stats.colliding = static_cast<Index>(result.colliding.size());
-    result.stats.preprocess_ms = preprocess_ms_;
-    result.stats.detect_ms = ms_since(start);
+    collect_result(
+        result, deformable_, [&](std::size_t, Index r) { return (flags_[r] & kColliding) != 0; },
+        [&](std::size_t q, Index) { return depth[q]; }, preprocess_ms_, start);
     return result;
   }
 

@@ -57,15 +57,9 @@ class SimpleDetector final : public NarrowDetector {
     } else {
       detect_simple(scene, previous, candidate, result.stats);
     }
-    for (Index r : deformable_) {
-      if (!colliding_[r]) continue;
-      result.colliding.push_back(r);
-      result.depths.push_back(depth_[r]);
-    }
-    result.stats.deformable = static_cast<Index>(deformable_.size());
-    result.stats.colliding = static_cast<Index>(result.colliding.size());
-    result.stats.preprocess_ms = preprocess_ms_;
-    result.stats.detect_ms = ms_since(start);
+    collect_result(
+        result, deformable_, [&](std::size_t, Index r) { return colliding_[r] != 0; },
+        [&](std::size_t, Index r) { return depth_[r]; }, preprocess_ms_, start);
     return result;
   }
 

@@ -192,20 +192,14 @@ class SimplifiedDetector final : public ApproximateDetector {
       }
     }
     CollisionResult result;
-    for (Index r : deformable_) {
-      if (!state_[r].colliding()) continue;
-      result.colliding.push_back(r);
-      result.depths.push_back(state_[r].depth);
-    }
     const double simplify_ms = approx_.simplify_ms;
     approx_ = ApproximateStats{total.clusters,      total.singletons,      total.colliding_clusters, total.near_clusters,
                                total.active_clusters, total.cluster_queries, simplify_ms};
-    result.stats.deformable = static_cast<Index>(deformable_.size());
     result.stats.tested = total.tested;
     result.stats.queries = total.queries + total.cluster_queries;
-    result.stats.colliding = static_cast<Index>(result.colliding.size());
-    result.stats.preprocess_ms = preprocess_ms_;
-    result.stats.detect_ms = ms_since(start);
+    collect_result(
+        result, deformable_, [&](std::size_t, Index r) { return state_[r].colliding(); },
+        [&](std::size_t, Index r) { return state_[r].depth; }, preprocess_ms_, start);
     return result;
   }
 

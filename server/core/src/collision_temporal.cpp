@@ -79,18 +79,11 @@ class TemporalDetector final : public NarrowDetector {
       for (Index q = 0; q < n; ++q) tested += one(q);
     }
     CollisionResult result;
-    for (Index q = 0; q < n; ++q) {
-      const Index r = deformable_[q];
-      if (!colliding_[r]) continue;
-      result.colliding.push_back(r);
-      result.depths.push_back(depth[q]);
-    }
-    result.stats.deformable = n;
     result.stats.tested = tested;
     result.stats.queries = tested;
-    result.stats.colliding = static_cast<Index>(result.colliding.size());
-    result.stats.preprocess_ms = preprocess_ms_;
-    result.stats.detect_ms = ms_since(start);
+    collect_result(
+        result, deformable_, [&](std::size_t, Index r) { return colliding_[r] != 0; },
+        [&](std::size_t q, Index) { return depth[q]; }, preprocess_ms_, start);
     return result;
   }
 
