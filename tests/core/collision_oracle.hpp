@@ -349,6 +349,26 @@ inline TestScene slab_and_sphere(double spacing = 0.08) {
   return make_test_scene(*slab, *ball, spacing);
 }
 
+// The scripted removal of the detector tests: every 40th zero row and every 11th deformable row
+// (from the 6th) leave the scene; `previous` (positions before the step) is compacted alike.
+// Returns the kept-row flags for the detectors' on_removed.
+inline std::vector<bool> remove_scripted_rows(TestScene& scene, Points& previous) {
+  std::vector<bool> keep(scene.rows(), true);
+  for (Index r = 0, jd = 0, jz = 0; r < scene.rows(); ++r) {
+    if (scene.regions[r] == Region::Zero) {
+      if (jz++ % 40 == 39) keep[r] = false;
+    } else if (jd++ % 11 == 5) {
+      keep[r] = false;
+    }
+  }
+  scene.remove(keep);
+  Index j = 0;
+  for (Index r = 0; r < previous.rows(); ++r)
+    if (keep[r]) previous.row(j++) = previous.row(r);
+  previous.conservativeResize(j, 3);
+  return keep;
+}
+
 struct ScriptStep {
   Vec3 t = Vec3::Zero();
   double angle = 0.0;  // about the x axis through the sphere's current centre
@@ -399,19 +419,7 @@ inline RunLog run_against_oracle(TestScene scene, const CollisionParams& params,
       oracle.on_inserted(scene, parents);
     }
     if (edits && k == 7) {
-      std::vector<bool> keep(scene.rows(), true);
-      for (Index r = 0, jd = 0, jz = 0; r < scene.rows(); ++r) {
-        if (scene.regions[r] == Region::Zero) {
-          if (jz++ % 40 == 39) keep[r] = false;
-        } else if (jd++ % 11 == 5) {
-          keep[r] = false;
-        }
-      }
-      scene.remove(keep);
-      Index j = 0;
-      for (Index r = 0; r < previous.rows(); ++r)
-        if (keep[r]) previous.row(j++) = previous.row(r);
-      previous.conservativeResize(j, 3);
+      const std::vector<bool> keep = remove_scripted_rows(scene, previous);
       det->on_removed(keep);
       oracle.on_removed(keep);
     }

@@ -57,19 +57,7 @@ Agreement run_side_by_side(TestScene scene, const CollisionParams& cp, const Sim
         EXPECT_EQ(approx->clusters().cluster_of(before.rows() + static_cast<Index>(j)), approx->clusters().cluster_of(parents[j]));
     }
     if (edits && k == 7) {  // drop some zero and some deformable surfels
-      std::vector<bool> keep(scene.rows(), true);
-      for (Index r = 0, jd = 0, jz = 0; r < scene.rows(); ++r) {
-        if (scene.regions[r] == Region::Zero) {
-          if (jz++ % 40 == 39) keep[r] = false;
-        } else if (jd++ % 11 == 5) {
-          keep[r] = false;
-        }
-      }
-      scene.remove(keep);
-      Index j = 0;
-      for (Index r = 0; r < previous.rows(); ++r)
-        if (keep[r]) previous.row(j++) = previous.row(r);
-      previous.conservativeResize(j, 3);
+      const std::vector<bool> keep = testing::remove_scripted_rows(scene, previous);
       exact->on_removed(keep);
       approx->on_removed(keep);
     }

@@ -62,19 +62,7 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
       det->on_inserted(scene.view(), parents);
     }
     if (k == 7) {
-      std::vector<bool> keep(scene.rows(), true);
-      for (Index r = 0, jd = 0, jz = 0; r < scene.rows(); ++r) {
-        if (scene.regions[r] == Region::Zero) {
-          if (jz++ % 40 == 39) keep[r] = false;
-        } else if (jd++ % 11 == 5) {
-          keep[r] = false;
-        }
-      }
-      scene.remove(keep);
-      Index j = 0;
-      for (Index r = 0; r < previous.rows(); ++r)
-        if (keep[r]) previous.row(j++) = previous.row(r);
-      previous.conservativeResize(j, 3);
+      const std::vector<bool> keep = remove_scripted_rows(scene, previous);
       ref->on_removed(keep);
       det->on_removed(keep);
     }
