@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from surfeledit import scenario as S
-from surfeledit.errors import InvalidArgumentError
+from checks import assert_rejected_and_inert
 
 METHODS = ["hierarchical", "region_growing"]
 
@@ -119,15 +119,7 @@ def test_bad_settings_are_typed_and_change_nothing(scenarios, bad, field):
     params = sc.step_params()
     for _ in range(5):
         b.deform(**params)
-    before = b.session.settings()
-    report = b.session.report()
-    colliding_before = np.asarray(b.session.colliding()).copy()
-    with pytest.raises(InvalidArgumentError) as e:
-        b.configure(**bad)
-    assert e.value.field == field, str(e.value)
-    assert b.session.settings() == before
-    assert b.session.report()["structures"] == report["structures"]
-    assert np.array_equal(np.asarray(b.session.colliding()), colliding_before)
+    assert_rejected_and_inert(b, bad, field)
 
 
 def test_session_builds_clusters_only_when_asked(scenarios):
