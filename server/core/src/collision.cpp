@@ -123,6 +123,28 @@ void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& z
     (scene.regions[r] == Region::Zero ? zero : deformable).push_back(static_cast<Index>(r));
 }
 
+void split_spheres(const Points& positions, const IndexList& parents, Index first_child, Points& center,
+                   Values& rho2) {
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index q = parents[k], b = first_child + static_cast<Index>(k);
+    const Vec3 pb = row3(positions, b);
+    if ((pb - row3(center, q)).squaredNorm() < rho2[q]) {
+      center.row(b) = center.row(q);
+      rho2[b] = rho2[q];
+    } else {
+      center.row(b) = pb.transpose();
+      rho2[b] = 0.0;
+    }
+  }
+  for (Index q : parents) {
+    const Vec3 pa = row3(positions, q);
+    if (!((pa - row3(center, q)).squaredNorm() < rho2[q])) {
+      center.row(q) = pa.transpose();
+      rho2[q] = 0.0;
+    }
+  }
+}
+
 IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const IndexList& new_row) {
   IndexList out;
   out.reserve(rows.size());

@@ -137,6 +137,13 @@ inline double sphere_rho2(double dist2, double radius, double margin) {
   return rho > 0.0 ? rho * rho : 0.0;
 }
 
+// The spheres of split surfels (§4.4, thesis §6.5): rows first_child + k were split from parents[k].
+// A child B takes its parent's sphere when it lies inside it, else an empty sphere (tested at the
+// next step); the parent row (child A) keeps its sphere only when it still lies inside it.
+// `center` (#P by 3) and `rho2` (#P) already have rows for the children.
+void split_spheres(const Points& positions, const IndexList& parents, Index first_child, Points& center,
+                   Values& rho2);
+
 // One evaluation of the §4.1 test for deformable surfel s1 at p1 against zero surfel k.
 struct SimpleTest {
   double dist2 = 0.0;  // |p1 - p2|^2

@@ -173,29 +173,14 @@ class RobustDetector final : public NarrowDetector {
     rho2_.conservativeResize(total);
     for (Index k = 0; k < added; ++k) {
       const Index q = parents[k], b = rows_ + k;
-      // Child B: the parent's state (inside, colliding, first update, old position); its sphere if
-      // it lies inside it, else an empty one (tested at the next step).
+      // Child B: the parent's state (inside, colliding, first update, old position); the spheres
+      // follow split_spheres.
       flags_.push_back(flags_[q]);
       orig_of_row_.push_back(-1);
       deformable_.push_back(b);
       old_position_.row(b) = old_position_.row(q);
-      const Vec3 pb = row3(scene.positions, b);
-      if ((pb - row3(center_, q)).squaredNorm() < rho2_[q]) {
-        center_.row(b) = center_.row(q);
-        rho2_[b] = rho2_[q];
-      } else {
-        center_.row(b) = pb.transpose();
-        rho2_[b] = 0.0;
-      }
     }
-    // Child A (the parent row) keeps the sphere only if it lies inside it.
-    for (Index q : parents) {
-      const Vec3 pa = row3(scene.positions, q);
-      if (!((pa - row3(center_, q)).squaredNorm() < rho2_[q])) {
-        center_.row(q) = pa.transpose();
-        rho2_[q] = 0.0;
-      }
-    }
+    split_spheres(scene.positions, parents, rows_, center_, rho2_);
     rows_ = total;
   }
 

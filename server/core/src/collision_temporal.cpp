@@ -109,24 +109,8 @@ class TemporalDetector final : public NarrowDetector {
       const Index q = parents[k], b = rows_ + k;
       colliding_.push_back(colliding_[q]);
       deformable_.push_back(b);
-      // Child B: the parent's sphere if it lies inside it, else an empty sphere (tested next step).
-      const Vec3 pb = row3(scene.positions, b);
-      if ((pb - row3(center_, q)).squaredNorm() < rho2_[q]) {
-        center_.row(b) = center_.row(q);
-        rho2_[b] = rho2_[q];
-      } else {
-        center_.row(b) = pb.transpose();
-        rho2_[b] = 0.0;
-      }
     }
-    // Child A (the parent row) keeps the sphere only if it lies inside it.
-    for (Index q : parents) {
-      const Vec3 pa = row3(scene.positions, q);
-      if (!((pa - row3(center_, q)).squaredNorm() < rho2_[q])) {
-        center_.row(q) = pa.transpose();
-        rho2_[q] = 0.0;
-      }
-    }
+    split_spheres(scene.positions, parents, rows_, center_, rho2_);
     rows_ += added;
   }
 
