@@ -14,7 +14,7 @@ log() { printf '[setup] %s\n' "$*"; }
 # 1. Debian packages.
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev
   libeigen3-dev libpcl-dev libnanoflann-dev cyclonedds-dev cyclonedds-tools
-  libgtest-dev libspdlog-dev libcli11-dev libbenchmark-dev libcgal-dev)
+  libgtest-dev libspdlog-dev libcli11-dev libbenchmark-dev libcgal-dev ccache)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -47,7 +47,9 @@ fi
 mkdir -p "$BUILD"
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then
   log "configuring $BUILD"
+  # ccache: rebuilds of another checkout of the same sources (a CI clone, a worktree) hit the cache.
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE="$VENV/bin/python" \
+    -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache \
     -Dpybind11_DIR="$("$VENV/bin/python" -m pybind11 --cmakedir)" \
     -DSURFELEDIT_BUILD_TESTS=ON -DSURFELEDIT_BUILD_PYTHON=ON -DSURFELEDIT_BUILD_BENCH=ON >"$BUILD/setup-configure.log" 2>&1 \
     || { tail -n 40 "$BUILD/setup-configure.log"; exit 1; }

@@ -102,8 +102,6 @@ HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
 
 namespace detail {
 
-int resolve_threads(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
-
 void require_scene_rows(const CollisionScene& scene, Index rows, const char* what) {
   const Eigen::Index n = rows;
   if (scene.positions.rows() != n || scene.normals.rows() != n || scene.radii.size() != n ||
@@ -161,28 +159,6 @@ void require_deformable_parents(const CollisionScene& scene, Index rows, const I
       throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
     }
   }
-}
-
-IndexList remap_rows(const std::vector<bool>& keep) {
-  IndexList out(keep.size(), -1);
-  Index j = 0;
-  for (std::size_t i = 0; i < keep.size(); ++i)
-    if (keep[i]) out[i] = j++;
-  return out;
-}
-
-void compact(Points& a, const std::vector<bool>& keep) {
-  Eigen::Index j = 0;
-  for (Eigen::Index i = 0; i < a.rows(); ++i)
-    if (keep[static_cast<std::size_t>(i)]) a.row(j++) = a.row(i);
-  a.conservativeResize(j, 3);
-}
-
-void compact(Values& a, const std::vector<bool>& keep) {
-  Eigen::Index j = 0;
-  for (Eigen::Index i = 0; i < a.size(); ++i)
-    if (keep[static_cast<std::size_t>(i)]) a[j++] = a[i];
-  a.conservativeResize(j);
 }
 
 void append_row(Points& a, const Vec3& v) {

@@ -8,6 +8,7 @@
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/kdtree.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit::detail {
 
@@ -37,14 +38,6 @@ std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionPar
                                                               const HierarchyParams& hierarchy,
                                                               std::unique_ptr<NarrowDetector> narrow);
 
-// Worker threads for `threads` (0 = all hardware threads).
-int resolve_threads(int threads);
-
-// Milliseconds since `start`.
-inline double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
 inline Vec3 row3(const Points& a, Index i) { return a.row(i).transpose(); }
 
 // Checks that every array of `scene` has `rows` rows (Internal otherwise: the session keeps them in step).
@@ -53,9 +46,6 @@ void require_scene_rows(const CollisionScene& scene, Index rows, const char* wha
 // Rows of `scene` with region != Zero, ascending; `zero` gets the others.
 void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& zero);
 
-// Old row -> new row after a removal (`keep`: one flag per old row), -1 for removed rows.
-IndexList remap_rows(const std::vector<bool>& keep);
-
 // The rows of `rows` that survive a removal, renumbered (`keep`, `new_row` as from remap_rows).
 IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const IndexList& new_row);
 
@@ -63,16 +53,6 @@ IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const
 // deformable itself; InvalidArgument ("parents") otherwise.
 void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
 
-// Keeps the entries of a per-row array whose flag is set (order kept).
-template <typename T>
-void compact(std::vector<T>& v, const std::vector<bool>& keep) {
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (keep[i]) v[j++] = v[i];
-  v.resize(j);
-}
-void compact(Points& a, const std::vector<bool>& keep);
-void compact(Values& a, const std::vector<bool>& keep);
 void append_row(Points& a, const Vec3& v);
 void append_value(Values& a, double v);
 

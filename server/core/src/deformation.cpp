@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "surfeledit/core/kdtree.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
@@ -26,11 +27,11 @@ std::string fmt(double v) {
 
 std::string fmt(const Vec3& v) { return "(" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + ")"; }
 
-int resolve_threads(int threads, const char* field) {
+int checked_threads(int threads, const char* field) {
   if (threads < 0) {
     throw Error(ErrorCode::InvalidArgument, field, "thread count must be >= 0, got " + std::to_string(threads));
   }
-  return threads > 0 ? threads : omp_get_max_threads();
+  return resolve_threads(threads);
 }
 
 bool valid_blend(Blend b) { return b == Blend::Smooth || b == Blend::Quadratic || b == Blend::Linear; }
@@ -150,7 +151,7 @@ std::size_t DeformationFields::memory_bytes() const {
 }
 
 DeformationFields compute_fields(const Points& positions, const std::vector<Region>& regions, int threads) {
-  const int nthreads = resolve_threads(threads, "threads");
+  const int nthreads = checked_threads(threads, "threads");
   const Eigen::Index n = positions.rows();
   if (static_cast<Eigen::Index>(regions.size()) != n) {
     throw Error(ErrorCode::InvalidArgument, "regions",
@@ -223,7 +224,7 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
                         Points& normals, Points* tangent_u, Points* tangent_v, int threads) {
   // ---- validation: nothing below this block may throw after an array was written ----
   validate(params);
-  const int nthreads = resolve_threads(threads, "threads");
+  const int nthreads = checked_threads(threads, "threads");
   const Eigen::Index n = positions.rows();
   auto require_rows = [n](Eigen::Index rows, const char* field) {
     if (rows != n) {

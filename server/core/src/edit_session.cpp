@@ -7,14 +7,11 @@
 
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/simplify/approximate_detector.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};

@@ -1,5 +1,6 @@
 // Inside/outside test of §2: nearest surfel (p2, n2) of the query p1; inside iff (p1 - p2) . n2 <= W.
 #include "surfeledit/core/inside_outside.hpp"
+#include "surfeledit/core/util.hpp"
 
 #include <omp.h>
 
@@ -58,7 +59,7 @@ std::vector<std::uint8_t> InsideOutside::classify(const Points& queries, InsideO
   const Eigen::Index nq = queries.rows();
   std::vector<std::uint8_t> flags(static_cast<std::size_t>(nq), 0);
   if (nq == 0 || tree_.size() == 0) return flags;
-  const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+  const int threads = resolve_threads(params.threads);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (Eigen::Index q = 0; q < nq; ++q) {
     const Vec3 p1 = queries.row(q).transpose();

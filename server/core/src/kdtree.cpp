@@ -1,5 +1,6 @@
 // k-d tree over 3-D points: nanoflann (static index, sliding-midpoint split) behind a pimpl.
 #include "surfeledit/core/kdtree.hpp"
+#include "surfeledit/core/util.hpp"
 
 #include <omp.h>
 
@@ -52,7 +53,6 @@ class InclusiveRadiusSet {
   std::vector<std::pair<std::uint32_t, double>>& out_;
 };
 
-int resolve_threads(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
 
 void check_params(const KdTreeParams& params) {
   if (params.leaf_size < 1) {

@@ -4,6 +4,7 @@
 #include <new>
 
 #include "surfeledit/core/model_io.hpp"
+#include "surfeledit/core/util.hpp"
 #include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/log.hpp"
 
@@ -16,10 +17,6 @@ namespace surfeledit::service {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>

@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include "surfeledit/core/simplify/surface_variation.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
@@ -39,7 +40,7 @@ std::vector<SimplifiedSurfel> simplify(const Points& positions, const Points& no
                                        const Clustering& clusters, int threads) {
   const Index n = clusters.size();
   std::vector<SimplifiedSurfel> out(static_cast<std::size_t>(n));
-  const int t = threads > 0 ? threads : omp_get_max_threads();
+  const int t = resolve_threads(threads);
 #pragma omp parallel for schedule(dynamic, 256) num_threads(t)
   for (Index c = 0; c < n; ++c) {
     out[c] = simplify_cluster(positions, normals, radii, clusters.rows(c), static_cast<std::size_t>(clusters.count(c)));

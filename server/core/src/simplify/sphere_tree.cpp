@@ -9,14 +9,11 @@
 
 #include "surfeledit/core/simplify/clustering.hpp"
 #include "surfeledit/core/simplify/miniball.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 // A node of the bottom-up tree before it is laid out.
 struct LooseNode {
@@ -146,7 +143,7 @@ struct SphereTreeBuilder {
     }
     // Leaves: minimal sphere of their surfels' balls (independent: multithreaded).
     const std::int32_t count = static_cast<std::int32_t>(t.nodes_.size());
-    const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+    const int threads = resolve_threads(params.threads);
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
     for (std::int32_t k = 0; k < count; ++k) {
       SphereTreeNode& n = t.nodes_[k];
@@ -176,7 +173,7 @@ struct SphereTreeBuilder {
       return t;
     }
     std::vector<LooseNode> loose(static_cast<std::size_t>(leaves));
-    const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+    const int threads = resolve_threads(params.threads);
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
     for (Index c = 0; c < leaves; ++c) {
       loose[c].cluster = c;

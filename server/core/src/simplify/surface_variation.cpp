@@ -1,4 +1,5 @@
 #include "surfeledit/core/simplify/surface_variation.hpp"
+#include "surfeledit/core/util.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <omp.h>
@@ -43,7 +44,7 @@ Values surface_variation(const Points& positions, const KdTree& tree, int k, con
   }
   Values out = Values::Zero(total);
   const Index n = static_cast<Index>(list->size());
-  const int t = threads > 0 ? threads : omp_get_max_threads();
+  const int t = resolve_threads(threads);
 #pragma omp parallel num_threads(t)
   {
     IndexList nn;
