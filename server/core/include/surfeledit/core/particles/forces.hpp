@@ -1,0 +1,28 @@
+// Total forces, torques, energy and stiffness of the particle system (thesis Eq. 12.5-12.9): the sum over
+// neighbour pairs of E_ij = 2 a_R Phi_R + a_P (Phi_P(n_i) + Phi_P(n_j)) + 2 a_N Phi_N + 2 a_C Phi_C,
+// i.e. the thesis's energy summed over ordered pairs; forces and torques are its exact negative gradients
+// (unless drop_dphi). Damping and region scaling are applied by the integrator.
+#pragma once
+
+#include "surfeledit/core/particles/neighbours.hpp"
+#include "surfeledit/core/particles/params.hpp"
+#include "surfeledit/core/particles/state.hpp"
+
+namespace surfeledit {
+
+struct SystemForces {
+  Points force;      // #P by 3, on each particle (without damping)
+  Points torque;     // #P by 3
+  Values stiffness;  // #P: sum over neighbours of the pair stiffness bounds (docs/particles.md)
+  double energy = 0.0;  // sum over unordered pairs of E_ij
+};
+
+// Per particle, so the result does not depend on the thread count.
+void compute_forces(const ParticleState& state, const Neighbourhood& nbrs, const ParticleParams& params,
+                    SystemForces& out);
+
+// Largest time step the stiffness bound allows (Gershgorin bound on the scaled Hessian, damped symplectic
+// step), times params.dt_safety; +inf when nothing interacts. `scale` #P region scale factors.
+double stable_time_step(const SystemForces& forces, const Values& scale, const ParticleParams& params);
+
+}  // namespace surfeledit
