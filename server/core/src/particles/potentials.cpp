@@ -3,6 +3,7 @@
 // a rotation theta of i changes n_i by theta x n_i, so the torque is (dPhi/dn_i) x n_i.
 #include "surfeledit/core/particles/potentials.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace surfeledit {
