@@ -76,20 +76,20 @@ pyb::dict stats_dict(const CollisionStats& s) {
 }  // namespace
 
 void bind_edit_session(pyb::module_& m) {
-  pyb::class_<StepOutcome>(m, "StepOutcome", "What one deformation step did (in-process)")
-      .def_readonly("seq", &StepOutcome::seq)
-      .def_property_readonly("moved", [](const StepOutcome& o) { return o.moved.size(); }, "number of moved or split rows")
-      .def_property_readonly("inserted", [](const StepOutcome& o) { return ids_array(o.inserted); })
-      .def_property_readonly("center", [](const StepOutcome& o) { return o.center; })
-      .def_readonly("detected", &StepOutcome::detected)
-      .def_property_readonly("colliding", [](const StepOutcome& o) { return ids_array(o.colliding); })
+  pyb::class_<StepResult>(m, "StepResult", "What one deformation step did (in-process)")
+      .def_readonly("seq", &StepResult::seq)
+      .def_property_readonly("moved", [](const StepResult& o) { return o.moved.size(); }, "number of moved or split rows")
+      .def_property_readonly("inserted", [](const StepResult& o) { return ids_array(o.inserted); })
+      .def_property_readonly("center", [](const StepResult& o) { return o.center; })
+      .def_readonly("detected", &StepResult::detected)
+      .def_property_readonly("colliding", [](const StepResult& o) { return ids_array(o.colliding); })
       .def_property_readonly("depths",
-                             [](const StepOutcome& o) { return pyb::array_t<double>(o.depths.size(), o.depths.data()); })
-      .def_property_readonly("stats", [](const StepOutcome& o) { return stats_dict(o.stats); })
-      .def_readonly("deform_ms", &StepOutcome::deform_ms)
-      .def_readonly("resample_ms", &StepOutcome::resample_ms)
-      .def("__repr__", [](const StepOutcome& o) {
-        return "StepOutcome(seq=" + std::to_string(o.seq) + ", moved=" + std::to_string(o.moved.size()) +
+                             [](const StepResult& o) { return pyb::array_t<double>(o.depths.size(), o.depths.data()); })
+      .def_property_readonly("stats", [](const StepResult& o) { return stats_dict(o.stats); })
+      .def_readonly("deform_ms", &StepResult::deform_ms)
+      .def_readonly("resample_ms", &StepResult::resample_ms)
+      .def("__repr__", [](const StepResult& o) {
+        return "StepResult(seq=" + std::to_string(o.seq) + ", moved=" + std::to_string(o.moved.size()) +
                ", inserted=" + std::to_string(o.inserted.size()) + ", colliding=" + std::to_string(o.colliding.size()) + ")";
       });
 
@@ -125,7 +125,7 @@ void bind_edit_session(pyb::module_& m) {
           },
           pyb::kw_only(), pyb::arg("translation") = Vec3::Zero(), pyb::arg("axis") = Vec3::UnitZ(),
           pyb::arg("angle") = 0.0, pyb::arg("center") = pyb::none(), pyb::arg("blend") = "smooth",
-          "One step, then resampling and collision detection as configured; returns a StepOutcome")
+          "One step, then resampling and collision detection as configured; returns a StepResult")
       .def(
           "configure",
           [](EditSession& s, const pyb::kwargs& kwargs) {

@@ -105,7 +105,7 @@ TEST(EditSessionCollision, DetectsByDefaultAndReportsIds) {
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   DeformParams p;
   p.translation = Vec3(0, 0, -0.1);
-  StepOutcome o;
+  StepResult o;
   for (int k = 0; k < 6; ++k) o = f.session.deform(p);
   EXPECT_TRUE(o.detected);
   EXPECT_EQ(o.seq, 6u);
@@ -134,7 +134,7 @@ TEST(EditSessionCollision, ConfigureSwitchesAlgorithmWithoutTouchingTheModel) {
   f.session.configure({{"algorithm", std::string("none")}});
   DeformParams p;
   p.translation = Vec3(0, 0, -0.6);
-  const StepOutcome o = f.session.deform(p);
+  const StepResult o = f.session.deform(p);
   EXPECT_FALSE(o.detected);
   EXPECT_TRUE(o.colliding.empty());
 }
@@ -144,7 +144,7 @@ TEST(EditSessionCollision, RemoveKeepsIdsAndDetection) {
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   DeformParams p;
   p.translation = Vec3(0, 0, -0.1);
-  StepOutcome o;
+  StepResult o;
   for (int k = 0; k < 6; ++k) o = f.session.deform(p);
   ASSERT_GE(o.colliding.size(), 3u);
   const IdList gone = {o.colliding[0], o.colliding[2], f.zero[5]};

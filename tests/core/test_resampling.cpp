@@ -88,7 +88,7 @@ TEST(Resampling, SessionSplitsWithStableIds) {
   for (int k = 0; k < 3; ++k) {
     const std::uint64_t next = f.session.model().next_id();
     const std::uint64_t v = f.session.version();
-    const StepOutcome o = f.session.deform(p);
+    const StepResult o = f.session.deform(p);
     inserted += o.inserted.size();
     for (SurfelId id : o.inserted) {
       EXPECT_GE(id, next);                       // fresh ids

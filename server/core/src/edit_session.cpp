@@ -108,7 +108,7 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
   ++version_;
 }
 
-StepOutcome EditSession::deform(const DeformParams& params) {
+StepResult EditSession::deform(const DeformParams& params) {
   model();  // throws without a model
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
   validate(params);
@@ -122,7 +122,7 @@ StepOutcome EditSession::deform(const DeformParams& params) {
   Points previous;  // positions before the step, for each surfel's own displacement
   if (detector_) previous = a.positions;
   const bool tangents = model_.has_tangents();
-  StepOutcome out;
+  StepResult out;
   const auto t_deform = std::chrono::steady_clock::now();
   const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                     tangents ? &a.tangent_v : nullptr, params_.threads);

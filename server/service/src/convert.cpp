@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 #include <variant>
 
 namespace surfeledit::service {
@@ -41,6 +42,50 @@ Seq borrow_range(const T* data, std::size_t count) {
 }
 
 char* cstr(const std::string& s) { return const_cast<char*>(s.c_str()); }
+
+// The project's op numbers are the protocol's.
+static_assert(static_cast<std::uint32_t>(Op::Info) == surfeledit_proto_OP_INFO, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::OpenSession) == surfeledit_proto_OP_OPEN_SESSION, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::JoinSession) == surfeledit_proto_OP_JOIN_SESSION, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::CloseSession) == surfeledit_proto_OP_CLOSE_SESSION, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::LoadBegin) == surfeledit_proto_OP_LOAD_BEGIN, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::LoadChunk) == surfeledit_proto_OP_LOAD_CHUNK, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::LoadCommit) == surfeledit_proto_OP_LOAD_COMMIT, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::LoadFile) == surfeledit_proto_OP_LOAD_FILE, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::SetRegions) == surfeledit_proto_OP_SET_REGIONS, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Deform) == surfeledit_proto_OP_DEFORM, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::GetState) == surfeledit_proto_OP_GET_STATE, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Configure) == surfeledit_proto_OP_CONFIGURE, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Remove) == surfeledit_proto_OP_REMOVE, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_REMOVE + 1, "kOpCount: one past the last proto Op");
+
+// The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
+template <typename Seq>
+const auto& the_argument(const Seq& seq, const char* name) {
+  if (seq._length != 1 || seq._buffer == nullptr) {
+    throw Error(ErrorCode::InvalidArgument, name,
+                std::string("expected exactly one element, got ") + std::to_string(seq._length));
+  }
+  return seq._buffer[0];
+}
+
+// Decodes the op's argument sequence `seq` (named `name`) with `decode_one`: a missing argument
+// goes to c.missing, a failed decoding to c.invalid.
+template <typename Seq, typename F>
+void decode_argument(Command& c, const Seq& seq, const char* name, F&& decode_one) {
+  const std::remove_pointer_t<decltype(seq._buffer)>* arg = nullptr;
+  try {
+    arg = &the_argument(seq, name);
+  } catch (...) {
+    c.missing = std::current_exception();
+    return;
+  }
+  try {
+    c.args = decode_one(*arg);
+  } catch (...) {
+    c.invalid = std::current_exception();
+  }
+}
 
 }  // namespace
 
@@ -144,6 +189,101 @@ Setting to_reply(const NamedSetting& s) {
   return out;
 }
 
+Command decode(const surfeledit_proto_Request& r) {
+  Command c;
+  c.client_id = str(r.client_id);
+  c.request_id = r.request_id;
+  c.session = str(r.session);
+  c.op = static_cast<Op>(r.op);
+  switch (c.op) {
+    case Op::LoadBegin:
+      decode_argument(c, r.load_begin, "load_begin", [](const surfeledit_proto_LoadBegin& a) {
+        return LoadBeginArgs{a.total, a.has_radii};
+      });
+      break;
+    case Op::LoadChunk:
+      decode_argument(c, r.load_chunk, "load_chunk", [](const surfeledit_proto_LoadChunk& a) {
+        ChunkData chunk;
+        chunk.offset = a.offset;
+        chunk.positions = a.positions._buffer;
+        chunk.positions_len = a.positions._length;
+        chunk.normals = a.normals._buffer;
+        chunk.normals_len = a.normals._length;
+        chunk.radii = a.radii._buffer;
+        chunk.radii_len = a.radii._length;
+        return chunk;
+      });
+      break;
+    case Op::LoadFile:
+      decode_argument(c, r.load_file, "load_file", [](const surfeledit_proto_LoadFile& a) {
+        LoadFileArgs args{str(a.path)};
+        if (args.path.empty()) throw Error(ErrorCode::InvalidArgument, "load_file.path", "a file path is required");
+        return args;
+      });
+      break;
+    case Op::SetRegions:
+      decode_argument(c, r.set_regions, "set_regions", [](const surfeledit_proto_SetRegions& a) {
+        SetRegionsArgs args;
+        args.zero = to_core(a.zero, "set_regions.zero");
+        args.one = to_core(a.one, "set_regions.one");
+        return args;
+      });
+      break;
+    case Op::Deform:
+      decode_argument(c, r.deform, "deform", [](const surfeledit_proto_Deform& a) { return to_core(a, "deform"); });
+      break;
+    case Op::GetState:
+      decode_argument(c, r.get_state, "get_state", [](const surfeledit_proto_GetState& a) {
+        return GetStateArgs{static_cast<bool>(a.changes_only), a.since_version, a.offset, a.max_count};
+      });
+      break;
+    case Op::Configure:
+      decode_argument(c, r.configure, "configure",
+                      [](const surfeledit_proto_Configure& a) { return ConfigureArgs{to_core(a, "configure")}; });
+      break;
+    case Op::Remove:
+      decode_argument(c, r.remove, "remove", [](const surfeledit_proto_Remove& a) {
+        RemoveArgs args;
+        if (a.ids._length > 0) args.ids.assign(a.ids._buffer, a.ids._buffer + a.ids._length);
+        return args;
+      });
+      break;
+    default: break;  // no argument (or an op outside the list, rejected by the handler)
+  }
+  return c;
+}
+
+CollisionStatsInfo to_reply(const CollisionStats& cs) {
+  CollisionStatsInfo out;
+  out.deformable = static_cast<std::uint64_t>(cs.deformable);
+  out.tested = static_cast<std::uint64_t>(cs.tested);
+  out.queries = static_cast<std::uint64_t>(cs.queries);
+  out.colliding = static_cast<std::uint64_t>(cs.colliding);
+  out.detect_ms = cs.detect_ms;
+  out.preprocess_ms = cs.preprocess_ms;
+  out.nv = static_cast<std::uint64_t>(cs.nv);
+  out.np = static_cast<std::uint64_t>(cs.np);
+  out.nu = static_cast<std::uint64_t>(cs.nu);
+  return out;
+}
+
+StepResult to_reply(const surfeledit::StepResult& result, std::uint64_t seq) {
+  StepResult step;
+  step.seq = seq;
+  step.moved = result.moved.size();
+  step.center = {result.center.x(), result.center.y(), result.center.z()};
+  step.detected = result.detected;
+  if (result.depths.size() != result.colliding.size()) {
+    throw std::logic_error("step outcome has " + std::to_string(result.depths.size()) + " depths for " +
+                           std::to_string(result.colliding.size()) + " colliding ids");
+  }
+  step.colliding = result.colliding;
+  step.depths = result.depths;
+  step.stats = to_reply(result.stats);
+  step.inserted = result.inserted;
+  return step;
+}
+
 ReplyView::ReplyView(const Reply& reply) {
   msg_.client_id = cstr(reply.client_id);
   msg_.request_id = reply.request_id;
@@ -216,11 +356,12 @@ ReplyView::ReplyView(const Reply& reply) {
     step_.colliding = borrow<dds_sequence_unsigned_long_long>(reply.step->colliding);
     step_.depths = borrow<dds_sequence_double>(reply.step->depths);
     const CollisionStatsInfo& cs = reply.step->stats;
-    step_.stats = surfeledit_proto_CollisionStats{cs.deformable, cs.tested,    cs.queries,
-                                                  cs.colliding,  cs.detect_ms, cs.preprocess_ms};
+    step_.stats = surfeledit_proto_CollisionStats{cs.deformable, cs.tested,        cs.queries, cs.colliding,
+                                                  cs.detect_ms,  cs.preprocess_ms, cs.nv,      cs.np,
+                                                  cs.nu};
     step_.inserted = borrow<dds_sequence_unsigned_long_long>(reply.step->inserted);
   }
-  msg_.step = borrow_one<dds_sequence_surfeledit_proto_StepInfo>(&step_, reply.step.has_value());
+  msg_.step = borrow_one<dds_sequence_surfeledit_proto_StepResult>(&step_, reply.step.has_value());
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {

@@ -138,7 +138,7 @@ void Service::Impl::serve(const surfeledit_proto_Request& request) {
   std::vector<UpdateEvent> events;
   std::shared_ptr<const Reply> reply;
   try {
-    reply = handler.handle(request, events);
+    reply = handler.handle(decode(request), events);
   } catch (const std::exception& e) {
     // handle() turns every failure into a reply; this is the last resort (e.g. out of memory there).
     logger()->error("request {}#{} could not be handled: {}", str(request.client_id), request.request_id, e.what());

@@ -11,6 +11,38 @@ std::size_t PreparedUpdate::bytes() const {
          (removed.size() + colliding.size()) * sizeof(std::uint64_t);
 }
 
+UpdateEvent make_update_event(const std::string& session, std::uint64_t version, const std::string& cause) {
+  UpdateEvent event;
+  event.session = session;
+  event.version = version;
+  event.cause = cause;
+  return event;
+}
+
+void append_rows(IndexList& rows, const SurfelModel& model, const IdList& ids, const char* what) {
+  rows.reserve(rows.size() + ids.size());
+  for (SurfelId id : ids) {
+    const Index row = model.row_of(id);
+    if (row < 0) throw std::logic_error(std::string(what) + " id " + std::to_string(id) + " has no row");
+    rows.push_back(row);
+  }
+}
+
+UpdateEvent changes_event(const EditSession& s, const std::string& session, std::uint64_t since) {
+  UpdateEvent event = make_update_event(session, s.version(), "");
+  if (!s.has_model()) return event;
+  const Changes changes = s.changes_since(since);
+  event.full = changes.full;
+  event.all_rows = changes.full;
+  if (!changes.full) {
+    append_rows(event.rows, s.model(), changes.changed, "changed");
+    std::sort(event.rows.begin(), event.rows.end());
+    event.removed = changes.removed;
+    std::sort(event.removed.begin(), event.removed.end());
+  }
+  return event;
+}
+
 PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model) {
   PreparedUpdate p;
   p.session = event.session;

@@ -44,7 +44,7 @@ struct SessionReport {
 };
 
 // What one deformation step did.
-struct StepOutcome {
+struct StepResult {
   std::uint64_t seq = 0;       // 1-based step number in this session
   IndexList moved;             // rows whose attributes changed (moved or split), ascending
   IdList inserted;             // ids of surfels inserted by resampling (appended rows)
@@ -85,7 +85,7 @@ class EditSession {
   IdList resolve(const RegionSpec& spec, const std::string& field) const;
   // Applies one step, then resampling and collision detection as configured; requires regions.
   // Bumps the version.
-  StepOutcome deform(const DeformParams& params);
+  StepResult deform(const DeformParams& params);
 
   // Session settings (collision algorithm, heuristics, resampling); validated before anything
   // changes. Re-initialises the detector from the current model when regions are set (its

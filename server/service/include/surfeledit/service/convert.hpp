@@ -10,6 +10,7 @@
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/types.hpp"
+#include "surfeledit/service/command.hpp"
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/update.hpp"
 
@@ -44,6 +45,17 @@ std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std
 // A core setting in the reply's form (kind from the value's type).
 Setting to_reply(const NamedSetting& s);
 
+// The request as a Command: its header, and its op's argument decoded and validated (errors are
+// kept in the Command's `missing` / `invalid`, not thrown, so the handler reports them in order).
+// A LoadChunk argument points into `request`, which must outlive the Command.
+Command decode(const surfeledit_proto_Request& request);
+
+// A core step result in the reply's form, as step number `seq`. Throws std::logic_error when its
+// depths do not match its colliding ids.
+StepResult to_reply(const surfeledit::StepResult& result, std::uint64_t seq);
+// Every counter of the core's collision stats.
+CollisionStatsInfo to_reply(const CollisionStats& stats);
+
 // Presents a Reply as a generated C sample whose buffers point into the Reply (no copy).
 // The Reply must outlive the view and stay unchanged; the view is for dds_write only.
 class ReplyView {
@@ -62,7 +74,7 @@ class ReplyView {
   std::vector<surfeledit_proto_Setting> settings_;
   surfeledit_proto_ServerInfo server_info_{};
   std::vector<char*> session_names_;
-  surfeledit_proto_StepInfo step_{};
+  surfeledit_proto_StepResult step_{};
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's

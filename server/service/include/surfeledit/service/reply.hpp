@@ -72,9 +72,13 @@ struct CollisionStatsInfo {
   std::uint64_t colliding = 0;   // surfels reported colliding
   double detect_ms = 0.0;        // this step's detection time
   double preprocess_ms = 0.0;    // last (re)initialisation of the detector
+  std::uint64_t nv = 0;          // hierarchies: bounding-volume overlap tests this step; 0 without
+  std::uint64_t np = 0;          // hierarchies: candidates handed to the narrow phase this step; 0 without
+  std::uint64_t nu = 0;          // hierarchies: boxes updated this step (refit, insertion); 0 without
 };
 
-struct StepInfo {
+// What one deformation step did (proto StepResult; the core's is surfeledit::StepResult).
+struct StepResult {
   std::uint64_t seq = 0;    // 1-based step number in the session
   std::uint64_t moved = 0;  // surfels displaced
   std::array<double, 3> center{};  // rotation centre used, model units
@@ -96,7 +100,7 @@ struct Reply {
   std::optional<StatePage> state;
   std::optional<SessionInfo> session_info;
   std::optional<ServerInfo> server_info;
-  std::optional<StepInfo> step;
+  std::optional<StepResult> step;
 };
 
 }  // namespace surfeledit::service

@@ -31,6 +31,17 @@ struct UpdateEvent {
   IdList colliding;              // deform: every colliding id after the step, ascending
 };
 
+// The one way an event starts: the session, its version after the change and the cause; the
+// caller fills what the cause carries (rows, step, collision state).
+UpdateEvent make_update_event(const std::string& session, std::uint64_t version, const std::string& cause);
+// An event carrying what changed in `s` since version `since` (rows of ids changed or inserted,
+// removed ids; the whole model when it was replaced since), at its current version, cause empty.
+// Throws std::logic_error when a changed id has no row.
+UpdateEvent changes_event(const EditSession& s, const std::string& session, std::uint64_t since);
+// Appends the rows of `ids` (every one must be in `model`; std::logic_error naming them `what`
+// otherwise) to `rows`.
+void append_rows(IndexList& rows, const SurfelModel& model, const IdList& ids, const char* what);
+
 // Everything the samples of one change carry, copied out of the model.
 struct PreparedUpdate {
   std::string session;

@@ -1,0 +1,58 @@
+// Handler functions of the edit ops: SET_REGIONS, DEFORM, CONFIGURE, REMOVE.
+#include <algorithm>
+
+#include "handler_ops.hpp"
+#include "surfeledit/core/util.hpp"
+
+namespace surfeledit::service {
+
+void serve_set_regions(OpContext& c) {
+  const auto& args = args_of<SetRegionsArgs>(c);
+  EditSession& s = *c.entry->session;
+  prefixed("set_regions", [&] { s.set_regions(args.zero, args.one); });
+  c.updates.push_back(make_update_event(c.command.session, s.version(), "regions"));
+}
+
+void serve_deform(OpContext& c) {
+  const auto& params = args_of<DeformParams>(c);
+  SessionEntry& entry = *c.entry;
+  const auto t0 = std::chrono::steady_clock::now();
+  surfeledit::StepResult result = prefixed("deform", [&] { return entry.session->deform(params); });
+  c.reply.timings.emplace_back("apply", ms_since(t0));
+  if (result.detected) c.reply.timings.emplace_back("detect", result.stats.detect_ms);
+  if (!result.inserted.empty()) c.reply.timings.emplace_back("resample", result.resample_ms);
+  entry.steps += 1;
+  const std::uint64_t seq = result.seq > 0 ? result.seq : entry.steps;
+  StepResult step = to_reply(result, seq);
+  UpdateEvent event = make_update_event(c.command.session, entry.session->version(), "deform");
+  event.step = seq;
+  event.detected = result.detected;
+  event.colliding = std::move(result.colliding);
+  // Changed rows: moved or split ones plus the rows of inserted surfels (new ids are changes too).
+  event.rows = std::move(result.moved);
+  if (!result.inserted.empty()) {
+    append_rows(event.rows, entry.session->model(), result.inserted, "inserted");
+    std::sort(event.rows.begin(), event.rows.end());
+    event.rows.erase(std::unique(event.rows.begin(), event.rows.end()), event.rows.end());
+  }
+  c.reply.step = std::move(step);
+  c.updates.push_back(std::move(event));
+}
+
+void serve_configure(OpContext& c) {
+  // Errors keep the core's field: the setting's name (PROTOCOL.md).
+  c.entry->session->configure(args_of<ConfigureArgs>(c).settings);
+}
+
+void serve_remove(OpContext& c) {
+  EditSession& s = *c.entry->session;
+  const std::uint64_t before = s.version();
+  prefixed("remove", [&] { s.remove(args_of<RemoveArgs>(c).ids); });
+  if (s.version() != before) {
+    UpdateEvent event = changes_event(s, c.command.session, before);
+    event.cause = "remove";
+    c.updates.push_back(std::move(event));
+  }
+}
+
+}  // namespace surfeledit::service

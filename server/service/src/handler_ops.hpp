@@ -1,0 +1,102 @@
+// The handler's op table (FCL's collision function matrix is the model): one row per op with
+// its handler function and what Handler::handle does around it. A handler function serves a
+// decoded Command whose argument is present and valid and whose client is attached when its row
+// says so; it throws surfeledit::Error for what it rejects, before changing anything.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "surfeledit/service/command.hpp"
+#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/handler.hpp"
+#include "surfeledit/service/reply.hpp"
+#include "surfeledit/service/request_cache.hpp"
+#include "surfeledit/service/session_registry.hpp"
+#include "surfeledit/service/update.hpp"
+#include "surfeledit/service/upload.hpp"
+
+namespace surfeledit::service {
+
+// What the handler keeps between requests.
+struct HandlerState {
+  explicit HandlerState(const HandlerConfig& c);
+
+  HandlerConfig config;
+  SessionRegistry sessions;
+  UploadTable uploads;        // uploads in progress
+  RequestCache cache;         // replies for repeated request ids
+  std::chrono::steady_clock::time_point started;  // for the uptime
+};
+
+// One request being served.
+struct OpContext {
+  HandlerState& state;
+  const Command& command;
+  SessionEntry* entry;                // the session the reply tail describes; nullptr: none (set by the op
+                                      // for ops that attach the client themselves, cleared when it is dropped)
+  Reply& reply;
+  std::vector<UpdateEvent>& updates;  // appended: the changes to publish
+};
+
+using OpHandler = void (*)(OpContext&);
+
+// What the reply tail (fill_reply_tail) adds after the handler function returned.
+enum class ReplyTail {
+  Version,                // the session's version
+  VersionAndSessionInfo,  // and its SessionInfo
+};
+
+// One row of the op table.
+struct OpEntry {
+  const char* name = nullptr;           // for logs: "OP_DEFORM"
+  OpHandler serve = nullptr;            // nullptr: no such op
+  bool attached = true;                 // the client must be attached to the session before `serve`
+  ReplyTail tail = ReplyTail::Version;  // added when the context still has a session afterwards
+  bool cached = true;                   // stored for repeats (false: recomputed, e.g. GET_STATE pages)
+};
+
+// The row of `op`, or nullptr for a value outside the table.
+const OpEntry* find_op(Op op);
+
+// The reply tail: the session's version, and its SessionInfo when `tail` says so.
+void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail);
+
+// The session's description for replies (session_ops.cpp).
+SessionInfo session_info(const SessionEntry& entry);
+
+// Handler functions, one per op: session_ops.cpp, load_ops.cpp, edit_ops.cpp, state_ops.cpp.
+void serve_info(OpContext& c);
+void serve_open_session(OpContext& c);
+void serve_join_session(OpContext& c);
+void serve_close_session(OpContext& c);
+void serve_load_begin(OpContext& c);
+void serve_load_chunk(OpContext& c);
+void serve_load_commit(OpContext& c);
+void serve_load_file(OpContext& c);
+void serve_set_regions(OpContext& c);
+void serve_deform(OpContext& c);
+void serve_get_state(OpContext& c);
+void serve_configure(OpContext& c);
+void serve_remove(OpContext& c);
+
+// The op's argument (the Command's variant holds it once find_op's row is served).
+template <typename Args>
+const Args& args_of(const OpContext& c) {
+  return std::get<Args>(c.command.args);
+}
+
+// Runs `f`, re-throwing core errors with their field under `prefix` (see rethrow_prefixed).
+template <typename F>
+auto prefixed(const std::string& prefix, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    rethrow_prefixed(e, prefix);
+  }
+}
+
+}  // namespace surfeledit::service

@@ -1,0 +1,47 @@
+// The request handler driven with generated C requests, decoded as the service decodes them.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "service_test_support.hpp"
+#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/handler.hpp"
+
+namespace surfeledit::service::test {
+
+class HandlerTest : public ::testing::Test {
+ protected:
+  Handler handler{HandlerConfig{4, 1000, 1}};
+  RequestBuilder rb;
+  std::vector<UpdateEvent> updates;
+  std::uint64_t next_id = 1;
+
+  std::shared_ptr<const Reply> send(surfeledit_proto_Op op, std::uint64_t id = 0) {
+    return handler.handle(decode(rb.make(op, id ? id : next_id++)), updates);
+  }
+
+  // Opens session "s" and uploads n sphere surfels in chunks of 4.
+  void load(std::size_t n) {
+    ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Ok);
+    rb.load_begin.total = n;
+    rb.load_begin.has_radii = true;
+    ASSERT_EQ(send(surfeledit_proto_OP_LOAD_BEGIN)->status, Status::Ok);
+    for (std::size_t first = 0; first < n; first += 4) {
+      ChunkArrays c = sphere_chunk(std::min<std::size_t>(4, n - first), first, n);
+      rb.load_chunk.offset = first;
+      point_to(rb.load_chunk.positions, c.positions);
+      point_to(rb.load_chunk.normals, c.normals);
+      point_to(rb.load_chunk.radii, c.radii);
+      const auto r = send(surfeledit_proto_OP_LOAD_CHUNK);
+      ASSERT_EQ(r->status, Status::Ok) << r->field << ": " << r->message;
+    }
+    const auto r = send(surfeledit_proto_OP_LOAD_COMMIT);
+    ASSERT_EQ(r->status, Status::Ok) << r->field << ": " << r->message;
+  }
+};
+
+}  // namespace surfeledit::service::test
