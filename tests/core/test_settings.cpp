@@ -191,17 +191,17 @@ TEST(Settings, TableDescribesEverySetting) {
     EXPECT_EQ(listed[i].name, spec.name);
     EXPECT_EQ(listed[i].value, default_value(spec)) << spec.name;
     EXPECT_GT(std::string(spec.doc).size(), 5u) << spec.name;
-    EXPECT_EQ(spec.kind == SettingKind::Text, !spec.choices.empty()) << spec.name;
+    EXPECT_EQ(spec.kind == SettingType::Text, !spec.choices.empty()) << spec.name;
     for (std::size_t j = 0; j < i; ++j) EXPECT_STRNE(spec.name, specs[j].name);
   }
   const auto threads = std::find_if(specs.begin(), specs.end(), [](const SettingSpec& x) {
     return std::string(x.name) == "threads";
   });
   ASSERT_NE(threads, specs.end());
-  EXPECT_EQ(threads->kind, SettingKind::Integer);
+  EXPECT_EQ(threads->kind, SettingType::Integer);
   EXPECT_EQ(threads->min, 0.0);
   EXPECT_TRUE(std::isinf(threads->max));
-  EXPECT_STREQ(enum_name(SettingKind::Integer), "integer");
+  EXPECT_STREQ(enum_name(SettingType::Integer), "integer");
 }
 
 }  // namespace

@@ -36,13 +36,13 @@ const auto& member(const SessionSettings& s) {
 }
 
 template <typename T>
-constexpr SettingKind kind_of() {
-  if constexpr (std::is_enum_v<T>) return SettingKind::Text;
-  else if constexpr (std::is_same_v<T, bool>) return SettingKind::Bool;
-  else if constexpr (std::is_same_v<T, int>) return SettingKind::Integer;
+constexpr SettingType kind_of() {
+  if constexpr (std::is_enum_v<T>) return SettingType::Text;
+  else if constexpr (std::is_same_v<T, bool>) return SettingType::Bool;
+  else if constexpr (std::is_same_v<T, int>) return SettingType::Integer;
   else {
     static_assert(std::is_same_v<T, double>, "a setting is an enum, bool, int or double");
-    return SettingKind::Number;
+    return SettingType::Number;
   }
 }
 
@@ -144,20 +144,8 @@ std::string join(const std::vector<const char*>& names) {
   return out;
 }
 
-// "an integer in [1, 64]", "a finite number > 1", "one of none, simple, ...".
-std::string expected(const SettingSpec& spec) {
-  if (spec.kind == SettingKind::Bool) return "a bool";
-  if (spec.kind == SettingKind::Text) return "one of " + join(spec.choices);
-  std::string out = spec.kind == SettingKind::Integer ? "an integer" : "a finite number";
-  const bool lo = std::isfinite(spec.min), hi = std::isfinite(spec.max);
-  if (lo && hi) return out + " in " + (spec.min_open ? "(" : "[") + show(spec.min) + ", " + show(spec.max) + "]";
-  if (lo) return out + (spec.min_open ? " > " : " >= ") + show(spec.min);
-  if (hi) return out + " <= " + show(spec.max);
-  return out;
-}
-
 [[noreturn]] void refuse(const SettingSpec& spec, const SettingValue& got) {
-  throw Error(ErrorCode::InvalidArgument, spec.name, "expects " + expected(spec) + ", got " + show(got));
+  throw Error(ErrorCode::InvalidArgument, spec.name, "expects " + expected_value(spec) + ", got " + show(got));
 }
 
 bool in_range(const SettingSpec& spec, double v) {
@@ -169,11 +157,11 @@ SettingValue check_setting(const SettingSpec& spec, const SettingValue& v) {
   const double* d = std::get_if<double>(&v);
   const std::int64_t* i = std::get_if<std::int64_t>(&v);
   switch (spec.kind) {
-    case SettingKind::Number:
+    case SettingType::Number:
       if (!d && !i) refuse(spec, v);
       if (!in_range(spec, d ? *d : static_cast<double>(*i))) refuse(spec, v);
       return d ? *d : static_cast<double>(*i);
-    case SettingKind::Integer: {
+    case SettingType::Integer: {
       if (!d && !i) refuse(spec, v);
       const double x = d ? *d : static_cast<double>(*i);
       if (x != std::floor(x) || !in_range(spec, x) || x < std::numeric_limits<int>::min() ||
@@ -182,10 +170,10 @@ SettingValue check_setting(const SettingSpec& spec, const SettingValue& v) {
       }
       return static_cast<std::int64_t>(x);
     }
-    case SettingKind::Bool:
+    case SettingType::Bool:
       if (!std::holds_alternative<bool>(v)) refuse(spec, v);
       return v;
-    case SettingKind::Text: {
+    case SettingType::Text: {
       const std::string* text = std::get_if<std::string>(&v);
       if (!text) refuse(spec, v);
       for (const char* c : spec.choices)
@@ -234,6 +222,17 @@ const std::vector<SettingSpec>& setting_specs() {
 }
 
 SettingValue default_value(const SettingSpec& spec) { return spec.get(SessionSettings{}); }
+
+std::string expected_value(const SettingSpec& spec) {
+  if (spec.kind == SettingType::Bool) return "a bool";
+  if (spec.kind == SettingType::Text) return "one of " + join(spec.choices);
+  std::string out = spec.kind == SettingType::Integer ? "an integer" : "a finite number";
+  const bool lo = std::isfinite(spec.min), hi = std::isfinite(spec.max);
+  if (lo && hi) return out + " in " + (spec.min_open ? "(" : "[") + show(spec.min) + ", " + show(spec.max) + "]";
+  if (lo) return out + (spec.min_open ? " > " : " >= ") + show(spec.min);
+  if (hi) return out + " <= " + show(spec.max);
+  return out;
+}
 
 SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes) {
   SessionSettings next = current;

@@ -44,23 +44,23 @@ struct NamedSetting {
 };
 
 // What a setting holds (the protocol's SettingKind, the Python type).
-enum class SettingKind : std::uint8_t {
+enum class SettingType : std::uint8_t {
   Number = 0,   // finite double (model units where it is a length)
   Integer = 1,  // int
   Bool = 2,
   Text = 3,     // one of the names of an enum (SettingSpec::choices)
 };
-constexpr EnumNames<SettingKind, 4> names_of(SettingKind) {
-  return {{{SettingKind::Number, "number"},
-           {SettingKind::Integer, "integer"},
-           {SettingKind::Bool, "bool"},
-           {SettingKind::Text, "text"}}};
+constexpr EnumNames<SettingType, 4> names_of(SettingType) {
+  return {{{SettingType::Number, "number"},
+           {SettingType::Integer, "integer"},
+           {SettingType::Bool, "bool"},
+           {SettingType::Text, "text"}}};
 }
 
 // One row of the settings table.
 struct SettingSpec {
   const char* name;                  // as in OP_CONFIGURE and the Python keywords
-  SettingKind kind;                  // what the value is
+  SettingType kind;                  // what the value is
   const char* doc;                   // one line, with units
   double min;                        // Number/Integer: smallest accepted value (-inf: none)
   double max;                        // Number/Integer: largest accepted value (+inf: none)
@@ -75,6 +75,10 @@ const std::vector<SettingSpec>& setting_specs();
 
 // The value of `spec` in a default-constructed SessionSettings.
 SettingValue default_value(const SettingSpec& spec);
+
+// What `spec` accepts, as its error messages say it: "an integer >= 1", "a finite number in [0, 1]",
+// "a bool", "one of lite, full".
+std::string expected_value(const SettingSpec& spec);
 
 // Applies `changes` to a copy of `current` and validates the result. Throws InvalidArgument naming
 // the setting (field = its name) for an unknown name, a value of the wrong kind (e.g. text for
