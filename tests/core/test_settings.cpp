@@ -1,19 +1,27 @@
 // Settings by name: kinds, validation, nothing changes on error, the listing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "surfeledit/core/settings.hpp"
 
 namespace surfeledit {
 namespace {
 
-void expect_error(const SessionSettings& current, const std::vector<NamedSetting>& changes, const std::string& field) {
+// Expects InvalidArgument naming `field`; returns the message (what()).
+std::string expect_error(const SessionSettings& current, const std::vector<NamedSetting>& changes,
+                         const std::string& field) {
   try {
     apply_settings(current, changes);
-    FAIL() << "no error for " << field;
+    ADD_FAILURE() << "no error for " << field;
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
-    EXPECT_EQ(e.field(), field);
+    EXPECT_EQ(e.field(), field) << e.what();
+    return e.what();
   }
+  return "";
 }
 
 TEST(Settings, DefaultsAndListingOrder) {
@@ -29,7 +37,7 @@ TEST(Settings, DefaultsAndListingOrder) {
                                              "max_level", "min_leaf_extent", "inflation", "knn_eps", "simplify",
                                              "cluster_size", "max_variation", "member_margin"}));
   EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
-  EXPECT_EQ(std::get<double>(d[3].value), 10.0);
+  EXPECT_EQ(std::get<std::int64_t>(d[3].value), 10);  // integers are listed as integers
   // The listing applied to defaults is the identity.
   const SessionSettings back = apply_settings(SessionSettings{}, d);
   EXPECT_EQ(back.collision.boundary_n, 10);
@@ -118,6 +126,82 @@ TEST(Settings, SimplificationAndApproximateSearch) {
                "simplify");
   // With no detection at all, simplify is inert and accepted.
   EXPECT_NO_THROW(apply_settings(s, {{"algorithm", std::string("none")}, {"simplify", std::string("hierarchical")}}));
+}
+
+// One message style for every setting: kind and range, enum names, unknown settings.
+TEST(Settings, UniformMessages) {
+  const SessionSettings s;
+  EXPECT_EQ(expect_error(s, {{"boundary_n", 2.5}}, "boundary_n"), "boundary_n: expects an integer >= 1, got 2.5");
+  EXPECT_EQ(expect_error(s, {{"boundary_n", std::string("ten")}}, "boundary_n"),
+            "boundary_n: expects an integer >= 1, got 'ten'");
+  EXPECT_EQ(expect_error(s, {{"max_level", std::int64_t{65}}}, "max_level"),
+            "max_level: expects an integer in [0, 64], got 65");
+  EXPECT_EQ(expect_error(s, {{"split_threshold", 1.0}}, "split_threshold"),
+            "split_threshold: expects a finite number > 1, got 1");
+  EXPECT_EQ(expect_error(s, {{"threshold", std::numeric_limits<double>::infinity()}}, "threshold"),
+            "threshold: expects a finite number, got inf");
+  EXPECT_EQ(expect_error(s, {{"boundary", 1.0}}, "boundary"), "boundary: expects a bool, got 1");
+  EXPECT_EQ(expect_error(s, {{"algorithm", std::string("x")}}, "algorithm"),
+            "algorithm: unknown value 'x'; expected one of none, simple, improved, temporal, robust");
+  EXPECT_EQ(expect_error(s, {{"sat", true}}, "sat"), "sat: expects one of lite, full, got true");
+  const std::string unknown = expect_error(s, {{"foo", 1.0}}, "foo");
+  EXPECT_EQ(unknown.rfind("foo: unknown setting 'foo'; known: algorithm, threshold, boundary, ", 0), 0u) << unknown;
+  EXPECT_NE(unknown.find(", member_margin"), std::string::npos) << unknown;
+  // Every enum parses and prints through one name table.
+  EXPECT_EQ(parse_blend("linear"), Blend::Linear);
+  EXPECT_STREQ(to_string(bvh::UpdateMode::TopDown), "top_down");
+  EXPECT_STREQ(to_string(static_cast<ZeroHierarchy>(99)), "unknown");
+  try {
+    parse_blend("sharp", "deform.blend");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "deform.blend");
+    EXPECT_STREQ(e.what(), "deform.blend: unknown value 'sharp'; expected one of smooth, quadratic, linear");
+  }
+}
+
+// Integer settings take integers, and integral numbers from older clients; numbers take integers.
+TEST(Settings, IntegersAndNumbers) {
+  const SessionSettings s;
+  const SessionSettings t = apply_settings(
+      s, {{"boundary_n", std::int64_t{12}}, {"cluster_size", 7.0}, {"threshold", std::int64_t{2}}});
+  EXPECT_EQ(t.collision.boundary_n, 12);
+  EXPECT_EQ(t.simplify.cluster_size, 7);
+  EXPECT_EQ(t.collision.threshold, 2.0);
+  expect_error(s, {{"threads", std::int64_t{1} << 40}}, "threads");  // beyond int
+  expect_error(s, {{"boundary_n", true}}, "boundary_n");
+  for (const NamedSetting& d : describe(t)) {
+    const SettingSpec* spec = nullptr;
+    for (const SettingSpec& row : setting_specs())
+      if (d.name == row.name) spec = &row;
+    ASSERT_NE(spec, nullptr) << d.name;
+    const std::size_t index[] = {0, 1, 2, 3};  // variant index by kind: double, int64, bool, string
+    EXPECT_EQ(d.value.index(), index[static_cast<int>(spec->kind)]) << d.name;
+  }
+}
+
+// The table: unique names, every text setting with its names, defaults = SessionSettings{}.
+TEST(Settings, TableDescribesEverySetting) {
+  const auto& specs = setting_specs();
+  EXPECT_EQ(specs.size(), 26u);
+  const auto listed = describe(SessionSettings{});
+  ASSERT_EQ(listed.size(), specs.size());
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const SettingSpec& spec = specs[i];
+    EXPECT_EQ(listed[i].name, spec.name);
+    EXPECT_EQ(listed[i].value, default_value(spec)) << spec.name;
+    EXPECT_GT(std::string(spec.doc).size(), 5u) << spec.name;
+    EXPECT_EQ(spec.kind == SettingType::Text, !spec.choices.empty()) << spec.name;
+    for (std::size_t j = 0; j < i; ++j) EXPECT_STRNE(spec.name, specs[j].name);
+  }
+  const auto threads = std::find_if(specs.begin(), specs.end(), [](const SettingSpec& x) {
+    return std::string(x.name) == "threads";
+  });
+  ASSERT_NE(threads, specs.end());
+  EXPECT_EQ(threads->kind, SettingType::Integer);
+  EXPECT_EQ(threads->min, 0.0);
+  EXPECT_TRUE(std::isinf(threads->max));
+  EXPECT_STREQ(enum_name(SettingType::Integer), "integer");
 }
 
 }  // namespace

@@ -16,27 +16,6 @@ using detail::make_robust_detector;
 using detail::make_simple_detector;
 using detail::make_temporal_detector;
 
-CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field) {
-  if (name == "none") return CollisionAlgorithm::None;
-  if (name == "simple") return CollisionAlgorithm::Simple;
-  if (name == "improved") return CollisionAlgorithm::Improved;
-  if (name == "temporal") return CollisionAlgorithm::Temporal;
-  if (name == "robust") return CollisionAlgorithm::Robust;
-  throw Error(ErrorCode::InvalidArgument, field,
-              "unknown collision algorithm '" + name + "' (expected none, simple, improved, temporal or robust)");
-}
-
-const char* to_string(CollisionAlgorithm algorithm) {
-  switch (algorithm) {
-    case CollisionAlgorithm::None: return "none";
-    case CollisionAlgorithm::Simple: return "simple";
-    case CollisionAlgorithm::Improved: return "improved";
-    case CollisionAlgorithm::Temporal: return "temporal";
-    case CollisionAlgorithm::Robust: return "robust";
-  }
-  return "unknown";
-}
-
 void validate(const CollisionParams& p) {
   switch (p.algorithm) {
     case CollisionAlgorithm::None:

@@ -38,44 +38,6 @@
 
 namespace surfeledit {
 
-ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field) {
-  if (name == "none") return ZeroHierarchy::None;
-  if (name == "aabb") return ZeroHierarchy::Aabb;
-  if (name == "obb") return ZeroHierarchy::Obb;
-  if (name == "sphere") return ZeroHierarchy::Sphere;
-  if (name == "sphere_hierarchical") return ZeroHierarchy::SphereHierarchical;
-  if (name == "sphere_incremental") return ZeroHierarchy::SphereIncremental;
-  throw Error(ErrorCode::InvalidArgument, field,
-              "unknown zero hierarchy '" + name +
-                  "' (expected none, aabb, obb, sphere, sphere_hierarchical or sphere_incremental)");
-}
-
-DeformableHierarchy parse_deformable_hierarchy(const std::string& name, const std::string& field) {
-  if (name == "none") return DeformableHierarchy::None;
-  if (name == "aabb") return DeformableHierarchy::Aabb;
-  throw Error(ErrorCode::InvalidArgument, field, "unknown deformable hierarchy '" + name + "' (expected none or aabb)");
-}
-
-const char* to_string(ZeroHierarchy kind) {
-  switch (kind) {
-    case ZeroHierarchy::None: return "none";
-    case ZeroHierarchy::Aabb: return "aabb";
-    case ZeroHierarchy::Obb: return "obb";
-    case ZeroHierarchy::Sphere: return "sphere";
-    case ZeroHierarchy::SphereHierarchical: return "sphere_hierarchical";
-    case ZeroHierarchy::SphereIncremental: return "sphere_incremental";
-  }
-  return "unknown";
-}
-
-const char* to_string(DeformableHierarchy kind) {
-  switch (kind) {
-    case DeformableHierarchy::None: return "none";
-    case DeformableHierarchy::Aabb: return "aabb";
-  }
-  return "unknown";
-}
-
 void validate(const HierarchyParams& h, const CollisionParams& c) {
   bvh::validate(h.tree);
   if (h.zero == ZeroHierarchy::SphereHierarchical || h.zero == ZeroHierarchy::SphereIncremental) validate(h.clusters);

@@ -82,23 +82,6 @@ struct R3 {
 
 }  // namespace
 
-Blend parse_blend(const std::string& name, const std::string& field) {
-  if (name == "smooth") return Blend::Smooth;
-  if (name == "quadratic") return Blend::Quadratic;
-  if (name == "linear") return Blend::Linear;
-  throw Error(ErrorCode::InvalidArgument, field,
-              "unknown blend '" + name + "' (expected smooth, quadratic or linear)");
-}
-
-const char* to_string(Blend blend) {
-  switch (blend) {
-    case Blend::Smooth: return "smooth";
-    case Blend::Quadratic: return "quadratic";
-    case Blend::Linear: return "linear";
-  }
-  return "unknown";
-}
-
 // smooth: beta = E(1 - l), E(x) = (x^2 - 1)^2, i.e. beta = l^2 (l - 2)^2; quadratic l^2; linear l.
 double blend_value(Blend blend, double l) {
   switch (blend) {

@@ -1,179 +1,254 @@
-// Session settings by name: kind checks, a validated copy, and the listing.
+// Session settings by name: the table (one row per setting), the checks every row gets from its
+// kind and range, a validated copy, and the listing.
 #include "surfeledit/core/settings.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 namespace surfeledit {
 
 namespace {
 
-const char* kind_of(const SettingValue& v) {
-  if (std::holds_alternative<double>(v)) return "number";
-  if (std::holds_alternative<bool>(v)) return "bool";
-  return "text";
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Accepted range of a Number/Integer row.
+struct Range {
+  double min = -kInf;     // smallest accepted value
+  double max = kInf;      // largest accepted value
+  bool min_open = false;  // min itself refused
+};
+Range at_least(double lo) { return {lo, kInf, false}; }
+Range above(double lo) { return {lo, kInf, true}; }
+Range within(double lo, double hi) { return {lo, hi, false}; }
+
+// The member of SessionSettings reached through the data-member pointers `Path`.
+template <auto... Path>
+auto& member(SessionSettings& s) {
+  return (s .* ... .* Path);
+}
+template <auto... Path>
+const auto& member(const SessionSettings& s) {
+  return (s .* ... .* Path);
 }
 
-[[noreturn]] void wrong_kind(const NamedSetting& s, const char* expected) {
-  throw Error(ErrorCode::InvalidArgument, s.name,
-              std::string("expects a ") + expected + ", got a " + kind_of(s.value));
-}
-
-double number(const NamedSetting& s) {
-  if (!std::holds_alternative<double>(s.value)) wrong_kind(s, "number");
-  const double v = std::get<double>(s.value);
-  if (!std::isfinite(v)) {
-    std::ostringstream msg;
-    msg << "must be finite, got " << v;
-    throw Error(ErrorCode::InvalidArgument, s.name, msg.str());
+template <typename T>
+constexpr SettingType kind_of() {
+  if constexpr (std::is_enum_v<T>) return SettingType::Text;
+  else if constexpr (std::is_same_v<T, bool>) return SettingType::Bool;
+  else if constexpr (std::is_same_v<T, int>) return SettingType::Integer;
+  else {
+    static_assert(std::is_same_v<T, double>, "a setting is an enum, bool, int or double");
+    return SettingType::Number;
   }
-  return v;
 }
 
-int integer(const NamedSetting& s) {
-  if (!std::holds_alternative<double>(s.value)) wrong_kind(s, "integer");
-  const double v = std::get<double>(s.value);
-  if (!std::isfinite(v) || v != std::floor(v) || v < std::numeric_limits<int>::min() ||
-      v > std::numeric_limits<int>::max()) {
-    std::ostringstream msg;
-    msg.precision(17);
-    msg << "expects an integer, got " << v;
-    throw Error(ErrorCode::InvalidArgument, s.name, msg.str());
+// One row: the setting `name` stored at SessionSettings.*Path; kind and choices follow its type.
+template <auto... Path>
+SettingSpec row(const char* name, const char* doc, Range range = {}) {
+  using T = std::decay_t<decltype(member<Path...>(std::declval<SessionSettings&>()))>;
+  SettingSpec spec{name, kind_of<T>(), doc, range.min, range.max, range.min_open, {}, nullptr, nullptr};
+  if constexpr (std::is_enum_v<T>) {
+    for (const EnumName<T>& n : enum_names<T>()) spec.choices.push_back(n.name);
   }
-  return static_cast<int>(v);
+  spec.get = [](const SessionSettings& s) -> SettingValue {
+    const T& v = member<Path...>(s);
+    if constexpr (std::is_enum_v<T>) return std::string(enum_name(v));
+    else if constexpr (std::is_same_v<T, int>) return std::int64_t{v};
+    else return v;
+  };
+  spec.set = [](SessionSettings& s, const SettingValue& v) {
+    T& m = member<Path...>(s);
+    if constexpr (std::is_enum_v<T>) m = parse_enum<T>(std::get<std::string>(v), "");
+    else if constexpr (std::is_same_v<T, int>) m = static_cast<int>(std::get<std::int64_t>(v));
+    else m = std::get<T>(v);
+  };
+  return spec;
 }
 
-bool flag(const NamedSetting& s) {
-  if (!std::holds_alternative<bool>(s.value)) wrong_kind(s, "bool");
-  return std::get<bool>(s.value);
+using S = SessionSettings;
+using C = CollisionParams;
+using H = HierarchyParams;
+using R = ResampleParams;
+using B = bvh::BvhParams;
+using P = SimplifyParams;
+
+std::vector<SettingSpec> make_table() {
+  return {
+      row<&S::collision, &C::algorithm>("algorithm", "collision detector (docs/algorithms.md §4)"),
+      row<&S::collision, &C::threshold>("threshold", "W of the inside test (p1 - p2) . n2 < W, model units"),
+      row<&S::collision, &C::boundary>("boundary", "boundary-surfel heuristic (simple/improved/temporal)"),
+      row<&S::collision, &C::boundary_n>("boundary_n", "neighbours looked at for boundary marks", at_least(1)),
+      row<&S::collision, &C::boundary_i>("boundary_i", "of those, the nearest zero surfels marked boundary "
+                                                       "(<= boundary_n)", at_least(1)),
+      row<&S::collision, &C::step_bound>("step_bound", "per-surfel step bound (simple/improved/temporal)"),
+      row<&S::collision, &C::sphere_margin>("sphere_margin", "temporal/robust spheres shrink by this many radii "
+                                                             "of the nearest surfel", at_least(0)),
+      row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all)", at_least(0)),
+      row<&S::resample, &R::enabled>("resample", "dynamic resampling of stretched surfels"),
+      row<&S::resample, &R::split_threshold>("split_threshold", "stretch ratio that splits a surfel", above(1)),
+      row<&S::hierarchy, &H::zero>("zero_hierarchy", "tree over the zero region (sphere_* = sphere cluster trees)"),
+      row<&S::hierarchy, &H::deformable>("deformable_hierarchy", "tree over the deformable region "
+                                                                 "(needs zero_hierarchy)"),
+      row<&S::hierarchy, &H::tree, &B::update>("update", "refit of the deformable tree"),
+      row<&S::hierarchy, &H::tree, &B::hybrid_f>("hybrid_f", "hybrid: fraction of the levels refit bottom-up",
+                                                 within(0, 1)),
+      row<&S::hierarchy, &H::sat>("sat", "OBB/AABB overlap test"),
+      row<&S::hierarchy, &H::extended>("extended", "narrow phase against the original model (needs robust)"),
+      row<&S::hierarchy, &H::tree, &B::leaf_max_surfels>("leaf_max_surfels", "a tree node with at most this many "
+                                                         "surfels is a leaf (>= leaf_min_surfels)", at_least(1)),
+      row<&S::hierarchy, &H::tree, &B::leaf_min_surfels>("leaf_min_surfels", "no split leaves a child with fewer "
+                                                         "surfels", at_least(1)),
+      row<&S::hierarchy, &H::tree, &B::max_level>("max_level", "deepest tree level (root = 0)", within(0, 64)),
+      row<&S::hierarchy, &H::tree, &B::min_leaf_extent>("min_leaf_extent", "leaf boxes at least this wide per "
+                                                        "axis, model units", at_least(0)),
+      row<&S::hierarchy, &H::tree, &B::inflation>("inflation", "margin added to a box when a refit recomputes "
+                                                  "it, model units", at_least(0)),
+      row<&S::collision, &C::knn_eps>("knn_eps", "approximate nearest-surfel search (0 = exact)", at_least(0)),
+      row<&S::simplify, &P::method>("simplify", "approximate detection on clusters of the deformable region "
+                                                "(simple/temporal/robust, no hierarchy)"),
+      row<&S::simplify, &P::cluster_size>("cluster_size", "surfels per cluster (1 = the exact result); also the "
+                                                          "leaves of sphere_* trees", at_least(1)),
+      row<&S::simplify, &P::max_variation>("max_variation", "largest surface variation of a cluster; also for "
+                                                            "sphere_* trees", within(0, 1)),
+      row<&S::simplify, &P::member_margin>("member_margin", "approximate detection: members tested within this "
+                                                            "many cluster radii of the zero region", at_least(0)),
+  };
 }
 
-const std::string& text(const NamedSetting& s) {
-  if (!std::holds_alternative<std::string>(s.value)) wrong_kind(s, "text");
-  return std::get<std::string>(s.value);
+// Shortest text that reads back as `v`.
+std::string show(double v) {
+  std::ostringstream out;
+  for (int precision = 6; precision <= 17; ++precision) {
+    out.str("");
+    out.precision(precision);
+    out << v;
+    if (!std::isfinite(v) || std::strtod(out.str().c_str(), nullptr) == v) break;
+  }
+  return out.str();
+}
+
+std::string show(const SettingValue& v) {
+  if (const double* d = std::get_if<double>(&v)) return show(*d);
+  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (const bool* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  return "'" + std::get<std::string>(v) + "'";
+}
+
+std::string join(const std::vector<const char*>& names) {
+  std::string out;
+  for (const char* n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+[[noreturn]] void refuse(const SettingSpec& spec, const SettingValue& got) {
+  throw Error(ErrorCode::InvalidArgument, spec.name, "expects " + expected_value(spec) + ", got " + show(got));
+}
+
+bool in_range(const SettingSpec& spec, double v) {
+  return std::isfinite(v) && (spec.min_open ? v > spec.min : v >= spec.min) && v <= spec.max;
+}
+
+// `v` as a value of spec's kind, or InvalidArgument naming the setting.
+SettingValue check_setting(const SettingSpec& spec, const SettingValue& v) {
+  const double* d = std::get_if<double>(&v);
+  const std::int64_t* i = std::get_if<std::int64_t>(&v);
+  switch (spec.kind) {
+    case SettingType::Number:
+      if (!d && !i) refuse(spec, v);
+      if (!in_range(spec, d ? *d : static_cast<double>(*i))) refuse(spec, v);
+      return d ? *d : static_cast<double>(*i);
+    case SettingType::Integer: {
+      if (!d && !i) refuse(spec, v);
+      const double x = d ? *d : static_cast<double>(*i);
+      if (x != std::floor(x) || !in_range(spec, x) || x < std::numeric_limits<int>::min() ||
+          x > std::numeric_limits<int>::max()) {
+        refuse(spec, v);
+      }
+      return static_cast<std::int64_t>(x);
+    }
+    case SettingType::Bool:
+      if (!std::holds_alternative<bool>(v)) refuse(spec, v);
+      return v;
+    case SettingType::Text: {
+      const std::string* text = std::get_if<std::string>(&v);
+      if (!text) refuse(spec, v);
+      for (const char* c : spec.choices)
+        if (*text == c) return v;
+      throw_unknown_name(spec.name, *text, join(spec.choices));
+    }
+  }
+  refuse(spec, v);
+}
+
+const SettingSpec& find_spec(const std::string& name) {
+  for (const SettingSpec& spec : setting_specs())
+    if (name == spec.name) return spec;
+  std::vector<const char*> known;
+  for (const SettingSpec& spec : setting_specs()) known.push_back(spec.name);
+  throw Error(ErrorCode::InvalidArgument, name, "unknown setting '" + name + "'; known: " + join(known));
+}
+
+// The checks that involve more than one setting, after every change is applied.
+void validate_combination(const SessionSettings& s) {
+  validate(s.collision);  // boundary_i <= boundary_n
+  validate(s.resample);
+  validate(s.hierarchy, s.collision);  // leaf sizes, deformable needs zero, extended needs robust, ...
+  validate(s.simplify);
+  // Approximate detection runs the algorithm's own per-surfel test on clusters, without a broad phase.
+  const CollisionAlgorithm algorithm = s.collision.algorithm;
+  if (s.simplify.method == SimplifyMethod::None || algorithm == CollisionAlgorithm::None) return;
+  if (algorithm == CollisionAlgorithm::Improved) {
+    throw Error(ErrorCode::InvalidArgument, "simplify",
+                std::string("simplify=") + to_string(s.simplify.method) +
+                    " cannot run with algorithm=improved (order-dependent spatial coherence); use simple, temporal or "
+                    "robust, or simplify=none");
+  }
+  if (s.hierarchy.any()) {
+    throw Error(ErrorCode::InvalidArgument, "simplify",
+                std::string("simplify=") + to_string(s.simplify.method) + " cannot run behind zero_hierarchy=" +
+                    to_string(s.hierarchy.zero) + " (approximate detection has no broad phase); set one of them to none");
+  }
 }
 
 }  // namespace
 
+const std::vector<SettingSpec>& setting_specs() {
+  static const std::vector<SettingSpec> table = make_table();
+  return table;
+}
+
+SettingValue default_value(const SettingSpec& spec) { return spec.get(SessionSettings{}); }
+
+std::string expected_value(const SettingSpec& spec) {
+  if (spec.kind == SettingType::Bool) return "a bool";
+  if (spec.kind == SettingType::Text) return "one of " + join(spec.choices);
+  std::string out = spec.kind == SettingType::Integer ? "an integer" : "a finite number";
+  const bool lo = std::isfinite(spec.min), hi = std::isfinite(spec.max);
+  if (lo && hi) return out + " in " + (spec.min_open ? "(" : "[") + show(spec.min) + ", " + show(spec.max) + "]";
+  if (lo) return out + (spec.min_open ? " > " : " >= ") + show(spec.min);
+  if (hi) return out + " <= " + show(spec.max);
+  return out;
+}
+
 SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes) {
   SessionSettings next = current;
-  CollisionParams& c = next.collision;
-  HierarchyParams& h = next.hierarchy;
-  for (const NamedSetting& s : changes) {
-    if (s.name == "algorithm") {
-      c.algorithm = parse_algorithm(text(s), s.name);
-    } else if (s.name == "threshold") {
-      c.threshold = number(s);
-    } else if (s.name == "boundary") {
-      c.boundary = flag(s);
-    } else if (s.name == "boundary_n") {
-      c.boundary_n = integer(s);
-    } else if (s.name == "boundary_i") {
-      c.boundary_i = integer(s);
-    } else if (s.name == "step_bound") {
-      c.step_bound = flag(s);
-    } else if (s.name == "sphere_margin") {
-      c.sphere_margin = number(s);
-    } else if (s.name == "threads") {
-      c.threads = integer(s);
-    } else if (s.name == "resample") {
-      next.resample.enabled = flag(s);
-    } else if (s.name == "split_threshold") {
-      next.resample.split_threshold = number(s);
-    } else if (s.name == "zero_hierarchy") {
-      h.zero = parse_zero_hierarchy(text(s), s.name);
-    } else if (s.name == "deformable_hierarchy") {
-      h.deformable = parse_deformable_hierarchy(text(s), s.name);
-    } else if (s.name == "update") {
-      h.tree.update = bvh::parse_update(text(s), s.name);
-    } else if (s.name == "hybrid_f") {
-      h.tree.hybrid_f = number(s);
-    } else if (s.name == "sat") {
-      h.sat = bvh::parse_sat(text(s), s.name);
-    } else if (s.name == "extended") {
-      h.extended = flag(s);
-    } else if (s.name == "leaf_max_surfels") {
-      h.tree.leaf_max_surfels = integer(s);
-    } else if (s.name == "leaf_min_surfels") {
-      h.tree.leaf_min_surfels = integer(s);
-    } else if (s.name == "max_level") {
-      h.tree.max_level = integer(s);
-    } else if (s.name == "min_leaf_extent") {
-      h.tree.min_leaf_extent = number(s);
-    } else if (s.name == "inflation") {
-      h.tree.inflation = number(s);
-    } else if (s.name == "knn_eps") {
-      c.knn_eps = number(s);
-    } else if (s.name == "simplify") {
-      next.simplify.method = parse_simplify_method(text(s), s.name);
-    } else if (s.name == "cluster_size") {
-      next.simplify.cluster_size = integer(s);
-    } else if (s.name == "max_variation") {
-      next.simplify.max_variation = number(s);
-    } else if (s.name == "member_margin") {
-      next.simplify.member_margin = number(s);
-    } else {
-      throw Error(ErrorCode::InvalidArgument, s.name,
-                  "unknown setting '" + s.name +
-                      "' (expected algorithm, threshold, boundary, boundary_n, boundary_i, step_bound, sphere_margin, threads, "
-                      "resample, split_threshold, zero_hierarchy, deformable_hierarchy, update, hybrid_f, sat, extended, "
-                      "leaf_max_surfels, leaf_min_surfels, max_level, min_leaf_extent, inflation, knn_eps, simplify, cluster_size, "
-                      "max_variation or member_margin)");
-    }
+  for (const NamedSetting& change : changes) {
+    const SettingSpec& spec = find_spec(change.name);
+    spec.set(next, check_setting(spec, change.value));
   }
-  validate(next.collision);
-  validate(next.resample);
-  validate(next.hierarchy, next.collision);
-  validate(next.simplify);
-  // Approximate detection runs the algorithm's own per-surfel test on clusters, without a broad phase.
-  if (next.simplify.method != SimplifyMethod::None && c.algorithm != CollisionAlgorithm::None) {
-    if (c.algorithm == CollisionAlgorithm::Improved) {
-      throw Error(ErrorCode::InvalidArgument, "simplify",
-                  std::string("simplify=") + to_string(next.simplify.method) +
-                      " cannot run with algorithm=improved (order-dependent spatial coherence); use simple, temporal or "
-                      "robust, or simplify=none");
-    }
-    if (h.any()) {
-      throw Error(ErrorCode::InvalidArgument, "simplify",
-                  std::string("simplify=") + to_string(next.simplify.method) + " cannot run behind zero_hierarchy=" +
-                      to_string(h.zero) + " (approximate detection has no broad phase); set one of them to none");
-    }
-  }
+  validate_combination(next);
   return next;
 }
 
-std::vector<NamedSetting> describe(const SessionSettings& s) {
-  const CollisionParams& c = s.collision;
-  const HierarchyParams& h = s.hierarchy;
-  return {
-      {"algorithm", std::string(to_string(c.algorithm))},
-      {"threshold", c.threshold},
-      {"boundary", c.boundary},
-      {"boundary_n", static_cast<double>(c.boundary_n)},
-      {"boundary_i", static_cast<double>(c.boundary_i)},
-      {"step_bound", c.step_bound},
-      {"sphere_margin", c.sphere_margin},
-      {"threads", static_cast<double>(c.threads)},
-      {"resample", s.resample.enabled},
-      {"split_threshold", s.resample.split_threshold},
-      {"zero_hierarchy", std::string(to_string(h.zero))},
-      {"deformable_hierarchy", std::string(to_string(h.deformable))},
-      {"update", std::string(bvh::to_string(h.tree.update))},
-      {"hybrid_f", h.tree.hybrid_f},
-      {"sat", std::string(bvh::to_string(h.sat))},
-      {"extended", h.extended},
-      {"leaf_max_surfels", static_cast<double>(h.tree.leaf_max_surfels)},
-      {"leaf_min_surfels", static_cast<double>(h.tree.leaf_min_surfels)},
-      {"max_level", static_cast<double>(h.tree.max_level)},
-      {"min_leaf_extent", h.tree.min_leaf_extent},
-      {"inflation", h.tree.inflation},
-      {"knn_eps", c.knn_eps},
-      {"simplify", std::string(to_string(s.simplify.method))},
-      {"cluster_size", static_cast<double>(s.simplify.cluster_size)},
-      {"max_variation", s.simplify.max_variation},
-      {"member_margin", s.simplify.member_margin},
-  };
+std::vector<NamedSetting> describe(const SessionSettings& settings) {
+  std::vector<NamedSetting> out;
+  out.reserve(setting_specs().size());
+  for (const SettingSpec& spec : setting_specs()) out.push_back({spec.name, spec.get(settings)});
+  return out;
 }
 
 }  // namespace surfeledit

@@ -152,6 +152,17 @@ DeformParams to_core(const surfeledit_proto_Deform& d, const std::string& field)
   return out;
 }
 
+namespace {
+
+// A SETTING_INT value: the integer when `number` is integral and fits, else the number itself (the core
+// then refuses it naming the setting, as it refuses 2.5 for an integer setting).
+SettingValue integral_or_number(double number) {
+  const bool integral = std::isfinite(number) && number == std::floor(number) && std::abs(number) < 0x1p63;
+  return integral ? SettingValue(static_cast<std::int64_t>(number)) : SettingValue(number);
+}
+
+}  // namespace
+
 std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std::string& field) {
   std::vector<NamedSetting> out;
   out.reserve(c.settings._length);
@@ -161,6 +172,7 @@ std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std
     named.name = str(s.name);
     switch (s.kind) {
       case surfeledit_proto_SETTING_NUMBER: named.value = s.number; break;
+      case surfeledit_proto_SETTING_INT: named.value = integral_or_number(s.number); break;
       case surfeledit_proto_SETTING_BOOL: named.value = static_cast<bool>(s.flag); break;
       case surfeledit_proto_SETTING_TEXT: named.value = str(s.text); break;
       default:
@@ -179,6 +191,9 @@ Setting to_reply(const NamedSetting& s) {
   if (const double* number = std::get_if<double>(&s.value)) {
     out.kind = SettingKind::Number;
     out.number = *number;
+  } else if (const std::int64_t* integer = std::get_if<std::int64_t>(&s.value)) {
+    out.kind = SettingKind::Int;
+    out.number = static_cast<double>(*integer);
   } else if (const bool* flag = std::get_if<bool>(&s.value)) {
     out.kind = SettingKind::Bool;
     out.flag = *flag;

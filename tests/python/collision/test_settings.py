@@ -64,3 +64,43 @@ def test_defaults_and_switching_keep_the_model(scenarios):
     b.configure(algorithm="simple")
     assert np.array_equal(b.session.positions(), pos)
     assert b.session.settings()["algorithm"] == "simple"
+
+
+def test_integers_come_back_as_int_and_messages_are_uniform():
+    s = core.EditSession()
+    s.configure(cluster_size=7, boundary_n=12, threshold=1)
+    got = s.settings()
+    assert type(got["cluster_size"]) is int and got["cluster_size"] == 7
+    assert type(got["boundary_n"]) is int and type(got["threads"]) is int
+    assert type(got["threshold"]) is float and got["threshold"] == 1.0
+    s.configure(boundary_n=8.0)  # an integral float is still accepted for an integer setting
+    assert s.settings()["boundary_n"] == 8
+    with pytest.raises(InvalidArgumentError, match=r"boundary_n: expects an integer >= 1, got 2\.5"):
+        s.configure(boundary_n=2.5)
+    with pytest.raises(InvalidArgumentError, match="algorithm: unknown value 'x'; expected one of none, simple,"):
+        s.configure(algorithm="x")
+    with pytest.raises(InvalidArgumentError, match="unknown setting 'foo'; known: algorithm, threshold,") as e:
+        s.configure(foo=1)
+    assert e.value.field == "foo"
+    with pytest.raises(InvalidArgumentError, match="cluster_size"):
+        s.configure(cluster_size=2**70)
+
+
+def test_setting_specs_describe_every_setting():
+    specs = core.setting_specs()
+    defaults = core.EditSession().settings()
+    assert [x["name"] for x in specs] == list(defaults)
+    kinds = {"number": float, "integer": int, "bool": bool, "text": str}
+    for x in specs:
+        assert set(x) == {"name", "kind", "default", "min", "max", "min_exclusive", "choices", "expects", "doc"}
+        assert type(x["default"]) is kinds[x["kind"]], x
+        assert x["default"] == defaults[x["name"]]
+        assert bool(x["choices"]) == (x["kind"] == "text")
+        assert x["doc"] and x["expects"]
+    by_name = {x["name"]: x for x in specs}
+    assert by_name["boundary_n"]["min"] == 1 and by_name["boundary_n"]["max"] is None
+    assert by_name["max_variation"]["min"] == 0.0 and by_name["max_variation"]["max"] == 1.0
+    assert by_name["split_threshold"]["min_exclusive"] and by_name["split_threshold"]["expects"] == "a finite number > 1"
+    assert by_name["algorithm"]["choices"] == ["none", "simple", "improved", "temporal", "robust"]
+    for x in specs:  # the keyword docs are built from the table
+        assert x["name"] + ": " + x["doc"] in core.EditSession.configure.__doc__

@@ -27,12 +27,4 @@ bool overlap_sat_full(const Obb& o, const Aabb& box) {
   return true;
 }
 
-SatMode parse_sat(const std::string& name, const std::string& field) {
-  if (name == "lite") return SatMode::Lite;
-  if (name == "full") return SatMode::Full;
-  throw Error(ErrorCode::InvalidArgument, field, "unknown SAT mode '" + name + "' (expected lite | full)");
-}
-
-const char* to_string(SatMode mode) { return mode == SatMode::Full ? "full" : "lite"; }
-
 }  // namespace surfeledit::bvh

@@ -1,4 +1,4 @@
-// Validation and names of the BVH parameters.
+// Validation of the BVH parameters.
 #include "surfeledit/core/bvh/params.hpp"
 
 #include <cmath>
@@ -24,23 +24,6 @@ void validate(const BvhParams& p) {
   if (!std::isfinite(p.inflation) || p.inflation < 0.0)
     bad("inflation", "must be finite and >= 0, got " + std::to_string(p.inflation));
   if (!(p.hybrid_f >= 0.0 && p.hybrid_f <= 1.0)) bad("hybrid_f", "must be in [0, 1], got " + std::to_string(p.hybrid_f));
-}
-
-UpdateMode parse_update(const std::string& name, const std::string& field) {
-  if (name == "bottom_up") return UpdateMode::BottomUp;
-  if (name == "top_down") return UpdateMode::TopDown;
-  if (name == "hybrid") return UpdateMode::Hybrid;
-  throw Error(ErrorCode::InvalidArgument, field,
-              "unknown update '" + name + "' (expected bottom_up | top_down | hybrid)");
-}
-
-const char* to_string(UpdateMode mode) {
-  switch (mode) {
-    case UpdateMode::BottomUp: return "bottom_up";
-    case UpdateMode::TopDown: return "top_down";
-    case UpdateMode::Hybrid: return "hybrid";
-  }
-  return "?";
 }
 
 }  // namespace surfeledit::bvh

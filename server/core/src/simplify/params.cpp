@@ -4,23 +4,6 @@
 
 namespace surfeledit {
 
-SimplifyMethod parse_simplify_method(const std::string& name, const std::string& field) {
-  if (name == "none") return SimplifyMethod::None;
-  if (name == "region_growing") return SimplifyMethod::RegionGrowing;
-  if (name == "hierarchical") return SimplifyMethod::Hierarchical;
-  throw Error(ErrorCode::InvalidArgument, field,
-              "unknown simplification '" + name + "' (none | region_growing | hierarchical)");
-}
-
-const char* to_string(SimplifyMethod method) {
-  switch (method) {
-    case SimplifyMethod::None: return "none";
-    case SimplifyMethod::RegionGrowing: return "region_growing";
-    case SimplifyMethod::Hierarchical: return "hierarchical";
-  }
-  return "?";
-}
-
 void validate(const SimplifyParams& params) {
   if (params.method != SimplifyMethod::None && params.method != SimplifyMethod::RegionGrowing &&
       params.method != SimplifyMethod::Hierarchical) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/hierarchy.hpp"
 
 namespace surfeledit {
@@ -25,9 +26,18 @@ enum class CollisionAlgorithm : std::uint8_t {
   Robust = 4,    // §4.4: parity of inside changes against the original model (the default)
 };
 
-// "none" | "simple" | "improved" | "temporal" | "robust"; throws InvalidArgument naming `field`.
-CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field = "algorithm");
-const char* to_string(CollisionAlgorithm algorithm);
+constexpr EnumNames<CollisionAlgorithm, 5> names_of(CollisionAlgorithm) {
+  return {{{CollisionAlgorithm::None, "none"},
+           {CollisionAlgorithm::Simple, "simple"},
+           {CollisionAlgorithm::Improved, "improved"},
+           {CollisionAlgorithm::Temporal, "temporal"},
+           {CollisionAlgorithm::Robust, "robust"}}};
+}
+// Throws InvalidArgument naming `field` for a name not in names_of.
+inline CollisionAlgorithm parse_algorithm(const std::string& name, const std::string& field = "algorithm") {
+  return parse_enum<CollisionAlgorithm>(name, field);
+}
+inline const char* to_string(CollisionAlgorithm algorithm) { return enum_name(algorithm); }
 
 struct CollisionParams {
   CollisionAlgorithm algorithm = CollisionAlgorithm::Robust;  // which detector

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit {
@@ -21,9 +22,14 @@ enum class Region : std::uint8_t {
 
 enum class Blend : std::uint8_t { Smooth = 0, Quadratic = 1, Linear = 2 };
 
-// Parses "smooth" | "quadratic" | "linear"; throws InvalidArgument naming `field` otherwise.
-Blend parse_blend(const std::string& name, const std::string& field = "blend");
-const char* to_string(Blend blend);
+constexpr EnumNames<Blend, 3> names_of(Blend) {
+  return {{{Blend::Smooth, "smooth"}, {Blend::Quadratic, "quadratic"}, {Blend::Linear, "linear"}}};
+}
+// Throws InvalidArgument naming `field` for a name not in names_of.
+inline Blend parse_blend(const std::string& name, const std::string& field = "blend") {
+  return parse_enum<Blend>(name, field);
+}
+inline const char* to_string(Blend blend) { return enum_name(blend); }
 // beta(lambda) and its derivative d beta / d lambda, for lambda in [0, 1].
 double blend_value(Blend blend, double lambda);
 double blend_derivative(Blend blend, double lambda);

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "surfeledit/core/bvh/overlap.hpp"
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/bvh/params.hpp"
 #include "surfeledit/core/simplify/params.hpp"
 
@@ -34,13 +35,27 @@ enum class ZeroHierarchy : std::uint8_t {
 // Box kind of the tree over the deformable region (AABB only: it is refit every step).
 enum class DeformableHierarchy : std::uint8_t { None = 0, Aabb = 1 };
 
-// "none" | "aabb" | "obb" | "sphere" | "sphere_hierarchical" | "sphere_incremental"; throws InvalidArgument naming `field`.
-ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field = "zero_hierarchy");
-// "none" | "aabb"; throws InvalidArgument naming `field`.
-DeformableHierarchy parse_deformable_hierarchy(const std::string& name,
-                                               const std::string& field = "deformable_hierarchy");
-const char* to_string(ZeroHierarchy kind);
-const char* to_string(DeformableHierarchy kind);
+constexpr EnumNames<ZeroHierarchy, 6> names_of(ZeroHierarchy) {
+  return {{{ZeroHierarchy::None, "none"},
+           {ZeroHierarchy::Aabb, "aabb"},
+           {ZeroHierarchy::Obb, "obb"},
+           {ZeroHierarchy::Sphere, "sphere"},
+           {ZeroHierarchy::SphereHierarchical, "sphere_hierarchical"},
+           {ZeroHierarchy::SphereIncremental, "sphere_incremental"}}};
+}
+constexpr EnumNames<DeformableHierarchy, 2> names_of(DeformableHierarchy) {
+  return {{{DeformableHierarchy::None, "none"}, {DeformableHierarchy::Aabb, "aabb"}}};
+}
+// Throw InvalidArgument naming `field` for a name not in names_of.
+inline ZeroHierarchy parse_zero_hierarchy(const std::string& name, const std::string& field = "zero_hierarchy") {
+  return parse_enum<ZeroHierarchy>(name, field);
+}
+inline DeformableHierarchy parse_deformable_hierarchy(const std::string& name,
+                                                      const std::string& field = "deformable_hierarchy") {
+  return parse_enum<DeformableHierarchy>(name, field);
+}
+inline const char* to_string(ZeroHierarchy kind) { return enum_name(kind); }
+inline const char* to_string(DeformableHierarchy kind) { return enum_name(kind); }
 
 struct HierarchyParams {
   ZeroHierarchy zero = ZeroHierarchy::None;                    // tree over the zero region (none = no hierarchy)

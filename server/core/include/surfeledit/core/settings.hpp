@@ -1,42 +1,20 @@
 // Session settings by name: the names the protocol's OP_CONFIGURE and the Python keyword
 // arguments use (`session.configure(algorithm="robust", boundary_n=10, ...)`).
 //
-//   algorithm        text    "none" | "simple" | "improved" | "temporal" | "robust"
-//   threshold        number  W of the inside test, model units
-//   boundary         bool    boundary-surfel heuristic (simple/improved/temporal)
-//   boundary_n       int     neighbours looked at for boundary marks
-//   boundary_i       int     zero neighbours marked boundary
-//   step_bound       bool    per-surfel step bound (simple/improved/temporal)
-//   sphere_margin    number  temporal/robust spheres shrink by this many radii of the nearest surfel
-//   threads          int     worker threads for detection (0 = all)
-//   resample         bool    dynamic resampling
-//   split_threshold  number  stretch ratio that splits a surfel
-//   knn_eps          number  approximate nearest-surfel search (nanoflann eps, >= 0; 0 = exact)
-//   zero_hierarchy   text    "none" | "aabb" | "obb" | "sphere" | "sphere_hierarchical" | "sphere_incremental":
-//                            tree over the zero region (hierarchy.hpp; sphere_* = sphere cluster trees)
-//   deformable_hierarchy text "none" | "aabb": tree over the deformable region (needs zero_hierarchy)
-//   update           text    "bottom_up" | "top_down" | "hybrid": refit of the deformable tree
-//   hybrid_f         number  hybrid: fraction of the levels refit bottom-up, [0, 1]
-//   sat              text    "lite" | "full": OBB/AABB overlap test
-//   extended         bool    narrow phase against the original model (needs algorithm robust)
-//   leaf_max_surfels int     a tree node with at most this many surfels is a leaf
-//   leaf_min_surfels int     no split leaves a child with fewer surfels
-//   max_level        int     deepest tree level (root = 0)
-//   min_leaf_extent  number  leaf boxes at least this wide per axis, model units
-//   inflation        number  margin added to a box when a refit recomputes it, model units
-//   simplify         text    "none" | "region_growing" | "hierarchical": approximate detection on clusters of
-//                            the deformable region (simplify/approximate_detector.hpp; simple/temporal/robust,
-//                            no hierarchy)
-//   cluster_size     int     surfels per cluster, >= 1 (1 = the exact result); also the leaves of sphere_* trees
-//   max_variation    number  largest surface variation of a cluster, [0, 1]; also for sphere_* trees
-//   member_margin    number  approximate detection: members tested within this many cluster radii of the zero region
+// Every setting is one row of one table (setting_specs(), settings.cpp): its name, kind, accepted
+// range or names, one-line doc, and where it lives in SessionSettings. The table drives applying
+// and checking a change, describe(), the unknown-name message, the Python keyword docs
+// (`surfeledit.core.setting_specs()`) and the protocol's SettingKind. Defaults are the member
+// initialisers of the parameter structs (a row's default is its value in `SessionSettings{}`).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/simplify/params.hpp"
 
@@ -56,19 +34,60 @@ struct SessionSettings {
   }
 };
 
-// A setting's value as it arrives: number (also for ints), bool or text.
-using SettingValue = std::variant<double, bool, std::string>;
+// A setting's value as it arrives or is listed: number, integer, bool or text. An integer setting
+// also accepts a number with an integral value (older protocol clients send integers as numbers);
+// a number setting also accepts an integer.
+using SettingValue = std::variant<double, std::int64_t, bool, std::string>;
 struct NamedSetting {
   std::string name;
   SettingValue value;
 };
 
+// What a setting holds (the protocol's SettingKind, the Python type).
+enum class SettingType : std::uint8_t {
+  Number = 0,   // finite double (model units where it is a length)
+  Integer = 1,  // int
+  Bool = 2,
+  Text = 3,     // one of the names of an enum (SettingSpec::choices)
+};
+constexpr EnumNames<SettingType, 4> names_of(SettingType) {
+  return {{{SettingType::Number, "number"},
+           {SettingType::Integer, "integer"},
+           {SettingType::Bool, "bool"},
+           {SettingType::Text, "text"}}};
+}
+
+// One row of the settings table.
+struct SettingSpec {
+  const char* name;                  // as in OP_CONFIGURE and the Python keywords
+  SettingType kind;                  // what the value is
+  const char* doc;                   // one line, with units
+  double min;                        // Number/Integer: smallest accepted value (-inf: none)
+  double max;                        // Number/Integer: largest accepted value (+inf: none)
+  bool min_open;                     // `min` itself is refused (e.g. split_threshold > 1)
+  std::vector<const char*> choices;  // Text: the accepted names, in enum order
+  SettingValue (*get)(const SessionSettings&);                // the current value, of `kind`
+  void (*set)(SessionSettings&, const SettingValue& checked);  // stores a value check_setting() accepted
+};
+
+// Every setting, in listing order.
+const std::vector<SettingSpec>& setting_specs();
+
+// The value of `spec` in a default-constructed SessionSettings.
+SettingValue default_value(const SettingSpec& spec);
+
+// What `spec` accepts, as its error messages say it: "an integer >= 1", "a finite number in [0, 1]",
+// "a bool", "one of lite, full".
+std::string expected_value(const SettingSpec& spec);
+
 // Applies `changes` to a copy of `current` and validates the result. Throws InvalidArgument naming
 // the setting (field = its name) for an unknown name, a value of the wrong kind (e.g. text for
-// boundary_n, 2.5 for an int) or a bad value; `current` is never modified.
+// boundary_n, 2.5 for an int), a value out of its range or an unknown name of a text setting; then,
+// naming one of the settings involved, for a combination that cannot run (e.g. boundary_i >
+// boundary_n, extended without robust). `current` is never modified.
 SessionSettings apply_settings(const SessionSettings& current, const std::vector<NamedSetting>& changes);
 
-// Every setting with its current value, in the order listed above.
+// Every setting with its current value, in table order; integers as std::int64_t.
 std::vector<NamedSetting> describe(const SessionSettings& settings);
 
 }  // namespace surfeledit

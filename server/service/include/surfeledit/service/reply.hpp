@@ -36,11 +36,11 @@ struct StatePage {
 };
 
 // One named session setting (proto Setting); the value is in the member its kind names.
-enum class SettingKind : std::uint32_t { Number = 0, Bool = 1, Text = 2 };
+enum class SettingKind : std::uint32_t { Number = 0, Bool = 1, Text = 2, Int = 3 };
 struct Setting {
   std::string name;
   SettingKind kind = SettingKind::Number;
-  double number = 0.0;  // Number (integers too)
+  double number = 0.0;  // Number, Int (integral)
   bool flag = false;    // Bool
   std::string text;     // Text
 };

@@ -11,6 +11,7 @@
 #include "surfeledit/core/bvh/aabb.hpp"
 #include "surfeledit/core/bvh/obb.hpp"
 #include "surfeledit/core/bvh/sphere.hpp"
+#include "surfeledit/core/enum_names.hpp"
 
 namespace surfeledit::bvh {
 
@@ -19,9 +20,12 @@ enum class SatMode : std::uint8_t {
   Lite = 0,  // 3 world + 3 OBB axes (van den Bergen's "SAT lite", Eqs. 8.9-8.10): conservative
   Full = 1,  // all 15 axes (Gottschalk): exact for boxes
 };
-// "lite" | "full"; throws InvalidArgument naming `field`.
-SatMode parse_sat(const std::string& name, const std::string& field = "sat");
-const char* to_string(SatMode mode);
+constexpr EnumNames<SatMode, 2> names_of(SatMode) { return {{{SatMode::Lite, "lite"}, {SatMode::Full, "full"}}}; }
+// Throws InvalidArgument naming `field` for a name not in names_of.
+inline SatMode parse_sat(const std::string& name, const std::string& field = "sat") {
+  return parse_enum<SatMode>(name, field);
+}
+inline const char* to_string(SatMode mode) { return enum_name(mode); }
 
 // AABB / surfel sphere (Eq. 8.4): |b.center_d - s.center_d| <= b.ext_d + r on every axis, written
 // with the corners. Conservative near the box edges (tests the box grown by r, not the rounded box).

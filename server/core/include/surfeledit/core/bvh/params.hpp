@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "surfeledit/core/enum_names.hpp"
+
 namespace surfeledit::bvh {
 
 // How a deforming tree follows its surfels between rebuilds (§8.3.1, Fig. 8.7).
@@ -13,9 +15,14 @@ enum class UpdateMode : std::uint8_t {
   TopDown = 1,   // lazy: a node is refit from its surfels when a traversal first visits it in a step
   Hybrid = 2,    // upper hybrid_f * height levels bottom-up each step, deeper nodes top-down on visit
 };
-// "bottom_up" | "top_down" | "hybrid"; throws InvalidArgument naming `field`.
-UpdateMode parse_update(const std::string& name, const std::string& field = "update");
-const char* to_string(UpdateMode mode);
+constexpr EnumNames<UpdateMode, 3> names_of(UpdateMode) {
+  return {{{UpdateMode::BottomUp, "bottom_up"}, {UpdateMode::TopDown, "top_down"}, {UpdateMode::Hybrid, "hybrid"}}};
+}
+// Throws InvalidArgument naming `field` for a name not in names_of.
+inline UpdateMode parse_update(const std::string& name, const std::string& field = "update") {
+  return parse_enum<UpdateMode>(name, field);
+}
+inline const char* to_string(UpdateMode mode) { return enum_name(mode); }
 
 struct BvhParams {
   int max_level = 20;           // deepest level a node may have (root = level 0); nodes there are leaves

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit {
@@ -17,9 +18,16 @@ enum class SimplifyMethod : std::uint8_t {
   Hierarchical = 2,   // §9.2.2: split at the centroid, normal to the largest-variance axis, top-down
 };
 
-// "none" | "region_growing" | "hierarchical"; throws InvalidArgument naming `field`.
-SimplifyMethod parse_simplify_method(const std::string& name, const std::string& field = "simplify");
-const char* to_string(SimplifyMethod method);
+constexpr EnumNames<SimplifyMethod, 3> names_of(SimplifyMethod) {
+  return {{{SimplifyMethod::None, "none"},
+           {SimplifyMethod::RegionGrowing, "region_growing"},
+           {SimplifyMethod::Hierarchical, "hierarchical"}}};
+}
+// Throws InvalidArgument naming `field` for a name not in names_of.
+inline SimplifyMethod parse_simplify_method(const std::string& name, const std::string& field = "simplify") {
+  return parse_enum<SimplifyMethod>(name, field);
+}
+inline const char* to_string(SimplifyMethod method) { return enum_name(method); }
 
 struct SimplifyParams {
   SimplifyMethod method = SimplifyMethod::Hierarchical;  // clustering used (the thesis prefers hierarchical, §9.5)
