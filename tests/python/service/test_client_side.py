@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from surfeledit import errors, proto
-from surfeledit.client import Changes, Session, State, Watcher, _merge
+from surfeledit.results import Changes, State, merge
+from surfeledit.session import Session
+from surfeledit.watcher import Watcher
 
 
 @pytest.mark.parametrize("status, cls", [(1, errors.InvalidArgumentError), (2, errors.NotFoundError),
@@ -23,10 +25,15 @@ def test_status_mapping(status: int, cls: type) -> None:
 
 
 class _NoServer:
-    _sessions: list = []
     """Stands in for a Client: any request is a test failure (checks must happen before sending)."""
 
     closed = False
+
+    def attach(self, child: Any) -> None:
+        pass
+
+    def detach(self, child: Any) -> None:
+        pass
 
     def request(self, *a: Any, **k: Any) -> Any:
         raise AssertionError("a request was sent")
@@ -71,7 +78,7 @@ def test_merge_changes_into_cache() -> None:
     ch = Changes(version=3, full=False, ids=np.array([3, 4], np.uint64),
                  positions=np.array([[9.0, 9, 9], [8, 8, 8]]), normals=np.zeros((2, 3)),
                  radii=np.array([0.3, 0.4]), removed=np.array([2], np.uint64))
-    out = _merge(cache, ch)
+    out = merge(cache, ch)
     assert out.version == 3
     assert out.ids.tolist() == [0, 3, 4, 6]
     assert out.positions.tolist() == [[0, 1, 2], [9, 9, 9], [8, 8, 8], [9, 10, 11]]
