@@ -16,6 +16,7 @@ import numpy as np
 
 from .arrays import ArrayLike, Vec3Like, readonly
 from .results import Changes, CollisionStats, SettingValue, State, StepResult
+from .session_api import StateArrays
 
 __all__ = ["LocalSession"]
 
@@ -41,7 +42,7 @@ def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
                       detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted)
 
 
-class LocalSession:
+class LocalSession(StateArrays):
     """An editing session in this process (no server): ``LocalSession("name", threads=0)``.
 
     Args:
@@ -132,22 +133,6 @@ class LocalSession:
             none = np.zeros((0, 3))
             return Changes(st.version, False, st.ids[:0], none, none, st.radii[:0], st.ids[:0])
         return Changes(st.version, True, st.ids, st.positions, st.normals, st.radii, st.ids[:0])
-
-    def ids(self) -> np.ndarray:
-        """(P,) uint64 ids, ascending."""
-        return self.state().ids
-
-    def positions(self) -> np.ndarray:
-        """(P, 3) float64, model units, in id order."""
-        return self.state().positions
-
-    def normals(self) -> np.ndarray:
-        """(P, 3) float64 unit normals, in id order."""
-        return self.state().normals
-
-    def radii(self) -> np.ndarray:
-        """(P,) float64, model units, in id order."""
-        return self.state().radii
 
     # -- in-process only ---------------------------------------------------------------------
     def colliding(self) -> np.ndarray:

@@ -18,6 +18,7 @@ from . import errors
 from ._protocol import proto
 from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_surfels, readonly, vec3
 from .results import Changes, CollisionStats, SettingValue, State, StepResult, merge
+from .session_api import StateArrays
 from .watcher import Watcher
 
 if TYPE_CHECKING:
@@ -73,7 +74,7 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
                       inserted=inserted)
 
 
-class Session:
+class Session(StateArrays):
     """An opened or joined editing session; close it (or use ``with``) to detach.
 
     Attributes:
@@ -320,22 +321,6 @@ class Session:
         self._cache = new
         self.version = new.version
         return new
-
-    def ids(self) -> np.ndarray:
-        """(P,) uint64 ids, ascending (the order of every other array)."""
-        return self.state().ids
-
-    def positions(self) -> np.ndarray:
-        """(P, 3) float64 positions, model units, in id order."""
-        return self.state().positions
-
-    def normals(self) -> np.ndarray:
-        """(P, 3) float64 unit normals, in id order."""
-        return self.state().normals
-
-    def radii(self) -> np.ndarray:
-        """(P,) float64 radii, model units, in id order."""
-        return self.state().radii
 
     # -- updates -----------------------------------------------------------------------------
     def watch(self) -> Watcher:

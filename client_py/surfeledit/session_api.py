@@ -19,7 +19,7 @@ import numpy as np
 from .arrays import ArrayLike, Vec3Like
 from .results import Changes, SettingValue, State, StepResult
 
-__all__ = ["EditingSession"]
+__all__ = ["EditingSession", "StateArrays"]
 
 
 @runtime_checkable
@@ -97,3 +97,27 @@ class EditingSession(Protocol):
     def close(self) -> None:
         """Ends this use of the session (idempotent)."""
         ...
+
+
+class StateArrays:
+    """The per-array accessors of :class:`EditingSession`, written once on top of ``state()``
+    (a base of both sessions)."""
+
+    def state(self) -> State:
+        raise NotImplementedError
+
+    def ids(self) -> np.ndarray:
+        """(P,) uint64 ids, ascending (the order of every other array)."""
+        return self.state().ids
+
+    def positions(self) -> np.ndarray:
+        """(P, 3) float64 positions, model units, in id order."""
+        return self.state().positions
+
+    def normals(self) -> np.ndarray:
+        """(P, 3) float64 unit normals, in id order."""
+        return self.state().normals
+
+    def radii(self) -> np.ndarray:
+        """(P,) float64 radii, model units, in id order."""
+        return self.state().radii

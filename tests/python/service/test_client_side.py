@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import surfeledit
 from surfeledit import errors, proto
 from surfeledit.results import Changes, State, merge
 from surfeledit.session import Session
@@ -97,3 +98,19 @@ def test_watcher_reassembles_parts() -> None:
     ev = w._ready[0]
     assert ev.ids.tolist() == [0, 1, 2, 3] and ev.positions.shape == (4, 3)
     assert ev.positions[:, 0].tolist() == [0, 0, 1, 1] and ev.step == 3 and ev.version == 5
+
+
+def test_remote_and_in_process_sessions_satisfy_one_protocol() -> None:
+    from surfeledit.session_api import EditingSession
+    assert isinstance(make_session(), EditingSession)
+    try:
+        from surfeledit.local import LocalSession
+        local = LocalSession("protocol", threads=1)
+    except ImportError:
+        pytest.skip("surfeledit.core (the in-process session) is not built")
+    assert isinstance(local, EditingSession)
+    local.load_points(np.eye(3) + 1.0, np.eye(3))
+    local.set_regions(zero=[0], one=[2])
+    step = local.deform(translation=(0.0, 0.0, 0.1))
+    assert isinstance(step, surfeledit.StepResult) and step.version == local.version
+    assert isinstance(local.state(), State) and local.changes_since(local.version).ids.size == 0
