@@ -114,11 +114,11 @@ class LocalSession(StateArrays):
         return dict(self.core.report())
 
     def state(self) -> State:
-        """The whole model now, ids ascending (arrays read-only copies)."""
+        """The whole model now, ids ascending (arrays read-only; the core hands out copies)."""
         c = self.core
         ids = np.asarray(c.ids(), np.uint64)
-        arrays = [np.array(c.positions(), np.float64), np.array(c.normals(), np.float64),
-                  np.array(c.radii(), np.float64)]
+        arrays = [np.asarray(c.positions(), np.float64), np.asarray(c.normals(), np.float64),
+                  np.asarray(c.radii(), np.float64)]
         if ids.size > 1 and not bool(np.all(ids[1:] > ids[:-1])):
             order = np.argsort(ids, kind="stable")
             ids, arrays = ids[order], [a[order] for a in arrays]

@@ -3,8 +3,9 @@
 A :class:`Scenario` is a generated scene (:mod:`surfeledit.scenes`: surfels, zero / one regions and
 the rigid solid's exact signed distance) plus a motion (total translation and/or rotation) split
 into ``steps`` equal static steps. :func:`run` replays it from the same stored start state with any
-collision algorithm and settings, in-process (:class:`LocalBackend`, ``surfeledit.core.EditSession``)
-or on a server over DDS (:class:`RemoteBackend`), and returns one :class:`StepRecord` per step.
+collision algorithm and settings, in-process (:class:`LocalBackend`, a :class:`~surfeledit.local.LocalSession`)
+or on a server over DDS (:class:`RemoteBackend`, a :class:`~surfeledit.Session`) — one code path
+through :class:`~surfeledit.session_api.EditingSession` — and returns one :class:`StepRecord` per step.
 
 Accuracy per step (docs/algorithms.md §4.4, "Ground truth for tests"): a deformable surfel (any surfel
 not in the zero region, inserted ones included) truly collides iff its *current* position is inside
@@ -31,9 +32,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
-import math
 import sys
-import time
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
@@ -122,6 +121,8 @@ class Backend:
     def __init__(self, open_session: Callable[[SceneSetup], EditingSession], reopen: bool) -> None:
         self._open = open_session
         self._reopen = reopen
+        # The EditingSession of the current run (a LocalSession's in-process extras, e.g. hierarchy(),
+        # are reached through it); None before start() and after close().
         self.session: Any = None
 
     def start(self, scene: SceneSetup) -> None:
@@ -259,10 +260,10 @@ class RunResult:
 
 
 #: Called after each step with (step, backend, output, state); may edit the session (e.g. remove).
-StepHook = Callable[[int, Any, StepOutput, ModelState], None]
+StepHook = Callable[[int, Backend, StepOutput, ModelState], None]
 
 
-def run(scenario: Scenario, algorithm: str = "robust", backend: Optional[Any] = None,
+def run(scenario: Scenario, algorithm: str = "robust", backend: Optional[Backend] = None,
         settings: Optional[Mapping[str, Any]] = None, removals: Optional[Mapping[int, Sequence[int]]] = None,
         after_step: Optional[StepHook] = None, measure: bool = True) -> RunResult:
     """Runs ``scenario`` with ``algorithm`` from its stored start state.
@@ -410,7 +411,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     results: List[RunResult] = []
     try:
         for alg in algorithms:
-            backend: Any = RemoteBackend(client, f"scenario-{alg}") if client is not None else LocalBackend(args.threads)
+            backend: Backend = (RemoteBackend(client, f"scenario-{alg}") if client is not None
+                                else LocalBackend(args.threads))
 
             def show(k: int, _b: Any, out: StepOutput, _s: ModelState, alg: str = alg) -> None:
                 print(f"{alg:9s} step {k:3d}  detect {out.stats.get('detect_ms', float('nan')):9.3f} ms  "

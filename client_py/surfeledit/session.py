@@ -85,10 +85,11 @@ class Session(StateArrays):
     def __init__(self, client: "Client", name: str, reply: "proto.Reply") -> None:
         self.client = client
         self.name = name
-        self.version = int(reply.version)
-        self._info = reply.session_info[0] if reply.session_info else None
+        self.version = 0
+        self._info: Optional["proto.SessionInfo"] = None
         self._cache: Optional[State] = None
         self._closed = False
+        self._absorb(reply)
         client.attach(self)
 
     def __enter__(self) -> "Session":
@@ -116,7 +117,10 @@ class Session(StateArrays):
 
     def _request(self, op: "proto.Op", **args: Any) -> "proto.Reply":
         """One request on this session; keeps :attr:`version` and the last session info up to date."""
-        reply = self.client.request(op, self.name, **args)
+        return self._absorb(self.client.request(op, self.name, **args))
+
+    def _absorb(self, reply: "proto.Reply") -> "proto.Reply":
+        """Keeps the version and the session info a reply carries."""
         if reply.version:
             self.version = int(reply.version)
         if reply.session_info:
