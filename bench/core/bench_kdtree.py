@@ -8,7 +8,8 @@ Run (after scripts/setup.sh, which builds with -DSURFELEDIT_BUILD_BENCH=ON):
 Datasets (fixed seeds):
   scene  make_default_scene() (rigid slab + sphere) sampled at spacing 0.009, seed 1, then a fixed
          random subset of exactly 300,000 surfels (seed 1).
-  bunny  /work/shared/data/models/bunny_watertight.obj through core.load_file, as is: 34,834
+  bunny  bunny_watertight.obj of the shared models (surfeledit.scenes.models_dir(): $SURFELEDIT_MODELS
+         or <repo>/../shared/data/models) through core.load_file, as is: 34,834
          vertices, i.e. SMALLER than 300k (skipped with a printed reason if the file is absent).
 Queries: --queries points drawn (seed 2) from the dataset and moved by Gaussian noise of sigma = half
 the median nearest-neighbour spacing, so they lie near, but not on, the surface (as a tool's queries do).
@@ -43,8 +44,7 @@ import benchlib  # noqa: E402
 
 from scipy.spatial import cKDTree  # noqa: E402
 from surfeledit import core  # noqa: E402
-
-BUNNY = Path("/work/shared/data/models/bunny_watertight.obj")
+from surfeledit.scenes import BUNNY_FILE as BUNNY  # noqa: E402
 SCENE_POINTS = 300_000
 LEAF_SWEEP = [1, 2, 4, 6, 8, 10, 12, 16, 20, 30, 40, 50]
 

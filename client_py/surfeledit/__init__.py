@@ -11,6 +11,9 @@ Quick start::
         s.configure(algorithm="temporal")            # collision detection: simple/improved/temporal/robust
         print(s.deform(translation=(0, 0, -0.05)).colliding)   # colliding ids after the step
 
+``surfeledit.LocalSession()`` is the same session in-process (no server); both satisfy
+:class:`surfeledit.EditingSession` and return the same result types.
+
 The library logs to ``logging.getLogger("surfeledit")`` and never prints.
 """
 
@@ -20,17 +23,31 @@ import logging
 
 from . import errors
 from ._protocol import proto
-from .client import (Changes, Client, CollisionStats, Session, State, StepResult, UpdateEvent, Watcher, connect,
-                     find_server_executable)
+from .connection import Client, connect
+from .results import Changes, CollisionStats, State, StepResult, UpdateEvent
+from .server_process import find_server_executable
+from .session import Session
+from .session_api import EditingSession
+from .watcher import Watcher
 from .errors import (ConflictError, InternalServerError, InvalidArgumentError, NotFoundError, RequestTimeoutError,
                      ServerIOError, ServerStartError, SurfelEditError, TooLargeError)
 
 logging.getLogger("surfeledit").addHandler(logging.NullHandler())
 
+
+def __getattr__(name: str) -> object:
+    # LocalSession needs the compiled surfeledit.core; import it only when asked for.
+    if name == "LocalSession":
+        from .local import LocalSession
+        return LocalSession
+    raise AttributeError(f"module 'surfeledit' has no attribute {name!r}")
+
+
 __version__ = "0.1.0"
 
 __all__ = [
-    "connect", "Client", "Session", "StepResult", "CollisionStats", "State", "Changes", "UpdateEvent", "Watcher", "proto",
+    "connect", "Client", "Session", "EditingSession", "LocalSession", "StepResult", "CollisionStats", "State",
+    "Changes", "UpdateEvent", "Watcher", "proto",
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
     "ServerStartError",

@@ -3,10 +3,11 @@
 A :class:`Scenario` is a generated scene (:mod:`surfeledit.scenes`: surfels, zero / one regions and
 the rigid solid's exact signed distance) plus a motion (total translation and/or rotation) split
 into ``steps`` equal static steps. :func:`run` replays it from the same stored start state with any
-collision algorithm and settings, in-process (:class:`LocalBackend`, ``surfeledit.core.EditSession``)
-or on a server over DDS (:class:`RemoteBackend`), and returns one :class:`StepRecord` per step.
+collision algorithm and settings, in-process (:class:`LocalBackend`, a :class:`~surfeledit.local.LocalSession`)
+or on a server over DDS (:class:`RemoteBackend`, a :class:`~surfeledit.Session`) — one code path
+through :class:`~surfeledit.session_api.EditingSession` — and returns one :class:`StepRecord` per step.
 
-Accuracy per step (ALGORITHMS.md §4.4, "Ground truth for tests"): a deformable surfel (any surfel
+Accuracy per step (docs/algorithms.md §4.4, "Ground truth for tests"): a deformable surfel (any surfel
 not in the zero region, inserted ones included) truly collides iff its *current* position is inside
 the rigid solid, ``truth_sdf(p) < 0``. Deformable surfels within two sample spacings of the
 zero/deformable seam are left out (there truth is ambiguous). Over the rest::
@@ -31,9 +32,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
-import math
 import sys
-import time
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
@@ -41,7 +40,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from . import scenes as _scenes
+from .local import LocalSession
+from .results import State
 from .scenes import Motion, SceneSetup
+from .session_api import EditingSession
 
 ALGORITHMS = ("none", "simple", "improved", "temporal", "robust")
 
@@ -92,8 +94,9 @@ class StepOutput:
     """What a backend returns for one step.
 
     colliding: (C,) uint64 ids, ascending; depths: (C,) float64 model units; stats: the detector's
-    counters (deformable, tested, queries, colliding, detect_ms, preprocess_ms); inserted: (I,) uint64
-    ids added by resampling this step; step_ms: the whole call as the caller measured it.
+    counters (deformable, tested, queries, colliding, detect_ms, preprocess_ms, and in-process the
+    hierarchies' nv, np, nu); inserted: (I,) uint64 ids added by resampling this step; step_ms: the
+    whole call as the caller measured it (over DDS: the round trip).
     """
 
     colliding: np.ndarray
@@ -103,36 +106,30 @@ class StepOutput:
     step_ms: float
 
 
-@dataclasses.dataclass
-class ModelState:
-    """The model after a step, rows in any order: ids (P,) uint64, positions/normals (P, 3), radii (P,)."""
-
-    ids: np.ndarray
-    positions: np.ndarray
-    normals: np.ndarray
-    radii: np.ndarray
+#: The model after a step: ids (P,) uint64 ascending, positions / normals (P, 3), radii (P,).
+ModelState = State
 
 
-def _stats_dict(stats: Any) -> Dict[str, float]:
-    if isinstance(stats, Mapping):
-        return {str(k): float(v) for k, v in stats.items()}
-    keys = ("deformable", "tested", "queries", "colliding", "detect_ms", "preprocess_ms")
-    return {k: float(getattr(stats, k)) for k in keys if hasattr(stats, k)}
+class Backend:
+    """Runs scenarios on an :class:`~surfeledit.session_api.EditingSession` — one code path in-process
+    and over DDS. ``open_session(scene)`` makes the session; ``reopen``: a fresh one at each
+    :meth:`start` (else the first is reloaded). Use :class:`LocalBackend` or :class:`RemoteBackend`.
+    """
 
+    kind = "?"
 
-class LocalBackend:
-    """In-process: a fresh ``surfeledit.core.EditSession`` per run (``threads``: 0 = all)."""
-
-    kind = "local"
-
-    def __init__(self, threads: int = 0) -> None:
-        self.threads = int(threads)
+    def __init__(self, open_session: Callable[[SceneSetup], EditingSession], reopen: bool) -> None:
+        self._open = open_session
+        self._reopen = reopen
+        # The EditingSession of the current run (a LocalSession's in-process extras, e.g. hierarchy(),
+        # are reached through it); None before start() and after close().
         self.session: Any = None
 
     def start(self, scene: SceneSetup) -> None:
-        from . import core
-        self.close()
-        self.session = core.EditSession(f"scenario-{scene.name}", threads=self.threads)
+        """Loads the scene's start state and its regions (settings of a reloaded session persist)."""
+        if self.session is None or self._reopen:
+            self.close()
+            self.session = self._open(scene)
         self.session.load_points(scene.positions, scene.normals, scene.radii)
         self.session.set_regions(zero=scene.zero, one=scene.one)
 
@@ -140,57 +137,12 @@ class LocalBackend:
         self.session.configure(**settings)
 
     def deform(self, **params: Any) -> StepOutput:
-        t0 = time.perf_counter()
         r = self.session.deform(**params)
-        ms = (time.perf_counter() - t0) * 1e3
-        return StepOutput(colliding=np.asarray(r.colliding, np.uint64), depths=np.asarray(r.depths, np.float64),
-                          stats=_stats_dict(r.stats), inserted=np.asarray(r.inserted, np.uint64), step_ms=ms)
+        return StepOutput(colliding=r.colliding, depths=r.depths, stats=r.stats.as_dict(), inserted=r.inserted,
+                          step_ms=r.round_trip_ms)
 
     def state(self) -> ModelState:
-        s = self.session
-        return ModelState(np.asarray(s.ids(), np.uint64), np.asarray(s.positions()), np.asarray(s.normals()),
-                          np.asarray(s.radii()))
-
-    def remove(self, ids: Sequence[int]) -> None:
-        self.session.remove(np.asarray(ids, np.int64))
-
-    def close(self) -> None:
-        self.session = None
-
-
-class RemoteBackend:
-    """On a server over DDS: one session ``name`` of ``client`` (a :class:`surfeledit.Client`),
-    reloaded from the stored start state at each run."""
-
-    kind = "remote"
-
-    def __init__(self, client: Any, name: str = "scenario") -> None:
-        self.client = client
-        self.name = name
-        self.session: Any = None
-
-    def start(self, scene: SceneSetup) -> None:
-        if self.session is None:
-            self.session = self.client.open_session(self.name)
-        self.session.load_points(scene.positions, scene.normals, scene.radii)
-        self.session.set_regions(zero=scene.zero, one=scene.one)
-
-    def configure(self, **settings: Any) -> None:
-        self.session.configure(**settings)
-
-    def deform(self, **params: Any) -> StepOutput:
-        t0 = time.perf_counter()
-        r = self.session.deform(**params)
-        ms = (time.perf_counter() - t0) * 1e3
-        return StepOutput(colliding=np.asarray(r.colliding, np.uint64),
-                          depths=np.asarray(getattr(r, "depths", []), np.float64), stats=_stats_dict(r.stats),
-                          inserted=np.asarray(getattr(r, "inserted", []), np.uint64),
-                          step_ms=float(getattr(r, "round_trip_ms", ms)))
-
-    def state(self) -> ModelState:
-        st = self.session.state()
-        return ModelState(np.asarray(st.ids, np.uint64), np.asarray(st.positions), np.asarray(st.normals),
-                          np.asarray(st.radii))
+        return self.session.state()
 
     def remove(self, ids: Sequence[int]) -> None:
         self.session.remove(np.asarray(ids, np.int64))
@@ -199,6 +151,28 @@ class RemoteBackend:
         if self.session is not None:
             self.session.close()
             self.session = None
+
+
+class LocalBackend(Backend):
+    """In-process: a fresh :class:`~surfeledit.local.LocalSession` per run (``threads``: 0 = all)."""
+
+    kind = "local"
+
+    def __init__(self, threads: int = 0) -> None:
+        self.threads = int(threads)
+        super().__init__(lambda scene: LocalSession(f"scenario-{scene.name}", threads=self.threads), reopen=True)
+
+
+class RemoteBackend(Backend):
+    """On a server over DDS: one session ``name`` of ``client`` (a :class:`surfeledit.Client`),
+    reloaded from the stored start state at each run."""
+
+    kind = "remote"
+
+    def __init__(self, client: Any, name: str = "scenario") -> None:
+        self.client = client
+        self.name = name
+        super().__init__(lambda scene: client.open_session(name), reopen=False)
 
 
 # -- truth and metrics -------------------------------------------------------------------------------
@@ -286,10 +260,10 @@ class RunResult:
 
 
 #: Called after each step with (step, backend, output, state); may edit the session (e.g. remove).
-StepHook = Callable[[int, Any, StepOutput, ModelState], None]
+StepHook = Callable[[int, Backend, StepOutput, ModelState], None]
 
 
-def run(scenario: Scenario, algorithm: str = "robust", backend: Optional[Any] = None,
+def run(scenario: Scenario, algorithm: str = "robust", backend: Optional[Backend] = None,
         settings: Optional[Mapping[str, Any]] = None, removals: Optional[Mapping[int, Sequence[int]]] = None,
         after_step: Optional[StepHook] = None, measure: bool = True) -> RunResult:
     """Runs ``scenario`` with ``algorithm`` from its stored start state.
@@ -432,12 +406,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     client = None
     if args.remote:
-        from .client import connect
+        from .connection import connect
         client = connect(domain=args.domain, spawn=True)
     results: List[RunResult] = []
     try:
         for alg in algorithms:
-            backend: Any = RemoteBackend(client, f"scenario-{alg}") if client is not None else LocalBackend(args.threads)
+            backend: Backend = (RemoteBackend(client, f"scenario-{alg}") if client is not None
+                                else LocalBackend(args.threads))
 
             def show(k: int, _b: Any, out: StepOutput, _s: ModelState, alg: str = alg) -> None:
                 print(f"{alg:9s} step {k:3d}  detect {out.stats.get('detect_ms', float('nan')):9.3f} ms  "

@@ -4,8 +4,8 @@ A :class:`SceneSetup` is a surfel model (rows = the ids the model gets when load
 regions (zero = rigid, one = fully displaced, the rest blends), the motion that drives it (a total
 translation and/or rotation, split into static steps by the scenario) and the ground truth: the
 signed distance of the rigid (zero) solid, ``truth_sdf(points) < 0`` inside. A deformable surfel
-truly collides iff its *current* position is inside that solid (ALGORITHMS.md §4.4, "Ground truth
-for tests"). ``seam`` holds the zero surfels next to the deformable part (empty when the deformable
+truly collides iff its *current* position is inside that solid (docs/algorithms.md §4.4, "Ground
+truth for tests"). ``seam`` holds the zero surfels next to the deformable part (empty when the deformable
 part is a separate body); the metrics leave out deformable surfels within two sample spacings of
 them, where truth is ambiguous.
 
@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from pathlib import Path
 from typing import Callable, Optional, Tuple
 
@@ -33,11 +34,21 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from . import core
+from ._protocol import REPO_ROOT
 
 SdfFn = Callable[[np.ndarray], np.ndarray]
 
-#: Where the shared test models live (the bunny scene needs ``bunny_watertight.obj`` there).
-MODELS_DIR = Path("/work/shared/data/models")
+
+def models_dir() -> Path:
+    """Where the shared test models live: env ``SURFELEDIT_MODELS`` if set, else
+    ``<repo>/../shared/data/models`` next to the source checkout this package is in (it may be absent:
+    callers skip with a reason)."""
+    env = os.environ.get("SURFELEDIT_MODELS")
+    return Path(env) if env else REPO_ROOT.parent / "shared" / "data" / "models"
+
+
+#: The shared test models' directory at import (the bunny scene needs ``bunny_watertight.obj`` there).
+MODELS_DIR = models_dir()
 
 
 @dataclasses.dataclass(frozen=True)

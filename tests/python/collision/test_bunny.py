@@ -7,7 +7,8 @@ import pytest
 from surfeledit import scenario as S, scenes
 
 pytestmark = pytest.mark.skipif(not scenes.BUNNY_FILE.is_file(),
-                                reason=f"{scenes.BUNNY_FILE} is absent (shared test models not mounted)")
+                                reason=f"{scenes.BUNNY_FILE} is absent (shared test models not mounted; "
+                                       "set SURFELEDIT_MODELS to their directory)")
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,9 @@ import pytest
 
 from surfeledit import core
 from surfeledit.errors import NotFoundError, ServerIOError, InvalidArgumentError
+from surfeledit.scenes import models_dir
 
-MODELS = Path(__file__).resolve().parents[3].parent / "shared" / "data" / "models"
+MODELS = models_dir()  # $SURFELEDIT_MODELS or <repo>/../shared/data/models
 
 
 def _need(name: str) -> Path:

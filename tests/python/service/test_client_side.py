@@ -7,8 +7,11 @@ from typing import Any
 import numpy as np
 import pytest
 
+import surfeledit
 from surfeledit import errors, proto
-from surfeledit.client import Changes, Session, State, Watcher, _merge
+from surfeledit.results import Changes, State, merge
+from surfeledit.session import Session
+from surfeledit.watcher import Watcher
 
 
 @pytest.mark.parametrize("status, cls", [(1, errors.InvalidArgumentError), (2, errors.NotFoundError),
@@ -23,10 +26,15 @@ def test_status_mapping(status: int, cls: type) -> None:
 
 
 class _NoServer:
-    _sessions: list = []
     """Stands in for a Client: any request is a test failure (checks must happen before sending)."""
 
     closed = False
+
+    def attach(self, child: Any) -> None:
+        pass
+
+    def detach(self, child: Any) -> None:
+        pass
 
     def request(self, *a: Any, **k: Any) -> Any:
         raise AssertionError("a request was sent")
@@ -71,7 +79,7 @@ def test_merge_changes_into_cache() -> None:
     ch = Changes(version=3, full=False, ids=np.array([3, 4], np.uint64),
                  positions=np.array([[9.0, 9, 9], [8, 8, 8]]), normals=np.zeros((2, 3)),
                  radii=np.array([0.3, 0.4]), removed=np.array([2], np.uint64))
-    out = _merge(cache, ch)
+    out = merge(cache, ch)
     assert out.version == 3
     assert out.ids.tolist() == [0, 3, 4, 6]
     assert out.positions.tolist() == [[0, 1, 2], [9, 9, 9], [8, 8, 8], [9, 10, 11]]
@@ -90,3 +98,19 @@ def test_watcher_reassembles_parts() -> None:
     ev = w._ready[0]
     assert ev.ids.tolist() == [0, 1, 2, 3] and ev.positions.shape == (4, 3)
     assert ev.positions[:, 0].tolist() == [0, 0, 1, 1] and ev.step == 3 and ev.version == 5
+
+
+def test_remote_and_in_process_sessions_satisfy_one_protocol() -> None:
+    from surfeledit.session_api import EditingSession
+    assert isinstance(make_session(), EditingSession)
+    try:
+        from surfeledit.local import LocalSession
+        local = LocalSession("protocol", threads=1)
+    except ImportError:
+        pytest.skip("surfeledit.core (the in-process session) is not built")
+    assert isinstance(local, EditingSession)
+    local.load_points(np.eye(3) + 1.0, np.eye(3))
+    local.set_regions(zero=[0], one=[2])
+    step = local.deform(translation=(0.0, 0.0, 0.1))
+    assert isinstance(step, surfeledit.StepResult) and step.version == local.version
+    assert isinstance(local.state(), State) and local.changes_since(local.version).ids.size == 0

@@ -1,0 +1,326 @@
+"""The connection to a server: :class:`Client` (request/reply over Cyclone DDS) and :func:`connect`.
+
+A request is written on ``surfeledit_request`` and its reply is the ``surfeledit_reply`` sample with
+the same client id and request id (PROTOCOL.md). Sessions (:mod:`surfeledit.session`) and watchers
+(:mod:`surfeledit.watcher`) attach themselves to the client that made them; closing the client closes
+them. Times are seconds unless a name says ``_ms``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import subprocess
+import threading
+import time
+import uuid
+from pathlib import Path
+from typing import Any, Iterable, List, Optional
+
+from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+
+from . import errors
+from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
+from .server_process import exit_message, spawn_server, stop_process
+from .session import Session
+
+__all__ = ["Client", "connect", "Inbox"]
+
+_log = logging.getLogger("surfeledit")
+
+_ANY_NEW = SampleState.NotRead | ViewState.Any | InstanceState.Any
+_PROBE_S = 1.5  # how long connect() looks for an already running server before spawning one
+_WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's update writer
+
+
+def _ns(seconds: float) -> int:
+    return max(0, int(seconds * 1e9))
+
+
+def _delete(*entities: Any) -> None:
+    """Deletes DDS entities now instead of at garbage collection (Entity.__del__ is idempotent)."""
+    for e in entities:
+        if e is not None:
+            try:
+                e.__del__()
+            except Exception:  # pragma: no cover - best effort at teardown
+                _log.debug("deleting %r failed", e, exc_info=True)
+
+
+def _matched(entity: Any) -> int:
+    """Number of matched remote endpoints of a writer (publications) or a reader (subscriptions)."""
+    if isinstance(entity, DataWriter):
+        return int(entity.get_publication_matched_status().current_count)
+    return int(entity.get_subscription_matched_status().current_count)
+
+
+def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeout: float) -> bool:
+    """Waits up to ``timeout`` seconds until every writer / reader in ``entities`` has a match; True if so."""
+    entities = list(entities)
+    deadline = time.monotonic() + timeout
+    ws = WaitSet(participant)
+    try:
+        for e in entities:
+            e.set_status_mask(DDSStatus.PublicationMatched if isinstance(e, DataWriter)
+                              else DDSStatus.SubscriptionMatched)
+            ws.attach(e)
+        while True:
+            if all(_matched(e) > 0 for e in entities):
+                return True
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return False
+            ws.wait(_ns(min(remaining, 0.05)))
+    finally:
+        for e in entities:
+            try:
+                ws.detach(e)
+                e.set_status_mask(0)
+            except Exception:  # pragma: no cover
+                pass
+        _delete(ws)
+
+
+class Inbox:
+    """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
+
+    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any) -> None:
+        self.reader = DataReader(participant, topic, qos=qos)
+        self._cond = ReadCondition(self.reader, _ANY_NEW)
+        self._waitset = WaitSet(participant)
+        self._waitset.attach(self._cond)
+
+    def take(self, n: int = 64) -> List[Any]:
+        """Up to ``n`` new samples (instance-state changes without data included; check their type)."""
+        return self.reader.take(N=n, condition=self._cond)
+
+    def wait(self, timeout: float) -> None:
+        """Blocks until a new sample arrives or ``timeout`` seconds pass."""
+        self._waitset.wait(_ns(timeout))
+
+    def matched(self) -> int:
+        """Number of matched writers."""
+        return _matched(self.reader)
+
+    def close(self) -> None:
+        _delete(self._waitset, self._cond, self.reader)
+
+
+class Client:
+    """A connection to a surfeledit server on one DDS domain (use :func:`connect`).
+
+    Thread-safe for requests (one request is in flight at a time). Close it (or use ``with``) to
+    close its sessions and watchers, release the DDS entities and stop a server it spawned.
+    """
+
+    def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None) -> None:
+        self.domain = int(domain)
+        self.timeout = float(timeout)
+        self.client_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
+        self._next_id = 1
+        self._lock = threading.RLock()
+        self._server = _server
+        self._server_log: Optional[Path] = None
+        self._server_info: Optional["proto.ServerInfo"] = None
+        self._closed = False
+        self._children: List[Any] = []  # sessions and watchers, closed with the client
+
+        self._participant = DomainParticipant(self.domain)
+        self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
+        self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
+        self._upd_topic: Optional[Topic] = None
+        self._writer = DataWriter(self._participant, self._req_topic, qos=request_qos())
+        self._replies = Inbox(self._participant, self._rep_topic, reply_qos())
+
+    # -- lifecycle -------------------------------------------------------------------------------
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def attach(self, child: Any) -> None:
+        """Registers a session or watcher (anything with ``close()``) to be closed with this client."""
+        self._children.append(child)
+
+    def detach(self, child: Any) -> None:
+        """Forgets a child registered with :meth:`attach` (it closed itself)."""
+        if child in self._children:
+            self._children.remove(child)
+
+    def close(self) -> None:
+        """Closes sessions, watchers and DDS entities, then stops the server if this client spawned it."""
+        if self._closed:
+            return
+        # Sessions detach so the server can drop sessions nobody uses; when no server is matched any
+        # more (it exited) the client counts as closed first, so they only mark themselves closed.
+        if self._writer.get_publication_matched_status().current_count == 0:
+            self._closed = True
+        for child in list(self._children):
+            try:
+                child.close()
+            except errors.SurfelEditError:
+                _log.warning("closing %r failed", child, exc_info=True)
+        self._closed = True
+        self._replies.close()
+        _delete(self._writer, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
+        if self._server is not None:
+            stop_process(self._server)
+            self._server = None
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    # -- matching ------------------------------------------------------------------------------
+    def wait_for_server(self, timeout: float) -> bool:
+        """Waits until a server's request reader and reply writer are discovered; True if so."""
+        return wait_matched(self._participant, (self._writer, self._replies.reader), timeout)
+
+    def update_inbox(self, match_timeout: float = _WATCH_MATCH_S) -> Inbox:
+        """A new reader of ``surfeledit_update`` (all sessions), returned once the server's update
+        writer is discovered or after ``match_timeout`` seconds (updates are volatile: earlier ones are
+        never seen). The caller closes it; check ``matched()`` to know whether the wait succeeded."""
+        if self._upd_topic is None:
+            self._upd_topic = Topic(self._participant, TOPIC_UPDATE, proto.Update)
+        inbox = Inbox(self._participant, self._upd_topic, update_qos())
+        wait_matched(self._participant, (inbox.reader,), match_timeout)
+        return inbox
+
+    # -- low-level request API -----------------------------------------------------------------
+    def new_request(self, op: "proto.Op", session: str = "", **args: Any) -> "proto.Request":
+        """Builds a request with the next request id; ``args`` are the IDL argument fields, e.g.
+        ``deform=proto.Deform(...)`` (wrapped into the 0-or-1 element sequence)."""
+        with self._lock:
+            rid = self._next_id
+            self._next_id += 1
+        req = proto.Request(client_id=self.client_id, request_id=rid, session=session, op=op)
+        for name, value in args.items():
+            if not hasattr(req, name) or name in ("client_id", "request_id", "session", "op"):
+                raise TypeError(f"unknown request argument {name!r}")
+            setattr(req, name, list(value) if isinstance(value, (list, tuple)) else [value])
+        return req
+
+    def call(self, request: "proto.Request", check: bool = True, timeout: Optional[float] = None,
+             retries: int = 1) -> "proto.Reply":
+        """Sends ``request`` and returns its reply (matched on client id and request id).
+
+        On timeout the same request (same id) is sent again up to ``retries`` times — the server
+        answers a repeat from its reply cache — then :class:`~surfeledit.errors.RequestTimeoutError`
+        is raised. With ``check`` a non-OK status raises the typed error of ``surfeledit.errors``.
+        """
+        if self._closed:
+            raise errors.SurfelEditError("client is closed")
+        timeout = self.timeout if timeout is None else timeout
+        with self._lock:
+            for attempt in range(retries + 1):
+                self._writer.write(request)
+                reply = self._wait_reply(request.request_id, time.monotonic() + timeout)
+                if reply is not None:
+                    break
+                _log.warning("no reply to request %d (%s) within %.1f s%s", request.request_id,
+                             request.op.name, timeout, "; retrying" if attempt < retries else "")
+            else:
+                raise errors.RequestTimeoutError(
+                    f"no reply to request {request.request_id} ({request.op.name}) on domain {self.domain} "
+                    f"within {timeout:.1f} s (tried {retries + 1} times)")
+        if check and reply.status != proto.Status.STATUS_OK:
+            raise errors.error_for_status(int(reply.status.value), reply.message, reply.field)
+        return reply
+
+    def request(self, op: "proto.Op", session: str = "", check: bool = True, **args: Any) -> "proto.Reply":
+        """``call(new_request(op, session, **args))``."""
+        return self.call(self.new_request(op, session, **args), check=check)
+
+    def _wait_reply(self, request_id: int, deadline: float) -> Optional["proto.Reply"]:
+        while True:
+            # Drain everything new; replies for other clients (same topic) and stale repeats are dropped.
+            while True:
+                samples = self._replies.take()
+                if not samples:
+                    break
+                for s in samples:
+                    if not isinstance(s, proto.Reply):
+                        continue  # instance-state change without data
+                    if s.client_id == self.client_id and s.request_id == request_id:
+                        return s
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return None
+            self._replies.wait(remaining)
+
+    # -- high-level API -------------------------------------------------------------------------
+    def info(self, session: str = "") -> "proto.ServerInfo":
+        """Server info (``version``, ``uptime_s``, ``sessions``, ``max_chunk_surfels``, ``max_model_surfels``)."""
+        reply = self.request(proto.Op.OP_INFO, session)
+        if not reply.server_info:
+            raise errors.InternalServerError("OP_INFO reply without server_info", "server_info")
+        self._server_info = reply.server_info[0]
+        return self._server_info
+
+    @property
+    def max_chunk_surfels(self) -> int:
+        """The server's per-chunk/page limit (from the last info; fetched if unknown)."""
+        info = self._server_info or self.info()
+        return int(info.max_chunk_surfels) or 65536
+
+    def open_session(self, name: str) -> Session:
+        """Creates the named session (or attaches if it exists)."""
+        return Session(self, name, self.request(proto.Op.OP_OPEN_SESSION, name))
+
+    def join_session(self, name: str) -> Session:
+        """Attaches to an existing session (:class:`~surfeledit.errors.NotFoundError` otherwise)."""
+        return Session(self, name, self.request(proto.Op.OP_JOIN_SESSION, name))
+
+    def probe(self, timeout: float) -> bool:
+        """True if a server is discovered and answers OP_INFO within about ``timeout`` seconds."""
+        if not self.wait_for_server(timeout):
+            return False
+        try:
+            reply = self.call(self.new_request(proto.Op.OP_INFO), timeout=max(0.5, timeout), retries=1)
+        except errors.RequestTimeoutError:
+            return False
+        self._server_info = reply.server_info[0] if reply.server_info else None
+        return True
+
+
+def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0) -> Client:
+    """Connects to the surfeledit server on a DDS domain.
+
+    Args:
+        domain: DDS domain id; None -> env ``SURFELEDIT_DOMAIN`` or 0.
+        spawn: when no server answers ``OP_INFO`` within a short probe, start
+            ``surfeledit-server --domain D`` (see :func:`~surfeledit.server_process.find_server_executable`),
+            wait until it answers, and stop it when the client closes.
+        timeout: seconds to wait for each reply (a request is retried once) and for a spawned
+            server to come up.
+
+    Raises:
+        ServerStartError: no server answered (spawn=False), or one could not be found/started.
+    """
+    if domain is None:
+        domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
+    client = Client(domain, timeout)
+    try:
+        if client.probe(min(_PROBE_S, timeout)):
+            return client
+        if not spawn:
+            raise errors.ServerStartError(f"no surfeledit server answers on DDS domain {domain}")
+        proc, log = spawn_server(domain)
+        client._server, client._server_log = proc, log
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if proc.poll() is not None:
+                raise errors.ServerStartError(exit_message(proc, log))
+            if client.probe(min(1.0, max(0.1, deadline - time.monotonic()))):
+                return client
+        raise errors.ServerStartError(f"{proc.args[0]} (pid {proc.pid}) did not answer OP_INFO within "
+                                      f"{timeout:.1f} s (log: {log})")
+    except BaseException:
+        client.close()
+        raise

@@ -1,0 +1,149 @@
+"""The in-process editing session: :class:`LocalSession` wraps ``surfeledit.core.EditSession`` (the
+C++ session the server holds per session) and returns the result types of :mod:`surfeledit.results`,
+so it satisfies :class:`surfeledit.session_api.EditingSession` like the remote :class:`surfeledit.Session`.
+
+Needs the compiled module ``surfeledit.core`` (built by CMake with ``SURFELEDIT_BUILD_PYTHON``).
+Inputs are validated by the core, which raises the typed errors of :mod:`surfeledit.errors`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any, Dict, Optional
+
+import numpy as np
+
+from .arrays import ArrayLike, Vec3Like, readonly
+from .results import Changes, CollisionStats, SettingValue, State, StepResult
+from .session_api import StateArrays
+
+__all__ = ["LocalSession"]
+
+_STATS_FIELDS = tuple(f.name for f in dataclasses.fields(CollisionStats))
+
+
+def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
+    """The :class:`StepResult` of a core ``StepOutcome`` (timings as the server reports them)."""
+    colliding = np.asarray(o.colliding, np.uint64)
+    depths = np.asarray(o.depths, np.float64)
+    inserted = np.asarray(o.inserted, np.uint64)
+    readonly((colliding, depths, inserted))
+    raw = o.stats
+    stats = CollisionStats(**{k: raw[k] for k in _STATS_FIELDS if k in raw})
+    timings = {"apply": float(o.deform_ms)}
+    if o.detected:
+        timings["detect"] = float(stats.detect_ms)
+    if inserted.size:
+        timings["resample"] = float(o.resample_ms)
+    timings["total"] = call_ms
+    return StepResult(seq=int(o.seq), version=version, moved=int(o.moved),
+                      center=np.asarray(o.center, np.float64).reshape(3), timings=timings, round_trip_ms=call_ms,
+                      detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted)
+
+
+class LocalSession(StateArrays):
+    """An editing session in this process (no server): ``LocalSession("name", threads=0)``.
+
+    Args:
+        name: the session's name (reports and logs only).
+        threads: collision-detection threads (0 = all cores); also the ``threads`` setting.
+
+    Attributes:
+        core: the wrapped ``surfeledit.core.EditSession``, for in-process-only extras.
+    """
+
+    def __init__(self, name: str = "local", threads: int = 0) -> None:
+        from . import core  # the compiled module; imported here so the remote client works without it
+
+        self.name = name
+        self.core = core.EditSession(name, threads=int(threads))
+        self._closed = False
+
+    def __enter__(self) -> "LocalSession":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"LocalSession({self.name!r}, version={self.version})"
+
+    @property
+    def version(self) -> int:
+        """The session version (bumped by every change of the model or the regions)."""
+        return int(self.core.version)
+
+    def close(self) -> None:
+        """Marks the session closed (the model is freed with the object)."""
+        self._closed = True
+
+    # -- the EditingSession contract ---------------------------------------------------------
+    def load_points(self, positions: ArrayLike, normals: ArrayLike, radii: Optional[ArrayLike] = None) -> None:
+        """Replaces the model: positions (P, 3), normals (P, 3), radii (P,) or None (estimated)."""
+        self.core.load_points(positions, normals, radii)
+
+    def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None) -> None:
+        """Sets the zero and the one region by (K,) integer ids."""
+        self.core.set_regions(zero=zero, one=one)
+
+    def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
+               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth") -> StepResult:
+        """One deformation step (see :meth:`surfeledit.session_api.EditingSession.deform`);
+        ``round_trip_ms`` and ``timings["total"]`` are the whole call."""
+        t0 = time.perf_counter()
+        o = self.core.deform(translation=translation, axis=axis, angle=angle, center=center, blend=blend)
+        call_ms = (time.perf_counter() - t0) * 1e3
+        return _step_result(o, self.version, call_ms)
+
+    def configure(self, **settings: SettingValue) -> None:
+        """Changes settings by name, all or none (InvalidArgumentError naming the setting)."""
+        self.core.configure(**settings)
+
+    def settings(self) -> Dict[str, SettingValue]:
+        """Every setting with its current value (integral settings as int)."""
+        return dict(self.core.settings())
+
+    def remove(self, ids: ArrayLike) -> None:
+        """Removes surfels by (K,) integer id."""
+        self.core.remove(ids)
+
+    def report(self) -> Dict[str, Any]:
+        """``surfels``, ``structures`` {name: bytes}, ``total_bytes``, ``bytes_per_surfel`` and
+        ``hierarchy_status`` (``'fresh'`` | ``'refit'`` | ``'rebuilding'``, ``''`` without a hierarchy)."""
+        return dict(self.core.report())
+
+    def state(self) -> State:
+        """The whole model now, ids ascending (arrays read-only; the core hands out copies)."""
+        c = self.core
+        ids = np.asarray(c.ids(), np.uint64)
+        arrays = [np.asarray(c.positions(), np.float64), np.asarray(c.normals(), np.float64),
+                  np.asarray(c.radii(), np.float64)]
+        if ids.size > 1 and not bool(np.all(ids[1:] > ids[:-1])):
+            order = np.argsort(ids, kind="stable")
+            ids, arrays = ids[order], [a[order] for a in arrays]
+        readonly([ids] + arrays)
+        return State(self.version, ids, *arrays)
+
+    def changes_since(self, version: int) -> Changes:
+        """Nothing when ``version`` is the current one; otherwise the whole model (``full``: the
+        in-process session keeps no change log)."""
+        st = self.state()
+        if int(version) == st.version:
+            none = np.zeros((0, 3))
+            return Changes(st.version, False, st.ids[:0], none, none, st.radii[:0], st.ids[:0])
+        return Changes(st.version, True, st.ids, st.positions, st.normals, st.radii, st.ids[:0])
+
+    # -- in-process only ---------------------------------------------------------------------
+    def colliding(self) -> np.ndarray:
+        """(C,) uint64 ids colliding after the last step, ascending."""
+        return np.asarray(self.core.colliding(), np.uint64)
+
+    def hierarchy(self) -> Dict[str, Any]:
+        """The detector's trees: ``status``, ``zero_build_ms``, ``deformable_build_ms``, ``last_rebuild_ms``,
+        ``rebuilds_adopted``."""
+        return dict(self.core.hierarchy())
+
+    def rebuild(self) -> bool:
+        """Starts a background rebuild of the deformable tree; False when there is none or one is under way."""
+        return bool(self.core.rebuild())

@@ -1,0 +1,192 @@
+"""Result types of a session, the same for the remote :class:`~surfeledit.Session` and the in-process
+:class:`~surfeledit.local.LocalSession` (frozen dataclasses of numpy arrays; no wire types).
+
+Conventions: ids ``(P,) uint64`` ascending; positions / normals ``(P, 3) float64`` in model units
+(normals unit length); radii ``(P,) float64`` in model units; times in milliseconds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Dict, Union
+
+import numpy as np
+
+from .arrays import NO_IDS
+
+__all__ = ["CollisionStats", "StepResult", "State", "Changes", "UpdateEvent", "SettingValue", "merge"]
+
+#: A session setting's value: a flag, a number (integers may come back as float) or a text.
+SettingValue = Union[bool, int, float, str]
+
+
+def _no_values() -> np.ndarray:
+    return np.zeros(0, np.float64)
+
+
+@dataclasses.dataclass(frozen=True)
+class CollisionStats:
+    """The collision detector's counters of one step (all zero when no detector ran).
+
+    Attributes:
+        deformable: deformable surfels considered. tested: surfels (re)evaluated this step.
+        queries: nearest-neighbour queries made this step. colliding: surfels reported colliding.
+        detect_ms: this step's detection time. preprocess_ms: the detector's last (re)initialisation.
+        nv, np, nu: the bounding-volume hierarchies' node visits, node-pair tests and node updates of
+            this step (in-process only for now; 0 over DDS, whose reply does not carry them).
+
+    Fields can also be read by name, ``stats["detect_ms"]``, as the in-process dict was.
+    """
+
+    deformable: int = 0
+    tested: int = 0
+    queries: int = 0
+    colliding: int = 0
+    detect_ms: float = 0.0
+    preprocess_ms: float = 0.0
+    nv: int = 0
+    np: int = 0
+    nu: int = 0
+
+    def __getitem__(self, name: str) -> Union[int, float]:
+        if name not in _STATS_FIELDS:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def as_dict(self) -> Dict[str, float]:
+        """``{field: value}`` as floats."""
+        return {name: float(getattr(self, name)) for name in _STATS_FIELDS}
+
+
+_STATS_FIELDS = tuple(f.name for f in dataclasses.fields(CollisionStats))
+
+
+@dataclasses.dataclass(frozen=True)
+class StepResult:
+    """The outcome of one deformation step.
+
+    Attributes:
+        seq: 1-based step number in the session.
+        version: session version after the step.
+        moved: number of surfels displaced.
+        center: rotation centre used, (3,) float64, model units.
+        timings: timings in ms (at least ``total``; deform adds ``apply``, and ``detect`` when a
+            detector ran, ``resample`` when surfels were split).
+        round_trip_ms: caller-measured time of the whole call (over DDS: request to reply).
+        detected: a collision detector ran (the session's algorithm is not ``"none"``).
+        colliding: (C,) uint64 ids of the surfels colliding after the step, ascending.
+        depths: (C,) float64 penetration depth estimate per colliding id, model units.
+        stats: the detector's :class:`CollisionStats` for this step.
+        inserted: (I,) uint64 ids of surfels inserted by dynamic resampling in this step.
+    """
+
+    seq: int
+    version: int
+    moved: int
+    center: np.ndarray
+    timings: Dict[str, float]
+    round_trip_ms: float
+    detected: bool = False
+    colliding: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
+    depths: np.ndarray = dataclasses.field(default_factory=_no_values)
+    stats: CollisionStats = dataclasses.field(default_factory=CollisionStats)
+    inserted: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
+
+
+@dataclasses.dataclass(frozen=True)
+class State:
+    """The whole model at ``version``; arrays are read-only (copy to edit).
+
+    Attributes:
+        version: session version.
+        ids: (P,) uint64, ascending.
+        positions: (P, 3) float64, model units.
+        normals: (P, 3) float64, unit length.
+        radii: (P,) float64, model units.
+    """
+
+    version: int
+    ids: np.ndarray
+    positions: np.ndarray
+    normals: np.ndarray
+    radii: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.ids.shape[0])
+
+
+@dataclasses.dataclass(frozen=True)
+class Changes:
+    """What changed since a version (over DDS: the answer of ``changes_only`` GET_STATE, all pages joined).
+
+    Attributes:
+        version: session version the changes lead to.
+        full: True when the arrays are the whole model (it was replaced since then, or the session
+            cannot tell what changed); apply them as a new model.
+        ids: (C,) uint64 changed or inserted ids, ascending; positions (C, 3), normals (C, 3), radii (C,).
+        removed: (R,) uint64 ids removed since then.
+    """
+
+    version: int
+    full: bool
+    ids: np.ndarray
+    positions: np.ndarray
+    normals: np.ndarray
+    radii: np.ndarray
+    removed: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class UpdateEvent:
+    """One change published by the server, all ``parts`` reassembled.
+
+    Attributes:
+        session: session name. version: version after the change.
+        cause: ``"load"``, ``"regions"``, ``"deform"``, ``"remove"`` or ``"close"``.
+        full: a new model (replaces everything the watcher had). step: deform step number (0 otherwise).
+        ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64 of the changed surfels
+        (for a deform: moved surfels and those inserted by resampling); removed (R,) uint64.
+        detected: deform: a collision detector ran, and ``colliding`` (K,) uint64 holds every id
+        colliding after the step, ascending (empty otherwise).
+
+    When the server's update queue backs up, it merges a session's queued updates into one (the
+    newest version, cause and step, with everything changed since the oldest merged one), so versions
+    may skip; applying updates in version order still gives the current state.
+    """
+
+    session: str
+    version: int
+    cause: str
+    full: bool
+    step: int
+    ids: np.ndarray
+    positions: np.ndarray
+    normals: np.ndarray
+    radii: np.ndarray
+    removed: np.ndarray
+    detected: bool = False
+    colliding: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
+
+
+def merge(cache: State, ch: Changes) -> State:
+    """``cache`` with incremental changes ``ch`` applied (ids stay ascending; ``cache`` is not modified)."""
+    ids, pos, nrm, rad = cache.ids, cache.positions, cache.normals, cache.radii
+    if ch.removed.size:
+        keep = ~np.isin(ids, ch.removed)
+        ids, pos, nrm, rad = ids[keep], pos[keep], nrm[keep], rad[keep]
+    ids, pos, nrm, rad = ids.copy(), pos.copy(), nrm.copy(), rad.copy()
+    if ch.ids.size:
+        idx = np.searchsorted(ids, ch.ids)
+        found = idx < ids.size
+        found[found] = ids[idx[found]] == ch.ids[found]
+        rows = idx[found]
+        pos[rows], nrm[rows], rad[rows] = ch.positions[found], ch.normals[found], ch.radii[found]
+        if not found.all():
+            new = ~found
+            ids = np.concatenate([ids, ch.ids[new]])
+            pos = np.concatenate([pos, ch.positions[new]])
+            nrm = np.concatenate([nrm, ch.normals[new]])
+            rad = np.concatenate([rad, ch.radii[new]])
+            order = np.argsort(ids, kind="stable")
+            ids, pos, nrm, rad = ids[order], pos[order], nrm[order], rad[order]
+    return State(ch.version, ids, pos, nrm, rad)

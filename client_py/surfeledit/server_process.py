@@ -1,0 +1,73 @@
+"""Finding, starting and stopping a local ``surfeledit-server`` process (used by :func:`surfeledit.connect`)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Optional, Tuple
+
+from . import errors
+from ._protocol import REPO_ROOT
+
+__all__ = ["find_server_executable", "spawn_server", "exit_message", "stop_process"]
+
+_log = logging.getLogger("surfeledit")
+
+
+def find_server_executable() -> Optional[str]:
+    """The surfeledit-server to spawn: env ``SURFELEDIT_SERVER``, then ``PATH``, then the build tree."""
+    env = os.environ.get("SURFELEDIT_SERVER")
+    if env:
+        return env
+    found = shutil.which("surfeledit-server")
+    if found:
+        return found
+    local = REPO_ROOT / "build" / "server" / "app" / "surfeledit-server"
+    return str(local) if local.is_file() else None
+
+
+def spawn_server(domain: int) -> Tuple[subprocess.Popen, Path]:
+    """Starts ``surfeledit-server --domain D`` in its own session, output to a temporary log file.
+
+    Returns the process and its log's path. Raises :class:`~surfeledit.errors.ServerStartError` when
+    no executable is found (see :func:`find_server_executable`) or it cannot be started.
+    """
+    exe = find_server_executable()
+    if exe is None:
+        raise errors.ServerStartError(
+            "no surfeledit server answers on DDS domain %d and surfeledit-server was not found "
+            "(set SURFELEDIT_SERVER, put it on PATH, or build it into build/server/app)" % domain)
+    log = tempfile.NamedTemporaryFile(prefix=f"surfeledit-server-{domain}-", suffix=".log", delete=False)
+    _log.info("starting %s --domain %d (log: %s)", exe, domain, log.name)
+    try:
+        proc = subprocess.Popen([exe, "--domain", str(domain)], stdin=subprocess.DEVNULL, stdout=log,
+                                stderr=subprocess.STDOUT, start_new_session=True)
+    except OSError as e:
+        raise errors.ServerStartError(f"cannot start {exe}: {e}") from e
+    finally:
+        log.close()
+    return proc, Path(log.name)
+
+
+def exit_message(proc: subprocess.Popen, log: Path) -> str:
+    """Why a spawned server is gone: its exit code and the tail (2000 characters) of its log."""
+    tail = log.read_text(errors="replace")[-2000:]
+    return f"{proc.args[0]} exited with code {proc.returncode} before answering:\n{tail}"
+
+
+def stop_process(proc: subprocess.Popen, grace: float = 5.0) -> None:
+    """SIGTERM, wait up to ``grace`` seconds, then SIGKILL (nothing if it already exited)."""
+    if proc.poll() is not None:
+        return
+    try:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        _log.warning("surfeledit-server (pid %d) ignored SIGTERM for %.0f s; killing it", proc.pid, grace)
+        proc.kill()
+        proc.wait()

@@ -1,0 +1,332 @@
+"""The remote editing session: :class:`Session`, one named session of a server, over a :class:`~surfeledit.Client`.
+
+It satisfies :class:`surfeledit.session_api.EditingSession` with the result types of
+:mod:`surfeledit.results`, like the in-process :class:`surfeledit.local.LocalSession`. Arrays are
+numpy, row-major, in the server's id order; angles are radians, times milliseconds.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+
+from . import errors
+from ._protocol import proto
+from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_surfels, readonly, vec3
+from .results import Changes, CollisionStats, SettingValue, State, StepResult, merge
+from .session_api import StateArrays
+from .watcher import Watcher
+
+if TYPE_CHECKING:
+    from .connection import Client
+
+__all__ = ["Session"]
+
+_log = logging.getLogger("surfeledit")
+_FETCH_ATTEMPTS = 8  # GET_STATE restarts when the version moves between pages
+
+
+def _setting(name: str, value: Any) -> "proto.Setting":
+    """One named setting by the Python type of its value (bool, int/float, str)."""
+    if not isinstance(name, str) or not name:
+        raise errors.InvalidArgumentError(f"setting names must be non-empty strings, got {name!r}", str(name))
+    if isinstance(value, (bool, np.bool_)):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_BOOL, flag=bool(value))
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_NUMBER, number=float(value))
+    if isinstance(value, str):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_TEXT, text=value)
+    raise errors.InvalidArgumentError(
+        f"setting {name!r} must be a bool, a number or a string, got {type(value).__name__}", name)
+
+
+def _setting_value(s: "proto.Setting") -> SettingValue:
+    kind = s.kind
+    if kind == proto.SettingKind.SETTING_BOOL:
+        return bool(s.flag)
+    if kind == proto.SettingKind.SETTING_TEXT:
+        return str(s.text)
+    return float(s.number)
+
+
+def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
+    """The :class:`StepResult` of a DEFORM reply (the only place that reads the wire's step type)."""
+    step = reply.step[0] if reply.step else proto.StepInfo()
+    colliding = np.asarray(step.colliding, dtype=np.uint64)
+    depths = np.asarray(step.depths, dtype=np.float64)
+    if depths.shape != colliding.shape:
+        raise errors.InternalServerError(
+            f"step reply has {depths.size} depths for {colliding.size} colliding ids", "step.depths")
+    inserted = np.asarray(step.inserted, dtype=np.uint64)
+    readonly((colliding, depths, inserted))
+    st = step.stats
+    stats = CollisionStats(deformable=int(st.deformable), tested=int(st.tested), queries=int(st.queries),
+                           colliding=int(st.colliding), detect_ms=float(st.detect_ms),
+                           preprocess_ms=float(st.preprocess_ms))
+    return StepResult(seq=int(step.seq), version=int(reply.version), moved=int(step.moved),
+                      center=np.array([step.center.x, step.center.y, step.center.z]),
+                      timings={t.name: float(t.ms) for t in reply.timings}, round_trip_ms=round_trip_ms,
+                      detected=bool(step.detected), colliding=colliding, depths=depths, stats=stats,
+                      inserted=inserted)
+
+
+class Session(StateArrays):
+    """An opened or joined editing session; close it (or use ``with``) to detach.
+
+    Attributes:
+        client: the connection. name: the session's name.
+        version: the session version of the last reply (0 before the first load).
+    """
+
+    def __init__(self, client: "Client", name: str, reply: "proto.Reply") -> None:
+        self.client = client
+        self.name = name
+        self.version = 0
+        self._info: Optional["proto.SessionInfo"] = None
+        self._cache: Optional[State] = None
+        self._closed = False
+        self._absorb(reply)
+        client.attach(self)
+
+    def __enter__(self) -> "Session":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        try:
+            self.close()
+        except errors.SurfelEditError:
+            if exc[0] is None:
+                raise
+            _log.warning("closing session %r failed", self.name, exc_info=True)
+
+    def __repr__(self) -> str:
+        return f"Session({self.name!r}, version={self.version})"
+
+    def close(self) -> None:
+        """Detaches from the session (the server drops it when its last client leaves)."""
+        self.client.detach(self)
+        if self._closed or self.client.closed:
+            self._closed = True
+            return
+        self._closed = True
+        self._request(proto.Op.OP_CLOSE_SESSION)
+
+    def _request(self, op: "proto.Op", **args: Any) -> "proto.Reply":
+        """One request on this session; keeps :attr:`version` and the last session info up to date."""
+        return self._absorb(self.client.request(op, self.name, **args))
+
+    def _absorb(self, reply: "proto.Reply") -> "proto.Reply":
+        """Keeps the version and the session info a reply carries."""
+        if reply.version:
+            self.version = int(reply.version)
+        if reply.session_info:
+            self._info = reply.session_info[0]
+        return reply
+
+    # -- info --------------------------------------------------------------------------------
+    def info(self) -> "proto.SessionInfo":
+        """Session info: ``surfels``, ``has_regions``, ``state_hash``, ``clients``, ``bytes_per_surfel``,
+        ``structures`` (name, bytes), ``settings`` (every setting; :meth:`settings` as a dict)."""
+        reply = self._request(proto.Op.OP_INFO)
+        if not reply.session_info:
+            raise errors.NotFoundError(f"session {self.name!r} not reported by the server", "session")
+        return self._info
+
+    def report(self) -> Dict[str, Any]:
+        """What the session holds: ``{"surfels": int, "structures": {name: bytes}, "total_bytes": int,
+        "bytes_per_surfel": float}`` (from :meth:`info`)."""
+        info = self.info()
+        structures = {s.name: int(s.bytes) for s in info.structures}
+        return dict(surfels=int(info.surfels), structures=structures, total_bytes=sum(structures.values()),
+                    bytes_per_surfel=float(info.bytes_per_surfel))
+
+    # -- loading -----------------------------------------------------------------------------
+    def load_points(self, positions: ArrayLike, normals: ArrayLike,
+                    radii: Optional[ArrayLike] = None) -> "proto.SessionInfo":
+        """Replaces the model with the given surfels (chunked upload, atomic on the server).
+
+        Args:
+            positions: (P, 3) float64, model units.
+            normals: (P, 3) float64, non-zero (normalised by the server).
+            radii: (P,) float64 > 0, model units; None lets the server estimate them from spacing.
+
+        Raises InvalidArgumentError (client side) on wrong shapes; the server validates values
+        (finite, non-zero normals, positive radii) at commit and raises the typed error.
+        Returns the session info.
+        """
+        pos = as_points(positions, "positions")
+        nrm = as_points(normals, "normals", pos.shape[0])
+        rad = as_radii(radii, pos.shape[0])
+        total = pos.shape[0]
+        chunk = self.client.max_chunk_surfels
+        self._request(proto.Op.OP_LOAD_BEGIN, load_begin=proto.LoadBegin(total=total, has_radii=rad is not None))
+        for off in range(0, total, chunk):
+            end = min(total, off + chunk)
+            self._request(proto.Op.OP_LOAD_CHUNK, load_chunk=proto.LoadChunk(
+                offset=off,
+                positions=pos[off:end].ravel().tolist(),
+                normals=nrm[off:end].ravel().tolist(),
+                radii=rad[off:end].tolist() if rad is not None else []))
+        self._request(proto.Op.OP_LOAD_COMMIT)
+        self._cache = None
+        return self._info
+
+    def load_file(self, path: Union[str, Path]) -> "proto.SessionInfo":
+        """Loads a file on the server's file system (.ply, .pcd, .obj) as the new model."""
+        self._request(proto.Op.OP_LOAD_FILE, load_file=proto.LoadFile(path=str(path)))
+        self._cache = None
+        return self._info
+
+    # -- regions and deformation -------------------------------------------------------------
+    def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None,
+                    zero_sphere: Optional[SelectorLike] = None, one_sphere: Optional[SelectorLike] = None,
+                    zero_box: Optional[SelectorLike] = None, one_box: Optional[SelectorLike] = None
+                    ) -> "proto.SessionInfo":
+        """Sets the zero region (never moves) and the one region (moves fully).
+
+        Each region is the union of its ids ((K,) integer) and selectors, applied to the current
+        positions: ``*_sphere = (center (3,), radius)``, ``*_box = (center (3,), half_extents (3,))``,
+        model units. Both regions must end up non-empty and disjoint (server-checked: ConflictError).
+        """
+        def spec(ids: Optional[ArrayLike], sphere: Optional[SelectorLike], box: Optional[SelectorLike],
+                 name: str) -> "proto.RegionSpec":
+            selectors = []
+            if sphere is not None:
+                center, radius = sphere
+                selectors.append(proto.Selector(kind=proto.SelectorKind.SELECTOR_SPHERE,
+                                                center=vec3(center, f"{name}_sphere.center"),
+                                                radius=float(radius)))
+            if box is not None:
+                center, half = box
+                selectors.append(proto.Selector(kind=proto.SelectorKind.SELECTOR_BOX,
+                                                center=vec3(center, f"{name}_box.center"),
+                                                half_extents=vec3(half, f"{name}_box.half_extents")))
+            return proto.RegionSpec(ids=as_ids(ids, name), selectors=selectors)
+
+        arg = proto.SetRegions(zero=spec(zero, zero_sphere, zero_box, "zero"),
+                               one=spec(one, one_sphere, one_box, "one"))
+        self._request(proto.Op.OP_SET_REGIONS, set_regions=arg)
+        return self._info
+
+    def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
+               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth") -> StepResult:
+        """Applies one deformation step (then resampling and collision detection as configured).
+
+        Args:
+            translation: (3,) model units, applied fully to the one region.
+            axis: (3,) rotation axis (normalised by the server; non-zero when ``angle != 0``).
+            angle: radians.
+            center: (3,) rotation centre; None -> centroid of the one region.
+            blend: ``"smooth"``, ``"quadratic"`` or ``"linear"``.
+        """
+        arg = proto.Deform(translation=vec3(translation, "translation"), axis=vec3(axis, "axis"),
+                           angle=float(angle), has_center=center is not None,
+                           center=vec3(center, "center") if center is not None else proto.Vec3(),
+                           blend=str(blend))
+        t0 = time.perf_counter()
+        reply = self._request(proto.Op.OP_DEFORM, deform=arg)
+        return _step_result(reply, (time.perf_counter() - t0) * 1e3)
+
+    # -- settings and removal ----------------------------------------------------------------
+    def configure(self, **settings: SettingValue) -> "proto.SessionInfo":
+        """Changes session settings, all or none, e.g. ``configure(algorithm="temporal", boundary_n=8)``.
+
+        Names and meanings: ``algorithm`` (``"none"``, ``"simple"``, ``"improved"``, ``"temporal"``,
+        ``"robust"``), ``threshold``, ``boundary``, ``boundary_n``, ``boundary_i``, ``step_bound``,
+        ``threads``, ``resample``, ``split_threshold`` (see :meth:`settings`). A bool is sent as a flag,
+        an int or float as a number, a str as text. The collision detector is re-initialised from the
+        current model; the model and the version do not change.
+
+        Returns the session info (its ``settings`` list every setting). Raises
+        :class:`~surfeledit.errors.InvalidArgumentError` naming the setting (``.field``) for an unknown
+        name, a value of the wrong kind or a bad value (nothing changes); a value of another Python
+        type is refused before sending.
+        """
+        arg = proto.Configure(settings=[_setting(name, value) for name, value in settings.items()])
+        self._request(proto.Op.OP_CONFIGURE, configure=arg)
+        return self._info
+
+    def settings(self) -> Dict[str, SettingValue]:
+        """Every session setting with its current value: ``{name: bool | float | str}`` (integers as float)."""
+        return {s.name: _setting_value(s) for s in self.info().settings}
+
+    def remove(self, ids: ArrayLike) -> "proto.SessionInfo":
+        """Removes surfels by id ((K,) integer); the other ids stay as they are.
+
+        Raises :class:`~surfeledit.errors.NotFoundError` for an unknown id and
+        :class:`~surfeledit.errors.ConflictError` when the zero or the one region would be left empty
+        (nothing is removed then). Returns the session info.
+        """
+        id_list = as_ids(ids, "ids")
+        if not id_list:
+            raise errors.InvalidArgumentError("remove needs at least one id", "ids")
+        self._request(proto.Op.OP_REMOVE, remove=proto.Remove(ids=id_list))
+        return self._info
+
+    # -- state -------------------------------------------------------------------------------
+    def _fetch_pages(self, changes_only: bool, since: int) -> Optional[Tuple[int, List["proto.StatePage"]]]:
+        """(version, all pages) of one GET_STATE answer at one version; None if the version moved in between."""
+        pages: List["proto.StatePage"] = []
+        version: Optional[int] = None
+        offset = 0
+        while True:
+            reply = self._request(proto.Op.OP_GET_STATE, get_state=proto.GetState(
+                changes_only=changes_only, since_version=since, offset=offset, max_count=0))
+            if not reply.state:
+                raise errors.InternalServerError("GET_STATE reply without a state page", "state")
+            page = reply.state[0]
+            if version is None:
+                version = int(reply.version)
+            elif int(reply.version) != version:
+                return None
+            pages.append(page)
+            offset = int(page.offset) + len(page.ids)
+            if offset >= int(page.total):
+                return version, pages
+            if not page.ids:
+                raise errors.InternalServerError(f"empty state page at offset {offset} of {page.total}", "state")
+
+    def _fetch(self, changes_only: bool, since: int) -> Changes:
+        """Reads all pages of one GET_STATE answer; restarts if the version moves between pages."""
+        for _attempt in range(_FETCH_ATTEMPTS):
+            answer = self._fetch_pages(changes_only, since)
+            if answer is None:
+                _log.debug("session %r changed while paging; restarting the fetch", self.name)
+                continue
+            version, pages = answer
+            ids, pos, nrm, rad = join_surfels(pages)
+            return Changes(version=version, full=bool(pages[0].full), ids=ids, positions=pos,
+                           normals=nrm, radii=rad, removed=np.asarray(pages[0].removed, dtype=np.uint64))
+        raise errors.ConflictError(f"session {self.name!r} kept changing while its state was fetched", "version")
+
+    def changes_since(self, version: int) -> Changes:
+        """Surfels changed or inserted since ``version`` plus removed ids (whole model if replaced)."""
+        return self._fetch(True, int(version))
+
+    def state(self) -> State:
+        """The whole model at the current version (arrays read-only).
+
+        The last full fetch is cached by version; later calls fetch only the changes since then.
+        """
+        cache = self._cache
+        if cache is None:
+            ch = self._fetch(False, 0)
+            new = State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii)
+        else:
+            ch = self._fetch(True, cache.version)
+            if ch.version == cache.version and ch.ids.size == 0 and ch.removed.size == 0:
+                return cache
+            new = State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii) if ch.full else merge(cache, ch)
+        readonly((new.ids, new.positions, new.normals, new.radii))
+        self._cache = new
+        self.version = new.version
+        return new
+
+    # -- updates -----------------------------------------------------------------------------
+    def watch(self) -> Watcher:
+        """Starts receiving this session's Update samples (from now on; fetch ``state()`` for the past)."""
+        return Watcher(self.client, self.name)

@@ -1,0 +1,123 @@
+"""The editing-session contract: what every session offers, in-process or over DDS.
+
+:class:`EditingSession` is satisfied by the remote :class:`surfeledit.Session` and the in-process
+:class:`surfeledit.local.LocalSession`, both returning the result types of :mod:`surfeledit.results`.
+Code written against it (the scenario runner, tests, a GUI) runs either way with one code path.
+A new session operation is added here, then to both sessions.
+
+Conventions: positions / normals ``(P, 3) float64`` (model units; normals unit length), radii
+``(P,) float64`` (model units), ids ``(P,) uint64`` ascending, angles radians, times ms. Failures
+are the typed errors of :mod:`surfeledit.errors` (same class for the same mistake either way).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Optional, Protocol, runtime_checkable
+
+import numpy as np
+
+from .arrays import ArrayLike, Vec3Like
+from .results import Changes, SettingValue, State, StepResult
+
+__all__ = ["EditingSession", "StateArrays"]
+
+
+@runtime_checkable
+class EditingSession(Protocol):
+    """One editing session: a surfel model, its zero / one regions, deformation steps and collision detection.
+
+    Attributes:
+        name: the session's name.
+        version: the session version (bumped by every change of the model or the regions).
+
+    The methods returning ``object`` return something informative in each implementation (the
+    remote one its ``proto.SessionInfo``); code written against this contract must not use it.
+    """
+
+    name: str
+    version: int
+
+    def load_points(self, positions: ArrayLike, normals: ArrayLike, radii: Optional[ArrayLike] = None) -> object:
+        """Replaces the model: positions (P, 3), normals (P, 3) non-zero, radii (P,) > 0 or None
+        (estimated from the spacing). Ids become 0..P-1 in row order. InvalidArgumentError on bad input."""
+        ...
+
+    def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None) -> object:
+        """Sets the zero region (never moves) and the one region (moves fully) by (K,) integer ids;
+        both non-empty and disjoint (ConflictError), every id known (NotFoundError)."""
+        ...
+
+    def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
+               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth") -> StepResult:
+        """One deformation step: translation (3,) model units, rotation ``angle`` radians about ``axis``
+        (3,) through ``center`` (3,) (None: the one region's centroid), blend ``"smooth"`` |
+        ``"quadratic"`` | ``"linear"``; then resampling and collision detection as configured."""
+        ...
+
+    def configure(self, **settings: SettingValue) -> object:
+        """Changes settings by name, all or none (InvalidArgumentError naming the setting in ``.field``)."""
+        ...
+
+    def settings(self) -> Dict[str, SettingValue]:
+        """Every setting with its current value (numbers may come back as float)."""
+        ...
+
+    def remove(self, ids: ArrayLike) -> object:
+        """Removes surfels by (K,) id; the other ids stay (NotFoundError, ConflictError: nothing removed)."""
+        ...
+
+    def report(self) -> Dict[str, Any]:
+        """What the session holds: ``surfels``, ``structures`` {name: bytes}, ``total_bytes``, ``bytes_per_surfel``."""
+        ...
+
+    def state(self) -> State:
+        """The whole model at the current version, ids ascending (arrays read-only)."""
+        ...
+
+    def changes_since(self, version: int) -> Changes:
+        """Surfels changed or inserted since ``version`` and ids removed (``full``: the whole model)."""
+        ...
+
+    def ids(self) -> np.ndarray:
+        """(P,) uint64 ids, ascending."""
+        ...
+
+    def positions(self) -> np.ndarray:
+        """(P, 3) float64, model units, in id order."""
+        ...
+
+    def normals(self) -> np.ndarray:
+        """(P, 3) float64 unit normals, in id order."""
+        ...
+
+    def radii(self) -> np.ndarray:
+        """(P,) float64, model units, in id order."""
+        ...
+
+    def close(self) -> None:
+        """Ends this use of the session (idempotent)."""
+        ...
+
+
+class StateArrays:
+    """The per-array accessors of :class:`EditingSession`, written once on top of ``state()``
+    (a base of both sessions)."""
+
+    def state(self) -> State:
+        raise NotImplementedError
+
+    def ids(self) -> np.ndarray:
+        """(P,) uint64 ids, ascending (the order of every other array)."""
+        return self.state().ids
+
+    def positions(self) -> np.ndarray:
+        """(P, 3) float64 positions, model units, in id order."""
+        return self.state().positions
+
+    def normals(self) -> np.ndarray:
+        """(P, 3) float64 unit normals, in id order."""
+        return self.state().normals
+
+    def radii(self) -> np.ndarray:
+        """(P,) float64 radii, model units, in id order."""
+        return self.state().radii

@@ -1,0 +1,119 @@
+"""Watching a session's changes: :class:`Watcher` receives ``Update`` samples and reassembles their parts."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from typing import TYPE_CHECKING, Any, Dict, Iterator, List, Optional
+
+import numpy as np
+
+from ._protocol import proto
+from .arrays import concat, join_surfels
+from .results import UpdateEvent
+
+if TYPE_CHECKING:
+    from .connection import Client
+
+__all__ = ["Watcher"]
+
+_log = logging.getLogger("surfeledit")
+_TAKE = 64  # samples taken from the reader at a time
+
+
+class Watcher:
+    """Receives a session's ``Update`` samples and reassembles multi-part changes.
+
+    Use :meth:`get` (blocking with timeout), :meth:`poll` (non-blocking, e.g. from a GUI timer) or
+    iterate (``for ev in watcher`` blocks; it ends after a ``close`` update or :meth:`close`).
+    Updates are volatile: only changes made after the watcher was created arrive.
+    """
+
+    def __init__(self, client: "Client", session: str) -> None:
+        self.client = client
+        self.session = session
+        self._inbox = client.update_inbox()
+        if not self._inbox.matched():
+            _log.warning("watcher of %r: no update writer discovered in time", session)
+        self._pending: Dict[int, Dict[int, "proto.Update"]] = {}
+        self._ready: List[UpdateEvent] = []
+        self._closed = False
+        self._lock = threading.Lock()
+        client.attach(self)
+
+    def __enter__(self) -> "Watcher":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stops receiving (idempotent); :meth:`get` and iteration then end."""
+        if self._closed:
+            return
+        self._closed = True
+        self.client.detach(self)
+        self._inbox.close()
+
+    def _drain(self) -> None:
+        while True:
+            samples = self._inbox.take(_TAKE)
+            if not samples:
+                return
+            for s in samples:
+                if isinstance(s, proto.Update) and s.session == self.session:
+                    self._add(s)
+
+    def _add(self, s: "proto.Update") -> None:
+        """Keeps one part; when all ``parts`` of its version are in, queues their :class:`UpdateEvent`."""
+        parts = max(1, int(s.parts))
+        got = self._pending.setdefault(int(s.version), {})
+        got[int(s.part)] = s
+        if len(got) < parts:
+            return
+        del self._pending[int(s.version)]
+        ordered = [got[i] for i in sorted(got)]
+        first = ordered[0]
+        ids, positions, normals, radii = join_surfels(ordered)
+        self._ready.append(UpdateEvent(
+            session=first.session, version=int(first.version), cause=first.cause, full=bool(first.full),
+            step=int(first.step), ids=ids, positions=positions, normals=normals, radii=radii,
+            removed=concat(ordered, "removed", np.uint64), detected=bool(first.detected),
+            colliding=np.asarray(first.colliding, dtype=np.uint64)))
+        self._ready.sort(key=lambda e: e.version)
+
+    def poll(self) -> List[UpdateEvent]:
+        """All complete updates received so far (non-blocking), oldest first."""
+        with self._lock:
+            if self._closed:
+                return []
+            self._drain()
+            out, self._ready = self._ready, []
+            return out
+
+    def get(self, timeout: Optional[float] = None) -> Optional[UpdateEvent]:
+        """The next complete update, waiting up to ``timeout`` seconds (None: forever); None on timeout."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        with self._lock:
+            while not self._closed:
+                self._drain()
+                if self._ready:
+                    return self._ready.pop(0)
+                if deadline is None:
+                    self._inbox.wait(1.0)
+                else:
+                    remaining = deadline - time.monotonic()
+                    if remaining <= 0:
+                        return None
+                    self._inbox.wait(remaining)
+        return None
+
+    def __iter__(self) -> Iterator[UpdateEvent]:
+        while not self._closed:
+            ev = self.get(timeout=None)
+            if ev is None:
+                return
+            yield ev
+            if ev.cause == "close":
+                return
