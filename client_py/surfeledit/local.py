@@ -16,7 +16,7 @@ import numpy as np
 
 from .arrays import ArrayLike, Vec3Like, readonly
 from .results import Changes, CollisionStats, SettingValue, State, StepResult
-from .session_api import StateArrays
+from .session_api import StateArrays, settings_doc
 
 __all__ = ["LocalSession"]
 
@@ -147,3 +147,6 @@ class LocalSession(StateArrays):
     def rebuild(self) -> bool:
         """Starts a background rebuild of the deformable tree; False when there is none or one is under way."""
         return bool(self.core.rebuild())
+
+
+LocalSession.configure.__doc__ = (LocalSession.configure.__doc__ or "") + settings_doc()

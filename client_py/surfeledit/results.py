@@ -16,7 +16,7 @@ from .arrays import NO_IDS
 
 __all__ = ["CollisionStats", "StepResult", "State", "Changes", "UpdateEvent", "SettingValue", "merge"]
 
-#: A session setting's value: a flag, a number (integers may come back as float) or a text.
+#: A session setting's value: a flag, an integer, a number or a text.
 SettingValue = Union[bool, int, float, str]
 
 
@@ -33,7 +33,7 @@ class CollisionStats:
         queries: nearest-neighbour queries made this step. colliding: surfels reported colliding.
         detect_ms: this step's detection time. preprocess_ms: the detector's last (re)initialisation.
         nv, np, nu: the bounding-volume hierarchies' node visits, node-pair tests and node updates of
-            this step (in-process only for now; 0 over DDS, whose reply does not carry them).
+            this step (0 without a hierarchy).
 
     Fields can also be read by name, ``stats["detect_ms"]``, as the in-process dict was.
     """

@@ -18,7 +18,7 @@ from . import errors
 from ._protocol import proto
 from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_surfels, readonly, vec3
 from .results import Changes, CollisionStats, SettingValue, State, StepResult, merge
-from .session_api import StateArrays
+from .session_api import StateArrays, settings_doc
 from .watcher import Watcher
 
 if TYPE_CHECKING:
@@ -36,7 +36,9 @@ def _setting(name: str, value: Any) -> "proto.Setting":
         raise errors.InvalidArgumentError(f"setting names must be non-empty strings, got {name!r}", str(name))
     if isinstance(value, (bool, np.bool_)):
         return proto.Setting(name=name, kind=proto.SettingKind.SETTING_BOOL, flag=bool(value))
-    if isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, (int, np.integer)):
+        return proto.Setting(name=name, kind=proto.SettingKind.SETTING_INT, number=float(value))
+    if isinstance(value, (float, np.floating)):
         return proto.Setting(name=name, kind=proto.SettingKind.SETTING_NUMBER, number=float(value))
     if isinstance(value, str):
         return proto.Setting(name=name, kind=proto.SettingKind.SETTING_TEXT, text=value)
@@ -50,12 +52,14 @@ def _setting_value(s: "proto.Setting") -> SettingValue:
         return bool(s.flag)
     if kind == proto.SettingKind.SETTING_TEXT:
         return str(s.text)
+    if kind == proto.SettingKind.SETTING_INT:
+        return int(s.number)
     return float(s.number)
 
 
 def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
     """The :class:`StepResult` of a DEFORM reply (the only place that reads the wire's step type)."""
-    step = reply.step[0] if reply.step else proto.StepInfo()
+    step = reply.step[0] if reply.step else proto.StepResult()
     colliding = np.asarray(step.colliding, dtype=np.uint64)
     depths = np.asarray(step.depths, dtype=np.float64)
     if depths.shape != colliding.shape:
@@ -66,7 +70,7 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
     st = step.stats
     stats = CollisionStats(deformable=int(st.deformable), tested=int(st.tested), queries=int(st.queries),
                            colliding=int(st.colliding), detect_ms=float(st.detect_ms),
-                           preprocess_ms=float(st.preprocess_ms))
+                           preprocess_ms=float(st.preprocess_ms), nv=int(st.nv), np=int(st.np), nu=int(st.nu))
     return StepResult(seq=int(step.seq), version=int(reply.version), moved=int(step.moved),
                       center=np.array([step.center.x, step.center.y, step.center.z]),
                       timings={t.name: float(t.ms) for t in reply.timings}, round_trip_ms=round_trip_ms,
@@ -235,11 +239,9 @@ class Session(StateArrays):
     def configure(self, **settings: SettingValue) -> "proto.SessionInfo":
         """Changes session settings, all or none, e.g. ``configure(algorithm="temporal", boundary_n=8)``.
 
-        Names and meanings: ``algorithm`` (``"none"``, ``"simple"``, ``"improved"``, ``"temporal"``,
-        ``"robust"``), ``threshold``, ``boundary``, ``boundary_n``, ``boundary_i``, ``step_bound``,
-        ``threads``, ``resample``, ``split_threshold`` (see :meth:`settings`). A bool is sent as a flag,
-        an int or float as a number, a str as text. The collision detector is re-initialised from the
-        current model; the model and the version do not change.
+        Every setting is listed below (from the server's settings table). A bool is sent as a flag, an
+        int as an integer, a float as a number, a str as text. The collision detector is re-initialised
+        from the current model; the model and the version do not change.
 
         Returns the session info (its ``settings`` list every setting). Raises
         :class:`~surfeledit.errors.InvalidArgumentError` naming the setting (``.field``) for an unknown
@@ -251,7 +253,7 @@ class Session(StateArrays):
         return self._info
 
     def settings(self) -> Dict[str, SettingValue]:
-        """Every session setting with its current value: ``{name: bool | float | str}`` (integers as float)."""
+        """Every session setting with its current value: ``{name: bool | int | float | str}``."""
         return {s.name: _setting_value(s) for s in self.info().settings}
 
     def remove(self, ids: ArrayLike) -> "proto.SessionInfo":
@@ -330,3 +332,6 @@ class Session(StateArrays):
     def watch(self) -> Watcher:
         """Starts receiving this session's Update samples (from now on; fetch ``state()`` for the past)."""
         return Watcher(self.client, self.name)
+
+
+Session.configure.__doc__ = (Session.configure.__doc__ or "") + settings_doc()

@@ -19,7 +19,7 @@ import numpy as np
 from .arrays import ArrayLike, Vec3Like
 from .results import Changes, SettingValue, State, StepResult
 
-__all__ = ["EditingSession", "StateArrays"]
+__all__ = ["EditingSession", "StateArrays", "settings_doc"]
 
 
 @runtime_checkable
@@ -97,6 +97,19 @@ class EditingSession(Protocol):
     def close(self) -> None:
         """Ends this use of the session (idempotent)."""
         ...
+
+
+def settings_doc() -> str:
+    """Every session setting, one line each (name: meaning; accepted values, default), from the settings
+    table the compiled core exposes (``surfeledit.core.setting_specs()``); empty without the module."""
+    try:
+        from . import core
+    except ImportError:
+        return ""
+    lines = ["", "        Settings:"]
+    for spec in core.setting_specs():
+        lines.append(f"            ``{spec['name']}``: {spec['doc']}; {spec['expects']}, default {spec['default']!r}")
+    return "\n".join(lines) + "\n"
 
 
 class StateArrays:
