@@ -1,4 +1,4 @@
-// Collision detection with bounding volume hierarchies (ALGORITHMS.md §5, thesis ch. 7-8): a broad
+// Collision detection with bounding volume hierarchies (docs/algorithms.md §5, thesis ch. 7-8): a broad
 // phase over a zero tree (AABB, OBB or sphere boxes, one std::visit per step) and optionally a
 // deformable AABB tree, in front of the configured algorithm's narrow test (collision_detail.hpp:
 // NarrowDetector, the same code as without a hierarchy) or of the extended narrow phase.

@@ -29,10 +29,9 @@ class NarrowDetector : public CollisionDetector {
   using CollisionDetector::CollisionDetector;
 };
 
-// Defined in collision_simple.cpp, collision_temporal.cpp, collision_robust.cpp.
-std::unique_ptr<NarrowDetector> make_simple_detector(const CollisionParams& params, bool improved);
-std::unique_ptr<NarrowDetector> make_temporal_detector(const CollisionParams& params);
-std::unique_ptr<NarrowDetector> make_robust_detector(const CollisionParams& params);
+// Defined in collision.cpp: the row detector (collision/row_detector.hpp) of `params.algorithm`'s kernel
+// (not None).
+std::unique_ptr<NarrowDetector> make_narrow_detector(const CollisionParams& params);
 // Defined in collision_bvh.cpp: `narrow` behind the broad phase of `hierarchy` (validated by the caller).
 std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionParams& params,
                                                               const HierarchyParams& hierarchy,
@@ -116,13 +115,6 @@ inline double sphere_rho2(double dist2, double radius, double margin) {
   const double rho = std::sqrt(dist2) - margin * radius;
   return rho > 0.0 ? rho * rho : 0.0;
 }
-
-// The spheres of split surfels (§4.4, thesis §6.5): rows first_child + k were split from parents[k].
-// A child B takes its parent's sphere when it lies inside it, else an empty sphere (tested at the
-// next step); the parent row (child A) keeps its sphere only when it still lies inside it.
-// `center` (#P by 3) and `rho2` (#P) already have rows for the children.
-void split_spheres(const Points& positions, const IndexList& parents, Index first_child, Points& center,
-                   Values& rho2);
 
 // One evaluation of the §4.1 test for deformable surfel s1 at p1 against zero surfel k.
 struct SimpleTest {
