@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "collision/kernel_rows.hpp"
 #include "collision/robust_kernel.hpp"
 #include "collision/temporal_kernel.hpp"
 #include "surfeledit/core/simplify/approximate_detector.hpp"
@@ -22,7 +23,7 @@ class SimplifiedDetector final : public ApproximateDetector {
   using State = typename Kernel::State;
 
   SimplifiedDetector(const CollisionParams& params, const SimplifyParams& simplify)
-      : ApproximateDetector(params), simplify_(simplify), kernel_(params) {}
+      : ApproximateDetector(params), simplify_(simplify), rows_(params) {}
 
   const SimplifyParams& simplify_params() const override { return simplify_; }
   const ClusterMap& clusters() const override { return clusters_; }
@@ -30,24 +31,22 @@ class SimplifiedDetector final : public ApproximateDetector {
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
-    IndexList deformable, zero_rows;
-    split_rows(scene, deformable, zero_rows);
     const Index rows = static_cast<Index>(scene.regions.size());
     const int threads = resolve_threads(params_.threads);
-    Kernel kernel(params_);
-    kernel.reset(scene, deformable, zero_rows, threads);
+    IndexList zero_rows;
+    KernelRows<Kernel> kr = KernelRows<Kernel>::build(params_, scene, threads, zero_rows);
+    const Kernel& kernel = kr.kernel;
     ZeroSet own_zero;  // the zero region for proximity and initial spheres when the kernel has none
     if (!kernel.zero_set()) own_zero.build(scene, zero_rows, params_.knn_eps);
     const ZeroSet& zero = kernel.zero_set() ? *kernel.zero_set() : own_zero;
     auto nearest = [&](const Vec3& p) { return nearest_zero(zero, p); };
     // Per-row states: spheres start with the distance to the nearest zero surfel.
-    std::vector<State> state(static_cast<std::size_t>(rows));
-    if (Kernel::kSeeded) seed_states(kernel, scene.positions, deformable, threads, nearest, state);
+    if (Kernel::kSeeded) seed_states(kernel, scene.positions, kr.deformable, threads, nearest, kr.states);
     // Clusters of the deformable rows and their simplified surfels' states.
     const auto cluster_start = std::chrono::steady_clock::now();
     SimplifyParams sp = simplify_;
     sp.threads = params_.threads;
-    ClusterMap map(rows, make_clusters(scene.positions, deformable, sp));
+    ClusterMap map(rows, make_clusters(scene.positions, kr.deformable, sp));
     approx_ = ApproximateStats{};
     approx_.simplify_ms = ms_since(cluster_start);
     const Index nc = map.cluster_count();
@@ -62,11 +61,8 @@ class SimplifiedDetector final : public ApproximateDetector {
         cstate[c] = kernel.init(p, nearest(p));
       }
     }
-    kernel_ = std::move(kernel);
+    rows_ = std::move(kr);
     own_zero_ = std::move(own_zero);
-    deformable_ = std::move(deformable);
-    rows_ = rows;
-    state_ = std::move(state);
     clusters_ = std::move(map);
     cluster_state_ = std::move(cstate);
     prox_ = std::move(prox);
@@ -75,11 +71,12 @@ class SimplifiedDetector final : public ApproximateDetector {
 
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
     const auto start = std::chrono::steady_clock::now();
-    require_scene_rows(scene, rows_, "detect");
-    if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
+    rows_.require_step(scene, previous);
     const int threads = resolve_threads(params_.threads);
     const Index nc = clusters_.cluster_count();
     const ZeroSet& zero = this->zero();
+    const Kernel& kernel = rows_.kernel;
+    std::vector<State>& state = rows_.states;
     // What one cluster's evaluation adds to the step's statistics (summed per thread, then merged).
     struct Counts {
       Index tested = 0, queries = 0, cluster_queries = 0, clusters = 0, singletons = 0, colliding_clusters = 0,
@@ -113,7 +110,7 @@ class SimplifiedDetector final : public ApproximateDetector {
         double radius = 0.0;
         for (Index r : m) radius = std::max(radius, (row3(scene.positions, r) - pc).norm() + scene.radii[r]);
         State& cs = cluster_state_[c];
-        n.cluster_queries += kernel_.update(cs, TestPoint{pc, radius, prev});
+        n.cluster_queries += kernel.update(cs, TestPoint{pc, radius, prev});
         if (cs.colliding()) {
           ++n.colliding_clusters;
           active = true;
@@ -135,7 +132,7 @@ class SimplifiedDetector final : public ApproximateDetector {
         }
         if (!active) {
           for (Index r : m) {
-            if (state_[r].colliding()) {  // memorised: still colliding while its cluster does not
+            if (state[r].colliding()) {  // memorised: still colliding while its cluster does not
               active = true;
               break;
             }
@@ -145,12 +142,12 @@ class SimplifiedDetector final : public ApproximateDetector {
       if (active) {
         ++n.active_clusters;
         for (Index r : m) {
-          const Index made = kernel_.update(state_[r], TestPoint{row3(scene.positions, r), scene.radii[r], row3(previous, r)});
+          const Index made = kernel.update(state[r], TestPoint{row3(scene.positions, r), scene.radii[r], row3(previous, r)});
           n.queries += made;
           n.tested += made > 0;
         }
       } else {
-        for (Index r : m) kernel_.skip(state_[r]);
+        for (Index r : m) kernel.skip(state[r]);
       }
     };
     Counts total;
@@ -173,31 +170,20 @@ class SimplifiedDetector final : public ApproximateDetector {
     result.stats.tested = total.tested;
     result.stats.queries = total.queries + total.cluster_queries;
     collect_result(
-        result, deformable_, [&](std::size_t, Index r) { return state_[r].colliding(); },
-        [&](std::size_t, Index r) { return state_[r].depth; }, preprocess_ms_, start);
+        result, rows_.deformable, [&](std::size_t, Index r) { return state[r].colliding(); },
+        [&](std::size_t, Index r) { return state[r].depth; }, preprocess_ms_, start);
     return result;
   }
 
   void on_removed(const std::vector<bool>& keep) override {
-    if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
-    const IndexList new_row = remap_rows(keep);
-    kernel_.on_removed(keep, new_row);
-    if (!kernel_.zero_set()) own_zero_.on_removed(keep, new_row);
-    deformable_ = remap_list(deformable_, keep, new_row);
-    compact(state_, keep);
+    const IndexList new_row = rows_.on_removed(keep);
+    if (!rows_.kernel.zero_set()) own_zero_.on_removed(keep, new_row);
     clusters_.on_removed(keep);
-    rows_ = static_cast<Index>(state_.size());
   }
 
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
-    const Index added = static_cast<Index>(parents.size());
-    require_scene_rows(scene, rows_ + added, "on_inserted");
-    require_deformable_parents(scene, rows_, parents);
-    split_states(kernel_, scene.positions, parents, state_);
-    for (Index k = 0; k < added; ++k) deformable_.push_back(rows_ + k);
-    kernel_.on_inserted(added);
+    rows_.on_inserted(scene, parents);
     clusters_.on_inserted(parents);  // children join their parent's cluster
-    rows_ += added;
   }
 
   // The clusters (members and row -> cluster map, cluster states) apart from the exact algorithm's state.
@@ -215,8 +201,7 @@ class SimplifiedDetector final : public ApproximateDetector {
   }
 
   std::size_t memory_bytes() const override {
-    return kernel_.memory_bytes() + (kernel_.zero_set() ? 0 : own_zero_.memory_bytes()) +
-           deformable_.capacity() * sizeof(Index) + state_.capacity() * sizeof(State) + cluster_bytes();
+    return rows_.memory_bytes() + (rows_.kernel.zero_set() ? 0 : own_zero_.memory_bytes()) + cluster_bytes();
   }
 
  private:
@@ -233,14 +218,11 @@ class SimplifiedDetector final : public ApproximateDetector {
   }
 
   // The zero region: the kernel's (Simple, Temporal) or the detector's own (Robust).
-  const ZeroSet& zero() const { return kernel_.zero_set() ? *kernel_.zero_set() : own_zero_; }
+  const ZeroSet& zero() const { return rows_.kernel.zero_set() ? *rows_.kernel.zero_set() : own_zero_; }
 
   SimplifyParams simplify_;
-  Kernel kernel_;                         // the exact algorithm's per-point update and its references
+  KernelRows<Kernel> rows_;               // the exact algorithm's kernel, deformable rows, per-surfel states
   ZeroSet own_zero_;                      // zero region when the kernel has none: proximity, initial spheres
-  IndexList deformable_;                  // rows with region != Zero, ascending
-  Index rows_ = 0;
-  std::vector<State> state_;              // #P: per original surfel (zero rows unused)
   ClusterMap clusters_;                   // deformable rows -> cluster
   std::vector<State> cluster_state_;      // #C: per simplified surfel (one-surfel clusters unused)
   std::vector<ProximityState> prox_;      // #C

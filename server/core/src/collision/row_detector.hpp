@@ -7,7 +7,7 @@
 
 #include <chrono>
 
-#include "kernel.hpp"
+#include "kernel_rows.hpp"
 
 namespace surfeledit::detail {
 
@@ -55,23 +55,15 @@ struct ParallelSweep {
 template <typename Kernel, typename Sweep = ParallelSweep>
 class RowDetector final : public NarrowDetector {
  public:
-  using State = typename Kernel::State;
-
-  explicit RowDetector(const CollisionParams& params) : NarrowDetector(params), kernel_(params) {}
+  explicit RowDetector(const CollisionParams& params) : NarrowDetector(params), rows_(params) {}
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
-    IndexList deformable, zero_rows;
-    split_rows(scene, deformable, zero_rows);
     const int threads = resolve_threads(params_.threads);
-    Kernel kernel(params_);
-    kernel.reset(scene, deformable, zero_rows, threads);
-    std::vector<State> states(scene.regions.size());
-    kernel.seed(scene, deformable, zero_rows, threads, states);
-    kernel_ = std::move(kernel);
-    deformable_ = std::move(deformable);
-    states_ = std::move(states);
-    rows_ = static_cast<Index>(states_.size());
+    IndexList zero_rows;
+    KernelRows<Kernel> rows = KernelRows<Kernel>::build(params_, scene, threads, zero_rows);
+    rows.kernel.seed(scene, rows.deformable, zero_rows, threads, rows.states);
+    rows_ = std::move(rows);
     sweep_.reset();
     preprocess_ms_ = ms_since(start);
   }
@@ -79,49 +71,26 @@ class RowDetector final : public NarrowDetector {
   CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
                                     const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
-    require_scene_rows(scene, rows_, "detect");
-    if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
-    const Tally tally =
-        sweep_.run(kernel_, deformable_, states_, scene, previous, candidate, resolve_threads(params_.threads));
+    rows_.require_step(scene, previous);
+    const Tally tally = sweep_.run(rows_.kernel, rows_.deformable, rows_.states, scene, previous, candidate,
+                                   resolve_threads(params_.threads));
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
     collect_result(
-        result, deformable_, [&](std::size_t, Index r) { return states_[r].colliding(); },
-        [&](std::size_t, Index r) { return states_[r].depth; }, preprocess_ms_, start);
+        result, rows_.deformable, [&](std::size_t, Index r) { return rows_.states[r].colliding(); },
+        [&](std::size_t, Index r) { return rows_.states[r].depth; }, preprocess_ms_, start);
     return result;
   }
 
-  void on_removed(const std::vector<bool>& keep) override {
-    if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
-    const IndexList new_row = remap_rows(keep);
-    kernel_.on_removed(keep, new_row);
-    deformable_ = remap_list(deformable_, keep, new_row);
-    compact(states_, keep);
-    rows_ = static_cast<Index>(states_.size());
-  }
-
-  void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
-    const Index added = static_cast<Index>(parents.size());
-    require_scene_rows(scene, rows_ + added, "on_inserted");
-    require_deformable_parents(scene, rows_, parents);
-    split_states(kernel_, scene.positions, parents, states_);
-    for (Index k = 0; k < added; ++k) deformable_.push_back(rows_ + k);
-    kernel_.on_inserted(added);
-    rows_ += added;
-  }
-
-  std::size_t memory_bytes() const override {
-    return kernel_.memory_bytes() + deformable_.capacity() * sizeof(Index) + states_.capacity() * sizeof(State);
-  }
+  void on_removed(const std::vector<bool>& keep) override { rows_.on_removed(keep); }
+  void on_inserted(const CollisionScene& scene, const IndexList& parents) override { rows_.on_inserted(scene, parents); }
+  std::size_t memory_bytes() const override { return rows_.memory_bytes(); }
 
  private:
-  Kernel kernel_;
+  KernelRows<Kernel> rows_;
   Sweep sweep_;
-  IndexList deformable_;      // rows with region != Zero, ascending
-  Index rows_ = 0;            // rows of the model the state refers to
-  std::vector<State> states_;  // #P (zero rows unused)
-  double preprocess_ms_ = 0.0;
+  double preprocess_ms_ = 0.0;  // the last reset
 };
 
 }  // namespace surfeledit::detail
