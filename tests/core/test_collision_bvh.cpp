@@ -16,13 +16,6 @@ using namespace surfeledit::testing;
 
 namespace {
 
-CollisionParams params_of(CollisionAlgorithm a) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = 1;
-  return p;
-}
-
 std::string describe(const CollisionParams& c, const HierarchyParams& h) {
   return std::string(to_string(c.algorithm)) + " zero=" + to_string(h.zero) + " deformable=" + to_string(h.deformable) +
          " update=" + bvh::to_string(h.tree.update) + " sat=" + bvh::to_string(h.sat) +
@@ -40,32 +33,16 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
   auto det = CollisionDetector::create(params, hierarchy);
   ref->reset(scene.view());
   det->reset(scene.view());
-  Vec3 centre = Vec3::Zero();
-  for (Index r = 0, n = 0; r < scene.rows(); ++r)
-    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
   int differing = 0;
-  for (std::size_t k = 0; k < script.size(); ++k) {
-    const Points previous_before = scene.positions;
-    const Mat3 rot = Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix();
-    scene.move(script[k].t, rot, centre);
-    centre += script[k].t;
-    Points previous = previous_before;
-    if (k == 4) {
-      IndexList parents;
-      for (Index r = 0, j = 0; r < scene.rows(); ++r)
-        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
-      for (Index q : parents)
-        scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
-      previous.conservativeResize(scene.rows(), 3);
-      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(previous_before.rows() + j) = previous.row(parents[j]);
-      ref->on_inserted(scene.view(), parents);
-      det->on_inserted(scene.view(), parents);
-    }
-    if (k == 7) {
-      const std::vector<bool> keep = remove_scripted_rows(scene, previous);
-      ref->on_removed(keep);
-      det->on_removed(keep);
-    }
+  auto inserted = [&](const IndexList& parents) {
+    ref->on_inserted(scene.view(), parents);
+    det->on_inserted(scene.view(), parents);
+  };
+  auto removed = [&](const std::vector<bool>& keep) {
+    ref->on_removed(keep);
+    det->on_removed(keep);
+  };
+  play_script(scene, script, true, inserted, removed, [&](std::size_t k, const Points& previous) {
     const CollisionResult want = ref->detect(scene.view(), previous);
     const CollisionResult got = det->detect(scene.view(), previous);
     if (got.colliding != want.colliding) ++differing;
@@ -73,7 +50,7 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
     EXPECT_GT(got.stats.nv, 0) << describe(params, hierarchy) << " step " << k;
     EXPECT_LE(got.stats.np, got.stats.deformable);
     if (candidates_seen) *candidates_seen += got.stats.np;
-  }
+  });
   return differing;
 }
 

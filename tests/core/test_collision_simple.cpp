@@ -7,16 +7,10 @@
 namespace surfeledit {
 namespace {
 
+using testing::params_of;
 using testing::run_against_oracle;
 using testing::slab_and_sphere;
 using testing::slab_script;
-
-CollisionParams params_of(CollisionAlgorithm a, int threads = 1) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = threads;
-  return p;
-}
 
 TEST(CollisionSimple, EqualsOracleEveryStep) {
   for (bool boundary : {true, false}) {
