@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
 
 #include <Eigen/Geometry>
@@ -381,6 +382,35 @@ inline std::vector<ScriptStep> slab_script() {
   for (int i = 0; i < 4; ++i) s.push_back({Vec3(0, 0, 0.15), 0.0});
   return s;
 }
+
+// Fig. 6.4: a plank sampled at `spacing`, its left half rigid (x < 0), a blend band up to x = 0.3 and
+// the one region beyond; bend() turns it back by half a turn (over `steps` steps) about the y axis
+// through (0, 0, 0.05), just above the seam, so the one region folds into the rigid half.
+struct ConcaveFold {
+  double spacing = 0.04;
+  int steps = 10;
+  SampledSurfels s = make_box(Vec3(1.0, 0.3, 0.1))->sample(SampleParams{spacing, 1, 0.25});
+  std::vector<Region> regions = regions_of(s.positions);
+  DeformationFields fields = compute_fields(s.positions, regions, 1);
+
+  static std::vector<Region> regions_of(const Points& positions) {
+    std::vector<Region> out;
+    for (Index r = 0; r < positions.rows(); ++r) {
+      const double x = positions(r, 0);
+      out.push_back(x < 0.0 ? Region::Zero : x > 0.3 ? Region::One : Region::Blend);
+    }
+    return out;
+  }
+  // One step of the bend: `pos` and `nrm` (#P by 3) move.
+  void bend(Points& pos, Points& nrm) const {
+    DeformParams p;
+    p.angle = M_PI / steps;
+    p.axis = Vec3::UnitY();
+    p.center = Vec3(0.0, 0.0, 0.05);
+    p.blend = Blend::Linear;
+    apply_step(fields, p, pos, nrm);
+  }
+};
 
 // What one run recorded per step: colliding rows (and their ids, rows' ids being tracked by the test).
 struct RunLog {

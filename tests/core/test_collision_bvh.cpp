@@ -144,15 +144,9 @@ TEST(CollisionBvh, NoCandidatesWhenFarFromTheZeroRegion) {
 // zero region's own inside test), by design not more -- concave collisions are not its definition;
 // the extended variant (original-model test) equals Robust there on every step.
 TEST(CollisionBvh, ConcaveFoldSimpleAsWithoutExtendedAsRobust) {
-  const double spacing = 0.04;
-  auto plank = make_box(Vec3(1.0, 0.3, 0.1));
-  const SampledSurfels s = plank->sample(SampleParams{spacing, 1, 0.25});
-  std::vector<Region> regions;
-  for (Index r = 0; r < s.positions.rows(); ++r) {
-    const double x = s.positions(r, 0);
-    regions.push_back(x < 0.0 ? Region::Zero : x > 0.3 ? Region::One : Region::Blend);
-  }
-  const DeformationFields fields = compute_fields(s.positions, regions, 1);
+  const ConcaveFold fold;
+  const SampledSurfels& s = fold.s;
+  const std::vector<Region>& regions = fold.regions;
   HierarchyParams tree;
   tree.zero = ZeroHierarchy::Aabb;
   tree.deformable = DeformableHierarchy::Aabb;
@@ -165,16 +159,11 @@ TEST(CollisionBvh, ConcaveFoldSimpleAsWithoutExtendedAsRobust) {
   auto robust_ext = CollisionDetector::create(params_of(CollisionAlgorithm::Robust), extended);
   for (auto* d : {simple.get(), simple_tree.get(), robust.get(), robust_ext.get()})
     d->reset(CollisionScene{pos, nrm, s.radii, regions});
-  const int steps = 10;
+  const int steps = fold.steps;
   std::size_t robust_max = 0;
   for (int k = 0; k < steps; ++k) {
     const Points previous = pos;
-    DeformParams p;
-    p.angle = M_PI / steps;
-    p.axis = Vec3::UnitY();
-    p.center = Vec3(0.0, 0.0, 0.05);
-    p.blend = Blend::Linear;
-    apply_step(fields, p, pos, nrm);
+    fold.bend(pos, nrm);
     const CollisionScene view{pos, nrm, s.radii, regions};
     const IndexList a = simple->detect(view, previous).colliding, b = simple_tree->detect(view, previous).colliding;
     const IndexList c = robust->detect(view, previous).colliding, d = robust_ext->detect(view, previous).colliding;

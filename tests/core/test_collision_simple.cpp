@@ -7,10 +7,7 @@
 namespace surfeledit {
 namespace {
 
-using testing::params_of;
-using testing::run_against_oracle;
-using testing::slab_and_sphere;
-using testing::slab_script;
+using namespace testing;
 
 TEST(CollisionSimple, EqualsOracleEveryStep) {
   for (bool boundary : {true, false}) {
