@@ -158,16 +158,6 @@ void require_deformable_parents(const CollisionScene& scene, Index rows, const I
   }
 }
 
-void append_row(Points& a, const Vec3& v) {
-  a.conservativeResize(a.rows() + 1, 3);
-  a.row(a.rows() - 1) = v.transpose();
-}
-
-void append_value(Values& a, double v) {
-  a.conservativeResize(a.size() + 1);
-  a[a.size() - 1] = v;
-}
-
 void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, double eps) {
   knn_eps = eps;
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");

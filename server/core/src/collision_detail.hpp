@@ -1,4 +1,5 @@
-// Internal pieces shared by the collision detectors (not a public header).
+// Internal pieces shared by the collision detectors (not a public header). The per-point kernels and
+// the detector that drives them over rows live in collision/ (kernel.hpp, row_detector.hpp).
 #pragma once
 
 #include <chrono>
@@ -18,7 +19,7 @@ class NarrowDetector : public CollisionDetector {
  public:
   // detect() where only rows with candidate[r] != 0 are tested (`candidate`: one flag per row;
   // nullptr = every row). The other deformable rows keep their collision state; what happens to
-  // their spheres is documented by each detector.
+  // their spheres is each kernel's not_candidate() (collision/kernel.hpp).
   virtual CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
                                             const std::vector<std::uint8_t>* candidate) = 0;
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
@@ -51,9 +52,6 @@ IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const
 // Checks the rows appended after `rows` existing ones: each split from a deformable parent row and
 // deformable itself; InvalidArgument ("parents") otherwise.
 void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
-
-void append_row(Points& a, const Vec3& v);
-void append_value(Values& a, double v);
 
 // Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact).
 inline KdTreeParams nearest_tree_params(double eps) {
