@@ -17,7 +17,7 @@ void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformab
 
 Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, std::vector<SimpleKernel::State>& states,
                          const CollisionScene& scene, const Points& previous,
-                         const std::vector<std::uint8_t>* candidate, int /*threads*/) {
+                         const std::vector<std::uint8_t>* candidate, int /*threads*/, std::vector<std::uint8_t>& hit) {
   if (candidate) throw Error(ErrorCode::Internal, "algorithm", "improved cannot run on candidates only");
   std::vector<std::uint8_t> settled(states.size(), 0);
   std::unique_ptr<KdTree> moving;  // per-step tree over the deformable positions, built on first need
@@ -27,8 +27,9 @@ Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, std:
   Tally tally;
   for (Index r : rows) {
     if (settled[r]) continue;
-    const Vec3 p1 = row3(scene.positions, r);
-    const SimpleTest t = kernel.test(states[r], TestPoint{p1, scene.radii[r], row3(previous, r)});
+    const TestPoint pt = row_point(scene, previous, r);
+    const Vec3& p1 = pt.p;
+    const SimpleTest t = kernel.test(states[r], pt);
     ++tally.queries;
     settled[r] = 1;
     ++tally.tested;
@@ -47,6 +48,7 @@ Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, std:
       states[j].depth = reach - std::sqrt(e2);
     }
   }
+  for (std::size_t q = 0; q < rows.size(); ++q) hit[q] = states[rows[q]].colliding();
   mean_dist2_ = tally.tested > 0 ? sum_dist2 / tally.tested : 0.0;
   return tally;
 }

@@ -110,7 +110,7 @@ class SimplifiedDetector final : public ApproximateDetector {
         double radius = 0.0;
         for (Index r : m) radius = std::max(radius, (row3(scene.positions, r) - pc).norm() + scene.radii[r]);
         State& cs = cluster_state_[c];
-        n.cluster_queries += kernel.update(cs, TestPoint{pc, radius, prev});
+        n.cluster_queries += kernel.update(cs, TestPoint{pc, &radius, prev.data()});
         if (cs.colliding()) {
           ++n.colliding_clusters;
           active = true;
@@ -142,7 +142,7 @@ class SimplifiedDetector final : public ApproximateDetector {
       if (active) {
         ++n.active_clusters;
         for (Index r : m) {
-          const Index made = kernel.update(state[r], TestPoint{row3(scene.positions, r), scene.radii[r], row3(previous, r)});
+          const Index made = kernel.update(state[r], row_point(scene, previous, r));
           n.queries += made;
           n.tested += made > 0;
         }

@@ -18,7 +18,7 @@ class ImprovedSweep {
 
   Tally run(const SimpleKernel& kernel, const IndexList& rows, std::vector<SimpleKernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads);
+            int threads, std::vector<std::uint8_t>& hit);
 
  private:
   double mean_dist2_ = 0.0;  // H: mean |d|^2 of the previous step's tested points

@@ -52,12 +52,21 @@
 
 namespace surfeledit::detail {
 
-// One tested point of a step: a deformable surfel or a cluster's simplified surfel.
+// One tested point of a step: a deformable surfel or a cluster's simplified surfel. Radius and
+// previous position are read through pointers, only by a point that is tested (most are skipped).
 struct TestPoint {
-  Vec3 p;     // position now
-  double r;   // disc radius (model units)
-  Vec3 prev;  // position before the step (for the step bound)
+  Vec3 p;                        // position now
+  const double* r = nullptr;     // -> disc radius (model units)
+  const double* prev = nullptr;  // -> position before the step (3 doubles, for the step bound)
+
+  double radius() const { return *r; }
+  Vec3 previous() const { return Vec3(prev[0], prev[1], prev[2]); }
 };
+
+// The TestPoint of row r of a step (`previous`: #P by 3, row-major).
+inline TestPoint row_point(const CollisionScene& scene, const Points& previous, Index r) {
+  return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0)};
+}
 
 // The zero surfel nearest to a point, as init() needs it.
 struct NearestZero {

@@ -20,19 +20,23 @@ struct Tally {
 // The points of a step are independent: each row goes through update() (not_candidate() when the
 // broad phase ruled it out), serially below 2048 rows or with one thread, else in OpenMP dynamic
 // chunks of Kernel::kChunk rows. Results do not depend on the thread count.
+// Every sweep also fills hit[q] (#rows): 1 when rows[q] collides after the step.
 struct ParallelSweep {
   void reset() {}
 
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, std::vector<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads) const {
+            int threads, std::vector<std::uint8_t>& hit) const {
     const Index n = static_cast<Index>(rows.size());
     Index tested = 0, queries = 0;
     auto one = [&](Index q) -> Index {
       const Index r = rows[q];
-      const TestPoint pt{row3(scene.positions, r), scene.radii[r], row3(previous, r)};
-      return candidate && !(*candidate)[r] ? kernel.not_candidate(states[r], pt) : kernel.update(states[r], pt);
+      const TestPoint pt = row_point(scene, previous, r);
+      auto& s = states[r];
+      const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
+      hit[q] = s.colliding();  // read while the state is in cache
+      return made;
     };
     if (threads == 1 || n < 2048) {
       for (Index q = 0; q < n; ++q) {
@@ -72,24 +76,26 @@ class RowDetector final : public NarrowDetector {
                                     const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
+    hit_.resize(rows_.deformable.size());
     const Tally tally = sweep_.run(rows_.kernel, rows_.deformable, rows_.states, scene, previous, candidate,
-                                   resolve_threads(params_.threads));
+                                   resolve_threads(params_.threads), hit_);
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
     collect_result(
-        result, rows_.deformable, [&](std::size_t, Index r) { return rows_.states[r].colliding(); },
+        result, rows_.deformable, [&](std::size_t q, Index) { return hit_[q] != 0; },
         [&](std::size_t, Index r) { return rows_.states[r].depth; }, preprocess_ms_, start);
     return result;
   }
 
   void on_removed(const std::vector<bool>& keep) override { rows_.on_removed(keep); }
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override { rows_.on_inserted(scene, parents); }
-  std::size_t memory_bytes() const override { return rows_.memory_bytes(); }
+  std::size_t memory_bytes() const override { return rows_.memory_bytes() + hit_.capacity(); }
 
  private:
   KernelRows<Kernel> rows_;
   Sweep sweep_;
+  std::vector<std::uint8_t> hit_;  // #deformable: colliding after the last step (filled by the sweep)
   double preprocess_ms_ = 0.0;  // the last reset
 };
 

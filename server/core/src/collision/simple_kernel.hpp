@@ -26,7 +26,7 @@ class ZeroSetKernel {
  protected:
   // The §4.1 test of a point against its nearest zero surfel k (`previous_state`: before the step).
   SimpleTest test(Index k, const TestPoint& pt, bool previous_state) const {
-    return simple_test(params_, zero_, k, pt.p, pt.r, pt.prev, previous_state);
+    return simple_test(params_, zero_, k, pt.p, pt.radius(), pt.previous(), previous_state);
   }
 
   CollisionParams params_;
