@@ -171,7 +171,7 @@ class SimplifiedDetector final : public ApproximateDetector {
     result.stats.queries = total.queries + total.cluster_queries;
     collect_result(
         result, rows_.deformable, [&](std::size_t, Index r) { return state[r].colliding(); },
-        [&](std::size_t, Index r) { return state[r].depth; }, preprocess_ms_, start);
+        [&](std::size_t, Index r) { return kernel.depth(state[r], row3(scene.positions, r)); }, preprocess_ms_, start);
     return result;
   }
 

@@ -11,9 +11,10 @@
 //   struct Kernel {
 //     // Per tested point; a default-constructed State is "not colliding, empty sphere".
 //     struct State {
-//       double depth;            // depth estimate of the last evaluation (model units, >= 0)
 //       bool colliding() const;  // colliding after the last evaluation
 //     };
+//     // Depth estimate (model units, >= 0) of a point colliding after this step's update, now at p.
+//     double depth(const State& s, const Vec3& p) const;
 //     static constexpr bool kSeeded;  // init() needs the nearest zero surfel of the point
 //     static constexpr int kChunk;    // OpenMP dynamic chunk of the row loop (rows per task)
 //

@@ -19,10 +19,10 @@ class RobustKernel {
   static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
   static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at old_position
 
-  struct State {
+  // One cache line per point: the row sweep touches every state every step.
+  struct alignas(64) State {
     Sphere sphere;                     // holds no original surfel
     Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
-    double depth = 0.0;                // depth estimate (model units), set while colliding
     std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate
     bool colliding() const { return (flags & kColliding) != 0; }
   };
@@ -42,6 +42,10 @@ class RobustKernel {
     s.old_position = p;
     s.flags = kFirstUpdate;
     return s;
+  }
+  // rho - |p - c| (Eq. 6.4), p being where the point was at its update this step.
+  double depth(const State& s, const Vec3& p) const {
+    return std::max(0.0, std::sqrt(s.sphere.rho2) - (p - s.sphere.center).norm());
   }
   Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
@@ -107,13 +111,9 @@ class RobustKernel {
     set_inside(s, inside_now);
     return made;
   }
-  // End of every step: the depth of a colliding point, else its position is the last non-colliding one.
+  // End of every step: the position of a point that does not collide is the last non-colliding one.
   static void finish(State& s, const Vec3& p1) {
-    if (s.flags & kColliding) {
-      s.depth = std::max(0.0, std::sqrt(s.sphere.rho2) - (p1 - s.sphere.center).norm());
-    } else {
-      s.old_position = p1;
-    }
+    if (!(s.flags & kColliding)) s.old_position = p1;
   }
   static void set_inside(State& s, bool in) {
     s.flags = in ? (s.flags | kInside) : (s.flags & static_cast<std::uint8_t>(~kInside));

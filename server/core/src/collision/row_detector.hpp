@@ -84,7 +84,8 @@ class RowDetector final : public NarrowDetector {
     result.stats.queries = tally.queries;
     collect_result(
         result, rows_.deformable, [&](std::size_t q, Index) { return hit_[q] != 0; },
-        [&](std::size_t, Index r) { return rows_.states[r].depth; }, preprocess_ms_, start);
+        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+        preprocess_ms_, start);
     return result;
   }
 

@@ -47,6 +47,7 @@ class SimpleKernel : public ZeroSetKernel {
 
   void seed(const CollisionScene&, const IndexList&, const IndexList&, int, std::vector<State>&) const {}
   State init(const Vec3&, const NearestZero&) const { return {}; }
+  double depth(const State& s, const Vec3&) const { return s.depth; }
   // One §4.1 test of s; returns it (Improved's sweep needs |d|^2).
   SimpleTest test(State& s, const TestPoint& pt) const {
     const SimpleTest t = ZeroSetKernel::test(zero_.nearest(pt.p), pt, s.colliding());

@@ -35,6 +35,7 @@ class TemporalKernel : public ZeroSetKernel {
     s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
     return s;
   }
+  double depth(const State& s, const Vec3&) const { return s.depth; }
   Index update(State& s, const TestPoint& pt) const {
     const double moved2 = (pt.p - s.sphere.center).squaredNorm();
     if (moved2 < s.sphere.rho2) {
