@@ -21,59 +21,96 @@ namespace surfeledit {
 
 namespace {
 
-// One unordered pair, r = x_j - x_i: the force on i (-f on j, Newton's third law holds exactly for every
-// term), the torques on i and on j (not antisymmetric), the stiffness bound (the same at both ends) and
-// E_ij = 2 a_R Phi_R + a_P (Phi_P(n_i) + Phi_P(n_j)) + 2 a_N Phi_N + 2 a_C Phi_C.
-struct PairForces {
-  Vec3 f, ti, tj;
-  double k, e;
+constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
+
+// Pairs (i, j_l), i < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises.
+struct PairBlock {
+  int size = 0;
+  double rx[kLanes], ry[kLanes], rz[kLanes], njx[kLanes], njy[kLanes], njz[kLanes];  // r and n_j
+  double rho[kLanes];                                                                // |r|
+  double phi[kLanes], dphi[kLanes], ddphi[kLanes], dphi_r[kLanes];  // weight at |r| (0 at and beyond d)
+  double e_rep[kLanes], d1_rep[kLanes], k_rep[kLanes];              // repulsion: Phi, Phi'/rho, stiffness
+  // Results: force on i (-f on j: Newton's third law holds exactly for every term), torques on i and on j
+  // (not antisymmetric), stiffness bound (the same at both ends), E_ij = 2 a_R Phi_R + a_P (Phi_P(n_i) +
+  // Phi_P(n_j)) + 2 a_N Phi_N + 2 a_C Phi_C.
+  double fx[kLanes], fy[kLanes], fz[kLanes], tix[kLanes], tiy[kLanes], tiz[kLanes];
+  double tjx[kLanes], tjy[kLanes], tjz[kLanes], k[kLanes], e[kLanes];
 };
 
-// The terms of potentials.hpp and repulsion.hpp written out with the common factors shared: false when
-// the weight (and so every term) is zero.
-inline bool pair_forces(const Vec3& r, const Vec3& ni, const Vec3& nj, const ParticleParams& p, PairForces& o) {
-  const double rho = r.norm();
-  const WeightSample w = weight(p.weight, rho);
-  if (w.phi == 0.0 && w.dphi == 0.0) return false;
-  const double phi = w.phi, dphi_r = p.drop_dphi ? 0.0 : w.dphi_r;
-  double rc = 0.0, ci = 0.0, cj = 0.0, tn = 0.0;  // f = rc r + ci n_i + cj n_j; t_i = ci r x n_i + tn n_i x n_j
-  o.k = o.e = 0.0;
-  if (p.alpha_planarity > 0.0) {  // Phi_P(n_i) + Phi_P(n_j), a = n . r
-    const double a = p.alpha_planarity, ai = ni.dot(r), aj = nj.dot(r);
-    o.e += a * (ai * ai * phi + aj * aj * phi);
-    rc += a * (ai * ai * dphi_r + aj * aj * dphi_r);
-    ci += a * (2.0 * ai * phi);
-    cj += a * (2.0 * aj * phi);
-    o.k += a * (2.0 * projection_stiffness(1.0, rho, w));
+// phi and the repulsion at |r| for every lane; lanes at or beyond the radius get zeros (they add nothing).
+void radial_terms(const ParticleParams& p, PairBlock& b) {
+  const int m = b.size;
+#pragma omp simd
+  for (int l = 0; l < m; ++l) b.rho[l] = std::sqrt(b.rx[l] * b.rx[l] + b.ry[l] * b.ry[l] + b.rz[l] * b.rz[l]);
+  const double d = p.weight.radius, d2 = d * d;
+  if (p.weight.kind == WeightKind::Compact) {
+#pragma omp simd
+    for (int l = 0; l < m; ++l) {
+      const double in = static_cast<double>(b.rho[l] < d);  // 1 or 0, without a branch
+      const WeightSample w = compact_weight_inside(b.rho[l], d2);
+      b.phi[l] = in * w.phi;
+      b.dphi[l] = in * w.dphi;
+      b.ddphi[l] = in * w.ddphi;
+      b.dphi_r[l] = in * w.dphi_r;
+    }
+  } else {
+    for (int l = 0; l < m; ++l) {
+      const WeightSample w = weight(p.weight, b.rho[l]);
+      b.phi[l] = w.phi, b.dphi[l] = w.dphi, b.ddphi[l] = w.ddphi, b.dphi_r[l] = w.dphi_r;
+    }
   }
-  if (p.alpha_normality > 0.0) {  // Phi_N, b = |n_i - n_j|^2
-    const double a = 2.0 * p.alpha_normality, b = (ni - nj).squaredNorm();
-    o.e += a * (b * phi);
-    rc += a * (b * dphi_r);
-    tn += a * (2.0 * phi);
-    o.k += a * conormality_stiffness(b, w);
+  if (p.repulsion.kind == RepulsionKind::Weight) {
+    const double A = p.repulsion.amplitude;
+#pragma omp simd
+    for (int l = 0; l < m; ++l) {
+      const RadialTerm t = weight_repulsion(A, WeightSample{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]});
+      b.e_rep[l] = t.energy, b.d1_rep[l] = t.d1_r, b.k_rep[l] = t.stiffness;
+    }
+  } else {
+    for (int l = 0; l < m; ++l) {
+      const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
+      // Beyond the radius every term is off, the repulsion too (it interacts only within a neighbourhood).
+      const RadialTerm t = (w.phi == 0.0 && w.dphi == 0.0) ? RadialTerm{} : repulsion_radial(p.repulsion, b.rho[l], w);
+      b.e_rep[l] = t.energy, b.d1_rep[l] = t.d1_r, b.k_rep[l] = t.stiffness;
+    }
   }
-  if (p.alpha_circularity > 0.0) {  // Phi_C, c = (n_i + n_j) . r; the same factor 2 c phi moves both normals
-    const double a = 2.0 * p.alpha_circularity, c = (ni + nj).dot(r);
-    o.e += a * (c * c * phi);
-    rc += a * (c * c * dphi_r);
-    ci += a * (2.0 * c * phi);
-    cj += a * (2.0 * c * phi);
-    o.k += a * (projection_stiffness(2.0, rho, w));
+}
+
+// The terms of potentials.hpp and repulsion.hpp for every lane, written out with their common factors
+// shared (a term whose alpha is 0 adds zeros). `ni` is the normal of particle i.
+void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
+  const double aP = p.alpha_planarity, aN = 2.0 * p.alpha_normality, aC = 2.0 * p.alpha_circularity;
+  const double aR = p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion;
+  const double keep_dphi = p.drop_dphi ? 0.0 : 1.0;
+  const double nix = ni.x(), niy = ni.y(), niz = ni.z();
+  const int m = b.size;
+#pragma omp simd
+  for (int l = 0; l < m; ++l) {
+    const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
+    const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
+    const double phi = w.phi, dr = keep_dphi * w.dphi_r, rho = b.rho[l];
+    const double ai = nix * rx + niy * ry + niz * rz, aj = njx * rx + njy * ry + njz * rz;  // Phi_P: n . r
+    const double bx = nix - njx, by = niy - njy, bz = niz - njz, bn = bx * bx + by * by + bz * bz;  // Phi_N
+    const double c = (nix + njx) * rx + (niy + njy) * ry + (niz + njz) * rz;  // Phi_C: (n_i + n_j) . r
+    b.e[l] = aP * (ai * ai * phi + aj * aj * phi) + aN * (bn * phi) + aC * (c * c * phi) + aR * b.e_rep[l];
+    const double rc = aP * (ai * ai * dr + aj * aj * dr) + aN * (bn * dr) + aC * (c * c * dr) + aR * b.d1_rep[l];
+    const double ci = aP * (2.0 * ai * phi) + aC * (2.0 * c * phi), cj = aP * (2.0 * aj * phi) + aC * (2.0 * c * phi);
+    const double tn = aN * (2.0 * phi);
+    b.k[l] = aP * (2.0 * projection_stiffness(1.0, rho, w)) + aN * conormality_stiffness(bn, w) +
+             aC * projection_stiffness(2.0, rho, w) + aR * b.k_rep[l];
+    // f = rc r + ci n_i + cj n_j; torques: -grad over a rotation of i is (dPhi/dn_i) x n_i, for j the same
+    // with r -> -r: t_i = ci r x n_i + tn n_i x n_j, t_j = cj r x n_j - tn n_i x n_j.
+    b.fx[l] = rc * rx + ci * nix + cj * njx;
+    b.fy[l] = rc * ry + ci * niy + cj * njy;
+    b.fz[l] = rc * rz + ci * niz + cj * njz;
+    const double nnx = tn * (niy * njz - niz * njy), nny = tn * (niz * njx - nix * njz), nnz = tn * (nix * njy - niy * njx);
+    b.tix[l] = ci * (ry * niz - rz * niy) + nnx;
+    b.tiy[l] = ci * (rz * nix - rx * niz) + nny;
+    b.tiz[l] = ci * (rx * niy - ry * nix) + nnz;
+    b.tjx[l] = cj * (ry * njz - rz * njy) - nnx;
+    b.tjy[l] = cj * (rz * njx - rx * njz) - nny;
+    b.tjz[l] = cj * (rx * njy - ry * njx) - nnz;
   }
-  if (p.alpha_repulsion > 0.0 && p.repulsion.kind != RepulsionKind::None) {
-    const double a = 2.0 * p.alpha_repulsion;
-    const RadialTerm t = repulsion_radial(p.repulsion, rho, w);
-    o.e += a * t.energy;
-    rc += a * t.d1_r;
-    o.k += a * t.stiffness;
-  }
-  // Torques: -grad over a rotation of i is (dPhi/dn_i) x n_i; for j the same with r -> -r.
-  const Vec3 nn = tn * ni.cross(nj);
-  o.f = rc * r + ci * ni + cj * nj;
-  o.ti = ci * r.cross(ni) + nn;
-  o.tj = cj * r.cross(nj) - nn;
-  return true;
 }
 
 // First entry of row i with a neighbour above i (rows ascending).
@@ -96,35 +133,48 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
   const Points& normals = out.normals;
   const int threads = resolve_threads(p.threads);
 
-  // The upper sums of row i; `lower(j, c, pf)` takes pair (i, j)'s share for j, stored at entry c.
-  const auto row = [&](Index i, auto&& lower) {
+  // The upper sums of row i (f, t_i, k; E into energy[i]); `lower(j, c, b, l)` takes lane l's share for
+  // j (entry c). `b` is the caller's (per thread) block.
+  struct Upper {
+    Vec3 f, t;
+    double k;
+  };
+  const auto row = [&](Index i, PairBlock& b, auto&& lower) {
     const Vec3 xi = s.x.row(i).transpose(), ni = normals.row(i).transpose();
-    Vec3 f = Vec3::Zero(), ti = Vec3::Zero();
-    double k = 0.0, e = 0.0;
-    PairForces pf;
-    for (std::int64_t c = upper_begin(nb, i); c < nb.offsets[i + 1]; ++c) {
-      const Index j = nb.indices[c];
-      if (!pair_forces(s.x.row(j).transpose() - xi, ni, normals.row(j).transpose(), p, pf)) continue;
-      f += pf.f;
-      ti += pf.ti;
-      k += pf.k;
-      e += pf.e;
-      lower(j, c, pf);
+    Upper up{Vec3::Zero(), Vec3::Zero(), 0.0};
+    double e = 0.0;
+    for (std::int64_t c0 = upper_begin(nb, i), end = nb.offsets[i + 1]; c0 < end; c0 += kLanes) {
+      b.size = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
+      for (int l = 0; l < b.size; ++l) {
+        const Index j = nb.indices[c0 + l];
+        b.rx[l] = s.x(j, 0) - xi.x(), b.ry[l] = s.x(j, 1) - xi.y(), b.rz[l] = s.x(j, 2) - xi.z();
+        b.njx[l] = normals(j, 0), b.njy[l] = normals(j, 1), b.njz[l] = normals(j, 2);
+      }
+      radial_terms(p, b);
+      pair_kernel(p, ni, b);
+      for (int l = 0; l < b.size; ++l) {
+        up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
+        up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
+        up.k += b.k[l];
+        e += b.e[l];
+        lower(nb.indices[c0 + l], c0 + l, b, l);
+      }
     }
     energy[i] = e;
-    return PairForces{f, ti, Vec3::Zero(), k, e};
+    return up;
   };
 
   if (threads == 1) {
     // out.* of row j hold lower_j (complete once the rows below j are done) until row j adds upper_j.
+    PairBlock b;
     for (Index i = 0; i < n; ++i) {
-      const PairForces up = row(i, [&](Index j, std::int64_t, const PairForces& pf) {
-        out.force.row(j) -= pf.f.transpose();
-        out.torque.row(j) += pf.tj.transpose();
-        out.stiffness[j] += pf.k;
+      const Upper up = row(i, b, [&](Index j, std::int64_t, const PairBlock& pb, int l) {
+        out.force.row(j) -= Vec3(pb.fx[l], pb.fy[l], pb.fz[l]).transpose();
+        out.torque.row(j) += Vec3(pb.tjx[l], pb.tjy[l], pb.tjz[l]).transpose();
+        out.stiffness[j] += pb.k[l];
       });
       out.force.row(i) = up.f.transpose() + out.force.row(i);
-      out.torque.row(i) = up.ti.transpose() + out.torque.row(i);
+      out.torque.row(i) = up.t.transpose() + out.torque.row(i);
       out.stiffness[i] = up.k + out.stiffness[i];
     }
   } else {
@@ -149,15 +199,16 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
         throw Error(ErrorCode::InvalidArgument, "neighbourhood", "not symmetric: i in N(j) but j not in N(i)");
 #pragma omp parallel num_threads(threads)
     {
+      PairBlock b;
 #pragma omp for schedule(static)
       for (Index i = 0; i < n; ++i) {
-        const PairForces up = row(i, [&](Index, std::int64_t c, const PairForces& pf) {
-          out.pair_force.row(c) = pf.f.transpose();
-          out.pair_torque.row(c) = pf.tj.transpose();
-          out.pair_stiffness[c] = pf.k;
+        const Upper up = row(i, b, [&](Index, std::int64_t c, const PairBlock& pb, int l) {
+          out.pair_force.row(c) << pb.fx[l], pb.fy[l], pb.fz[l];
+          out.pair_torque.row(c) << pb.tjx[l], pb.tjy[l], pb.tjz[l];
+          out.pair_stiffness[c] = pb.k[l];
         });
         out.force.row(i) = up.f.transpose();
-        out.torque.row(i) = up.ti.transpose();
+        out.torque.row(i) = up.t.transpose();
         out.stiffness[i] = up.k;
       }
 #pragma omp for schedule(static)

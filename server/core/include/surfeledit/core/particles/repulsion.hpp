@@ -35,6 +35,15 @@ struct RadialTerm {
   double d1_r = 0.0;
   double stiffness = 0.0;
 };
+// Weight-based repulsion A phi^2 (the branch-free case, also evaluated by the vectorised pair kernel).
+inline RadialTerm weight_repulsion(double A, const WeightSample& w) {
+  RadialTerm t;
+  t.energy = A * w.phi * w.phi;
+  t.d1_r = 2.0 * A * w.phi * w.dphi_r;
+  const double d2 = 2.0 * A * (w.dphi * w.dphi + w.phi * w.ddphi);  // Phi''
+  t.stiffness = std::abs(d2) + std::abs(t.d1_r);
+  return t;
+}
 inline RadialTerm repulsion_radial(const RepulsionParams& params, double rho, const WeightSample& w) {
   RadialTerm t;
   const double A = params.amplitude;
@@ -58,11 +67,7 @@ inline RadialTerm repulsion_radial(const RepulsionParams& params, double rho, co
       d2 = (rho * rho / (s2 * s2) - 1.0 / s2) * g;
       break;
     }
-    case RepulsionKind::Weight:
-      t.energy = A * w.phi * w.phi;
-      t.d1_r = 2.0 * A * w.phi * w.dphi_r;
-      d2 = 2.0 * A * (w.dphi * w.dphi + w.phi * w.ddphi);
-      break;
+    case RepulsionKind::Weight: return weight_repulsion(A, w);
   }
   t.stiffness = std::abs(d2) + std::abs(t.d1_r);
   return t;
