@@ -31,14 +31,10 @@ namespace {
 
 constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
 
-// Pairs (i_l, j_l), i_l < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises;
-// a block runs over the upper neighbours of consecutive rows.
+// Pairs (i, j_l), i < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises.
 struct PairBlock {
   int size = 0;
-  Index row[kLanes];          // i
-  std::int64_t entry[kLanes];  // neighbour entry of j in row i
   double rx[kLanes], ry[kLanes], rz[kLanes], njx[kLanes], njy[kLanes], njz[kLanes];  // r and n_j
-  double nix[kLanes], niy[kLanes], niz[kLanes];                                       // n_i
   double rho[kLanes];                                                                // |r|
   double phi[kLanes], dphi[kLanes], ddphi[kLanes], dphi_r[kLanes];  // weight at |r| (0 at and beyond d)
   double e_rep[kLanes], d1_rep[kLanes], k_rep[kLanes];              // repulsion: Phi, Phi'/rho, stiffness
@@ -54,12 +50,12 @@ SURFELEDIT_SIMD_CLONES void radial_terms(const ParticleParams& p, PairBlock& b) 
   const int m = b.size;
 #pragma omp simd
   for (int l = 0; l < m; ++l) b.rho[l] = std::sqrt(b.rx[l] * b.rx[l] + b.ry[l] * b.ry[l] + b.rz[l] * b.rz[l]);
-  const double d = p.weight.radius, inv_d2 = 1.0 / (d * d);
+  const double d = p.weight.radius, d2 = d * d;
   if (p.weight.kind == WeightKind::Compact) {
 #pragma omp simd
     for (int l = 0; l < m; ++l) {
       const double in = static_cast<double>(b.rho[l] < d);  // 1 or 0, without a branch
-      const WeightSample w = compact_weight_inside(b.rho[l], inv_d2);
+      const WeightSample w = compact_weight_inside(b.rho[l], d2);
       b.phi[l] = in * w.phi;
       b.dphi[l] = in * w.dphi;
       b.ddphi[l] = in * w.ddphi;
@@ -89,16 +85,16 @@ SURFELEDIT_SIMD_CLONES void radial_terms(const ParticleParams& p, PairBlock& b) 
 }
 
 // The terms of potentials.hpp and repulsion.hpp for every lane, written out with their common factors
-// shared (a term whose alpha is 0 adds zeros).
-SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, PairBlock& b) {
+// shared (a term whose alpha is 0 adds zeros). `ni` is the normal of particle i.
+SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
   const double aP = p.alpha_planarity, aN = 2.0 * p.alpha_normality, aC = 2.0 * p.alpha_circularity;
   const double aR = p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion;
   const double keep_dphi = p.drop_dphi ? 0.0 : 1.0;
+  const double nix = ni.x(), niy = ni.y(), niz = ni.z();
   const int m = b.size;
 #pragma omp simd
   for (int l = 0; l < m; ++l) {
     const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
-    const double nix = b.nix[l], niy = b.niy[l], niz = b.niz[l];
     const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
     const double phi = w.phi, dr = keep_dphi * w.dphi_r, rho = b.rho[l];
     const double ai = nix * rx + niy * ry + niz * rz, aj = njx * rx + njy * ry + njz * rz;  // Phi_P: n . r
@@ -131,49 +127,6 @@ inline std::int64_t upper_begin(const Neighbourhood& nb, Index i) {
   return std::upper_bound(begin + nb.offsets[i], begin + nb.offsets[i + 1], i) - begin;
 }
 
-struct Upper {  // the sums of a row over its upper neighbours
-  Vec3 f = Vec3::Zero(), t = Vec3::Zero();
-  double k = 0.0, e = 0.0;
-};
-
-// Visits rows [r0, r1) in ascending order, their upper pairs in blocks of up to kLanes: lower(j, b, l)
-// for every pair (lane l of block b, its share for j), then finish(i, upper_i) once per row, after every
-// pair of the rows up to i. The sums of a row do not depend on where the blocks start.
-template <class Lower, class Finish>
-void upper_pairs(const ParticleState& s, const Points& normals, const Neighbourhood& nb, const ParticleParams& p,
-                 Index r0, Index r1, PairBlock& b, Lower&& lower, Finish&& finish) {
-  Upper up;
-  Index current = r0;
-  const auto flush = [&] {
-    radial_terms(p, b);
-    pair_kernel(p, b);
-    for (int l = 0; l < b.size; ++l) {
-      for (; current < b.row[l]; ++current, up = Upper()) finish(current, up);
-      up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
-      up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
-      up.k += b.k[l];
-      up.e += b.e[l];
-      lower(b, l);
-    }
-    b.size = 0;
-  };
-  b.size = 0;
-  for (Index i = r0; i < r1; ++i) {
-    const double xi = s.x(i, 0), yi = s.x(i, 1), zi = s.x(i, 2);
-    for (std::int64_t c = upper_begin(nb, i); c < nb.offsets[i + 1]; ++c) {
-      if (b.size == kLanes) flush();
-      const int l = b.size++;
-      const Index j = nb.indices[c];
-      b.row[l] = i, b.entry[l] = c;
-      b.rx[l] = s.x(j, 0) - xi, b.ry[l] = s.x(j, 1) - yi, b.rz[l] = s.x(j, 2) - zi;
-      b.njx[l] = normals(j, 0), b.njy[l] = normals(j, 1), b.njz[l] = normals(j, 2);
-      b.nix[l] = normals(i, 0), b.niy[l] = normals(i, 1), b.niz[l] = normals(i, 2);
-    }
-  }
-  flush();
-  for (; current < r1; ++current, up = Upper()) finish(current, up);
-}
-
 }  // namespace
 
 void compute_forces(const ParticleState& s, const Neighbourhood& nb, const ParticleParams& p, SystemForces& out) {
@@ -188,23 +141,50 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
   const Points& normals = out.normals;
   const int threads = resolve_threads(p.threads);
 
+  // The upper sums of row i (f, t_i, k; E into energy[i]); `lower(j, c, b, l)` takes lane l's share for
+  // j (entry c). `b` is the caller's (per thread) block.
+  struct Upper {
+    Vec3 f, t;
+    double k;
+  };
+  const auto row = [&](Index i, PairBlock& b, auto&& lower) {
+    const Vec3 xi = s.x.row(i).transpose(), ni = normals.row(i).transpose();
+    Upper up{Vec3::Zero(), Vec3::Zero(), 0.0};
+    double e = 0.0;
+    for (std::int64_t c0 = upper_begin(nb, i), end = nb.offsets[i + 1]; c0 < end; c0 += kLanes) {
+      b.size = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
+      for (int l = 0; l < b.size; ++l) {
+        const Index j = nb.indices[c0 + l];
+        b.rx[l] = s.x(j, 0) - xi.x(), b.ry[l] = s.x(j, 1) - xi.y(), b.rz[l] = s.x(j, 2) - xi.z();
+        b.njx[l] = normals(j, 0), b.njy[l] = normals(j, 1), b.njz[l] = normals(j, 2);
+      }
+      radial_terms(p, b);
+      pair_kernel(p, ni, b);
+      for (int l = 0; l < b.size; ++l) {
+        up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
+        up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
+        up.k += b.k[l];
+        e += b.e[l];
+        lower(nb.indices[c0 + l], c0 + l, b, l);
+      }
+    }
+    energy[i] = e;
+    return up;
+  };
+
   if (threads == 1) {
     // out.* of row j hold lower_j (complete once the rows below j are done) until row j adds upper_j.
     PairBlock b;
-    upper_pairs(
-        s, normals, nb, p, 0, n, b,
-        [&](const PairBlock& pb, int l) {
-          const Index j = nb.indices[pb.entry[l]];
-          out.force.row(j) -= Vec3(pb.fx[l], pb.fy[l], pb.fz[l]).transpose();
-          out.torque.row(j) += Vec3(pb.tjx[l], pb.tjy[l], pb.tjz[l]).transpose();
-          out.stiffness[j] += pb.k[l];
-        },
-        [&](Index i, const Upper& up) {
-          out.force.row(i) = up.f.transpose() + out.force.row(i);
-          out.torque.row(i) = up.t.transpose() + out.torque.row(i);
-          out.stiffness[i] = up.k + out.stiffness[i];
-          energy[i] = up.e;
-        });
+    for (Index i = 0; i < n; ++i) {
+      const Upper up = row(i, b, [&](Index j, std::int64_t, const PairBlock& pb, int l) {
+        out.force.row(j) -= Vec3(pb.fx[l], pb.fy[l], pb.fz[l]).transpose();
+        out.torque.row(j) += Vec3(pb.tjx[l], pb.tjy[l], pb.tjz[l]).transpose();
+        out.stiffness[j] += pb.k[l];
+      });
+      out.force.row(i) = up.f.transpose() + out.force.row(i);
+      out.torque.row(i) = up.t.transpose() + out.torque.row(i);
+      out.stiffness[i] = up.k + out.stiffness[i];
+    }
   } else {
     // Pair shares at the upper entry (i < j) of row i; mirror[c] of a lower entry (row j, neighbour k < j)
     // is the entry of j in row k.
@@ -228,23 +208,17 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
 #pragma omp parallel num_threads(threads)
     {
       PairBlock b;
-      constexpr Index kRows = 256;  // rows per work item
 #pragma omp for schedule(static)
-      for (Index r0 = 0; r0 < n; r0 += kRows)
-        upper_pairs(
-            s, normals, nb, p, r0, std::min(n, r0 + kRows), b,
-            [&](const PairBlock& pb, int l) {
-              const std::int64_t c = pb.entry[l];
-              out.pair_force.row(c) << pb.fx[l], pb.fy[l], pb.fz[l];
-              out.pair_torque.row(c) << pb.tjx[l], pb.tjy[l], pb.tjz[l];
-              out.pair_stiffness[c] = pb.k[l];
-            },
-            [&](Index i, const Upper& up) {
-              out.force.row(i) = up.f.transpose();
-              out.torque.row(i) = up.t.transpose();
-              out.stiffness[i] = up.k;
-              energy[i] = up.e;
-            });
+      for (Index i = 0; i < n; ++i) {
+        const Upper up = row(i, b, [&](Index, std::int64_t c, const PairBlock& pb, int l) {
+          out.pair_force.row(c) << pb.fx[l], pb.fy[l], pb.fz[l];
+          out.pair_torque.row(c) << pb.tjx[l], pb.tjy[l], pb.tjz[l];
+          out.pair_stiffness[c] = pb.k[l];
+        });
+        out.force.row(i) = up.f.transpose();
+        out.torque.row(i) = up.t.transpose();
+        out.stiffness[i] = up.k;
+      }
 #pragma omp for schedule(static)
       for (Index j = 0; j < n; ++j) {
         Vec3 f = Vec3::Zero(), t = Vec3::Zero();
