@@ -7,6 +7,7 @@
 
 #include "surfeledit/core/particles/forces.hpp"
 #include "surfeledit/core/particles/repulsion.hpp"
+#include "particle_fixtures.hpp"
 
 namespace surfeledit {
 namespace {
@@ -162,6 +163,38 @@ TEST(ParticleGradients, SystemForcesAreMinusEnergyGradient) {
       expect_near(f.torque.row(i).transpose(), tq, "system torque");
     }
   }
+}
+
+// compute_forces evaluates each unordered pair once and sums in a fixed order: the same bits on 1 and 3
+// threads (two different code paths), for every weighting, repulsion and drop_dphi; asymmetric
+// neighbourhoods are refused.
+TEST(ParticleGradients, SystemForcesDoNotDependOnThreads) {
+  const ParticleState s = test::plane_patch(14, 0.3, 0.3, 0.3, 9);
+  for (const WeightParams& wp : weightings())
+    for (RepulsionKind kind : {RepulsionKind::None, RepulsionKind::Spring, RepulsionKind::Gaussian, RepulsionKind::Weight})
+      for (bool drop : {false, true}) {
+        ParticleParams p;
+        p.weight = wp;
+        p.weight.radius *= 2.0;
+        p.repulsion.kind = kind;
+        p.drop_dphi = drop;
+        const Neighbourhood nb = neighbours_grid(s.x, p.weight.radius, 1);
+        SystemForces one, three;
+        p.threads = 1;
+        compute_forces(s, nb, p, one);
+        p.threads = 3;
+        compute_forces(s, nb, p, three);
+        EXPECT_TRUE(one.force == three.force && one.torque == three.torque && one.stiffness == three.stiffness &&
+                    one.energy == three.energy)
+            << "weight " << int(wp.kind) << " repulsion " << int(kind) << " drop " << drop;
+        EXPECT_GT(one.energy, 0.0);
+      }
+  Neighbourhood bad = neighbours_grid(s.x, 2.0, 1);
+  bad.indices[bad.offsets[5]] = bad.indices[bad.offsets[5] + 1];  // row 5 loses a neighbour, gets a repeat
+  ParticleParams p;
+  p.threads = 2;
+  SystemForces f;
+  EXPECT_THROW(compute_forces(s, bad, p, f), Error);
 }
 
 }  // namespace

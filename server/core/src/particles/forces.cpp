@@ -1,52 +1,238 @@
-// Sum of the pair potentials per particle (each particle visits all its neighbours, so no two threads
-// write the same row) and the stable time step from the summed stiffness bounds.
+// Sum of the pair potentials, one fused kernel per unordered neighbour pair (i < j), and the stable time
+// step from the summed stiffness bounds.
+//
+// Order of the sums (so that results do not depend on the thread count): for particle i,
+//   total_i = upper_i + lower_i,
+// upper_i the sum over its neighbours j > i in ascending j, lower_i the sum (from zero) over its neighbours
+// k < i in ascending k of what pair (k, i) gives i. One thread adds lower_i while visiting the rows in
+// ascending order; several threads store each pair's share for its upper particle and gather it afterwards.
+// Both evaluate the same expressions in the same order, so the bits are the same (forces.cpp is compiled
+// without floating-point contraction, so an inlined expression cannot become an FMA in one path only).
 #include "surfeledit/core/particles/forces.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "surfeledit/core/particles/repulsion.hpp"
 #include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
+
+namespace {
+
+// On x86-64 the two block loops are also compiled for AVX2 and picked at run time. Without contraction
+// (see above) every lane computes the same IEEE operations at any vector width, so the bits do not change.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define SURFELEDIT_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define SURFELEDIT_SIMD_CLONES
+#endif
+
+constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
+
+// Pairs (i, j_l), i < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises.
+struct PairBlock {
+  int size = 0;
+  double rx[kLanes], ry[kLanes], rz[kLanes], njx[kLanes], njy[kLanes], njz[kLanes];  // r and n_j
+  double rho[kLanes];                                                                // |r|
+  double phi[kLanes], dphi[kLanes], ddphi[kLanes], dphi_r[kLanes];  // weight at |r| (0 at and beyond d)
+  double e_rep[kLanes], d1_rep[kLanes], k_rep[kLanes];              // repulsion: Phi, Phi'/rho, stiffness
+  // Results: force on i (-f on j: Newton's third law holds exactly for every term), torques on i and on j
+  // (not antisymmetric), stiffness bound (the same at both ends), E_ij = 2 a_R Phi_R + a_P (Phi_P(n_i) +
+  // Phi_P(n_j)) + 2 a_N Phi_N + 2 a_C Phi_C.
+  double fx[kLanes], fy[kLanes], fz[kLanes], tix[kLanes], tiy[kLanes], tiz[kLanes];
+  double tjx[kLanes], tjy[kLanes], tjz[kLanes], k[kLanes], e[kLanes];
+};
+
+// phi and the repulsion at |r| for every lane; lanes at or beyond the radius get zeros (they add nothing).
+SURFELEDIT_SIMD_CLONES void radial_terms(const ParticleParams& p, PairBlock& b) {
+  const int m = b.size;
+#pragma omp simd
+  for (int l = 0; l < m; ++l) b.rho[l] = std::sqrt(b.rx[l] * b.rx[l] + b.ry[l] * b.ry[l] + b.rz[l] * b.rz[l]);
+  const double d = p.weight.radius, d2 = d * d;
+  if (p.weight.kind == WeightKind::Compact) {
+#pragma omp simd
+    for (int l = 0; l < m; ++l) {
+      const double in = static_cast<double>(b.rho[l] < d);  // 1 or 0, without a branch
+      const WeightSample w = compact_weight_inside(b.rho[l], d2);
+      b.phi[l] = in * w.phi;
+      b.dphi[l] = in * w.dphi;
+      b.ddphi[l] = in * w.ddphi;
+      b.dphi_r[l] = in * w.dphi_r;
+    }
+  } else {
+    for (int l = 0; l < m; ++l) {
+      const WeightSample w = weight(p.weight, b.rho[l]);
+      b.phi[l] = w.phi, b.dphi[l] = w.dphi, b.ddphi[l] = w.ddphi, b.dphi_r[l] = w.dphi_r;
+    }
+  }
+  if (p.repulsion.kind == RepulsionKind::Weight) {
+    const double A = p.repulsion.amplitude;
+#pragma omp simd
+    for (int l = 0; l < m; ++l) {
+      const RadialTerm t = weight_repulsion(A, WeightSample{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]});
+      b.e_rep[l] = t.energy, b.d1_rep[l] = t.d1_r, b.k_rep[l] = t.stiffness;
+    }
+  } else {
+    for (int l = 0; l < m; ++l) {
+      const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
+      // Beyond the radius every term is off, the repulsion too (it interacts only within a neighbourhood).
+      const RadialTerm t = (w.phi == 0.0 && w.dphi == 0.0) ? RadialTerm{} : repulsion_radial(p.repulsion, b.rho[l], w);
+      b.e_rep[l] = t.energy, b.d1_rep[l] = t.d1_r, b.k_rep[l] = t.stiffness;
+    }
+  }
+}
+
+// The terms of potentials.hpp and repulsion.hpp for every lane, written out with their common factors
+// shared (a term whose alpha is 0 adds zeros). `ni` is the normal of particle i.
+SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
+  const double aP = p.alpha_planarity, aN = 2.0 * p.alpha_normality, aC = 2.0 * p.alpha_circularity;
+  const double aR = p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion;
+  const double keep_dphi = p.drop_dphi ? 0.0 : 1.0;
+  const double nix = ni.x(), niy = ni.y(), niz = ni.z();
+  const int m = b.size;
+#pragma omp simd
+  for (int l = 0; l < m; ++l) {
+    const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
+    const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
+    const double phi = w.phi, dr = keep_dphi * w.dphi_r, rho = b.rho[l];
+    const double ai = nix * rx + niy * ry + niz * rz, aj = njx * rx + njy * ry + njz * rz;  // Phi_P: n . r
+    const double bx = nix - njx, by = niy - njy, bz = niz - njz, bn = bx * bx + by * by + bz * bz;  // Phi_N
+    const double c = (nix + njx) * rx + (niy + njy) * ry + (niz + njz) * rz;  // Phi_C: (n_i + n_j) . r
+    b.e[l] = aP * (ai * ai * phi + aj * aj * phi) + aN * (bn * phi) + aC * (c * c * phi) + aR * b.e_rep[l];
+    const double rc = aP * (ai * ai * dr + aj * aj * dr) + aN * (bn * dr) + aC * (c * c * dr) + aR * b.d1_rep[l];
+    const double ci = aP * (2.0 * ai * phi) + aC * (2.0 * c * phi), cj = aP * (2.0 * aj * phi) + aC * (2.0 * c * phi);
+    const double tn = aN * (2.0 * phi);
+    b.k[l] = aP * (2.0 * projection_stiffness(1.0, rho, w)) + aN * conormality_stiffness(bn, w) +
+             aC * projection_stiffness(2.0, rho, w) + aR * b.k_rep[l];
+    // f = rc r + ci n_i + cj n_j; torques: -grad over a rotation of i is (dPhi/dn_i) x n_i, for j the same
+    // with r -> -r: t_i = ci r x n_i + tn n_i x n_j, t_j = cj r x n_j - tn n_i x n_j.
+    b.fx[l] = rc * rx + ci * nix + cj * njx;
+    b.fy[l] = rc * ry + ci * niy + cj * njy;
+    b.fz[l] = rc * rz + ci * niz + cj * njz;
+    const double nnx = tn * (niy * njz - niz * njy), nny = tn * (niz * njx - nix * njz), nnz = tn * (nix * njy - niy * njx);
+    b.tix[l] = ci * (ry * niz - rz * niy) + nnx;
+    b.tiy[l] = ci * (rz * nix - rx * niz) + nny;
+    b.tiz[l] = ci * (rx * niy - ry * nix) + nnz;
+    b.tjx[l] = cj * (ry * njz - rz * njy) - nnx;
+    b.tjy[l] = cj * (rz * njx - rx * njz) - nny;
+    b.tjz[l] = cj * (rx * njy - ry * njx) - nnz;
+  }
+}
+
+// First entry of row i with a neighbour above i (rows ascending).
+inline std::int64_t upper_begin(const Neighbourhood& nb, Index i) {
+  const auto begin = nb.indices.begin();
+  return std::upper_bound(begin + nb.offsets[i], begin + nb.offsets[i + 1], i) - begin;
+}
+
+}  // namespace
 
 void compute_forces(const ParticleState& s, const Neighbourhood& nb, const ParticleParams& p, SystemForces& out) {
   const Index n = s.size();
   out.force.setZero(n, 3);
   out.torque.setZero(n, 3);
   out.stiffness.setZero(n);
-  Values energy = Values::Zero(n);
-  const Points normals = s.normals();
-  const bool drop = p.drop_dphi;
-#pragma omp parallel for schedule(static) num_threads(resolve_threads(p.threads))
-  for (Index i = 0; i < n; ++i) {
+  out.normals.resize(n, 3);
+  for (Index i = 0; i < n; ++i) out.normals.row(i) = s.normal(i).transpose();
+  Values& energy = out.pair_energy;
+  energy.setZero(n);
+  const Points& normals = out.normals;
+  const int threads = resolve_threads(p.threads);
+
+  // The upper sums of row i (f, t_i, k; E into energy[i]); `lower(j, c, b, l)` takes lane l's share for
+  // j (entry c). `b` is the caller's (per thread) block.
+  struct Upper {
+    Vec3 f, t;
+    double k;
+  };
+  const auto row = [&](Index i, PairBlock& b, auto&& lower) {
     const Vec3 xi = s.x.row(i).transpose(), ni = normals.row(i).transpose();
-    Vec3 f = Vec3::Zero(), tau = Vec3::Zero();
-    double e = 0.0, k = 0.0;
-    for (std::int64_t c = nb.offsets[i]; c < nb.offsets[i + 1]; ++c) {
-      const Index j = nb.indices[c];
-      const Vec3 r = s.x.row(j).transpose() - xi;
-      const WeightSample w = weight(p.weight, r.norm());
-      if (w.phi == 0.0 && w.dphi == 0.0) continue;
-      const Vec3 nj = normals.row(j).transpose();
-      const auto add = [&](const PairTerm& t, double a, bool with_torque) {
-        e += a * t.energy;
-        f += a * t.force;
-        if (with_torque) tau += a * t.torque;
-        k += a * t.stiffness;
-      };
-      if (p.alpha_planarity > 0.0) {
-        add(coplanarity(ni, r, w, drop), p.alpha_planarity, true);
-        add(coplanarity(nj, r, w, drop), p.alpha_planarity, false);  // Phi_P of j's plane moves x_i only
+    Upper up{Vec3::Zero(), Vec3::Zero(), 0.0};
+    double e = 0.0;
+    for (std::int64_t c0 = upper_begin(nb, i), end = nb.offsets[i + 1]; c0 < end; c0 += kLanes) {
+      b.size = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
+      for (int l = 0; l < b.size; ++l) {
+        const Index j = nb.indices[c0 + l];
+        b.rx[l] = s.x(j, 0) - xi.x(), b.ry[l] = s.x(j, 1) - xi.y(), b.rz[l] = s.x(j, 2) - xi.z();
+        b.njx[l] = normals(j, 0), b.njy[l] = normals(j, 1), b.njz[l] = normals(j, 2);
       }
-      if (p.alpha_normality > 0.0) add(conormality(ni, nj, r, w, drop), 2.0 * p.alpha_normality, true);
-      if (p.alpha_circularity > 0.0) add(cocircularity(ni, nj, r, w, drop), 2.0 * p.alpha_circularity, true);
-      if (p.alpha_repulsion > 0.0 && p.repulsion.kind != RepulsionKind::None)
-        add(repulsion(p.repulsion, r, w), 2.0 * p.alpha_repulsion, false);
+      radial_terms(p, b);
+      pair_kernel(p, ni, b);
+      for (int l = 0; l < b.size; ++l) {
+        up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
+        up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
+        up.k += b.k[l];
+        e += b.e[l];
+        lower(nb.indices[c0 + l], c0 + l, b, l);
+      }
     }
-    out.force.row(i) = f.transpose();
-    out.torque.row(i) = tau.transpose();
-    out.stiffness[i] = k;
-    energy[i] = 0.5 * e;  // each unordered pair is visited from both ends
+    energy[i] = e;
+    return up;
+  };
+
+  if (threads == 1) {
+    // out.* of row j hold lower_j (complete once the rows below j are done) until row j adds upper_j.
+    PairBlock b;
+    for (Index i = 0; i < n; ++i) {
+      const Upper up = row(i, b, [&](Index j, std::int64_t, const PairBlock& pb, int l) {
+        out.force.row(j) -= Vec3(pb.fx[l], pb.fy[l], pb.fz[l]).transpose();
+        out.torque.row(j) += Vec3(pb.tjx[l], pb.tjy[l], pb.tjz[l]).transpose();
+        out.stiffness[j] += pb.k[l];
+      });
+      out.force.row(i) = up.f.transpose() + out.force.row(i);
+      out.torque.row(i) = up.t.transpose() + out.torque.row(i);
+      out.stiffness[i] = up.k + out.stiffness[i];
+    }
+  } else {
+    // Pair shares at the upper entry (i < j) of row i; mirror[c] of a lower entry (row j, neighbour k < j)
+    // is the entry of j in row k.
+    const std::size_t entries = nb.indices.size();
+    out.pair_force.setZero(static_cast<Eigen::Index>(entries), 3);
+    out.pair_torque.setZero(static_cast<Eigen::Index>(entries), 3);
+    out.pair_stiffness.setZero(static_cast<Eigen::Index>(entries));
+    std::vector<std::int64_t>& mirror = out.mirror;
+    mirror.assign(entries, 0);
+    std::vector<std::int64_t> cursor(nb.offsets.begin(), nb.offsets.end() - 1);
+    for (Index i = 0; i < n; ++i)
+      for (std::int64_t c = upper_begin(nb, i); c < nb.offsets[i + 1]; ++c) {
+        const Index j = nb.indices[c];
+        if (cursor[j] >= nb.offsets[j + 1] || nb.indices[cursor[j]] != i)
+          throw Error(ErrorCode::InvalidArgument, "neighbourhood", "not symmetric: j in N(i) but i not in N(j)");
+        mirror[cursor[j]++] = c;
+      }
+    for (Index j = 0; j < n; ++j)
+      if (cursor[j] != upper_begin(nb, j))
+        throw Error(ErrorCode::InvalidArgument, "neighbourhood", "not symmetric: i in N(j) but j not in N(i)");
+#pragma omp parallel num_threads(threads)
+    {
+      PairBlock b;
+#pragma omp for schedule(static)
+      for (Index i = 0; i < n; ++i) {
+        const Upper up = row(i, b, [&](Index, std::int64_t c, const PairBlock& pb, int l) {
+          out.pair_force.row(c) << pb.fx[l], pb.fy[l], pb.fz[l];
+          out.pair_torque.row(c) << pb.tjx[l], pb.tjy[l], pb.tjz[l];
+          out.pair_stiffness[c] = pb.k[l];
+        });
+        out.force.row(i) = up.f.transpose();
+        out.torque.row(i) = up.t.transpose();
+        out.stiffness[i] = up.k;
+      }
+#pragma omp for schedule(static)
+      for (Index j = 0; j < n; ++j) {
+        Vec3 f = Vec3::Zero(), t = Vec3::Zero();
+        double k = 0.0;
+        for (std::int64_t c = nb.offsets[j]; c < nb.offsets[j + 1] && nb.indices[c] < j; ++c) {
+          f -= out.pair_force.row(mirror[c]).transpose();
+          t += out.pair_torque.row(mirror[c]).transpose();
+          k += out.pair_stiffness[mirror[c]];
+        }
+        out.force.row(j) = out.force.row(j) + f.transpose();
+        out.torque.row(j) = out.torque.row(j) + t.transpose();
+        out.stiffness[j] = out.stiffness[j] + k;
+      }
+    }
   }
   out.energy = energy.sum();
 }

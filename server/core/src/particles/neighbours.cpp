@@ -55,39 +55,65 @@ Neighbourhood neighbours_grid(const Points& points, double radius, int threads) 
   const Eigen::Vector3d dims_d = cells_for(cell);
   const std::int64_t nx = static_cast<std::int64_t>(dims_d[0]), ny = static_cast<std::int64_t>(dims_d[1]),
                      nz = static_cast<std::int64_t>(dims_d[2]);
-  const auto cell_of = [&](Index i, int axis) {
-    return std::min<std::int64_t>(static_cast<std::int64_t>((points(i, axis) - lo[axis]) / cell), dims_d[axis] - 1);
-  };
-  // Counting sort of the particles by cell.
-  std::vector<std::int64_t> start(static_cast<std::size_t>(nx * ny * nz) + 1, 0), cell_id(n);
+  // Cell coordinates of every particle (#P by 3) and a counting sort of the particles by cell, with their
+  // coordinates copied in that order so that the candidates of a row of cells are contiguous in memory.
+  std::vector<std::int64_t> cxyz(3 * static_cast<std::size_t>(n));
+  std::vector<std::int64_t> start(static_cast<std::size_t>(nx * ny * nz) + 1, 0);
   for (Index i = 0; i < n; ++i) {
-    cell_id[i] = cell_of(i, 0) + nx * (cell_of(i, 1) + ny * cell_of(i, 2));
-    ++start[cell_id[i] + 1];
+    for (int axis = 0; axis < 3; ++axis)
+      cxyz[3 * i + axis] = std::min<std::int64_t>(static_cast<std::int64_t>((points(i, axis) - lo[axis]) / cell),
+                                                  static_cast<std::int64_t>(dims_d[axis]) - 1);
+    ++start[cxyz[3 * i] + nx * (cxyz[3 * i + 1] + ny * cxyz[3 * i + 2]) + 1];
   }
   for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
   IndexList sorted(n);
+  Points sp(n, 3);
   {
     std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-    for (Index i = 0; i < n; ++i) sorted[fill[cell_id[i]]++] = i;
+    for (Index i = 0; i < n; ++i) {
+      const std::int64_t k = fill[cxyz[3 * i] + nx * (cxyz[3 * i + 1] + ny * cxyz[3 * i + 2])]++;
+      sorted[k] = i;
+      sp.row(k) = points.row(i);
+    }
   }
+  // Pass 1: each particle's neighbours in cell order, by blocks of rows (concatenated in row order).
   const double r2 = radius * radius;
-  std::vector<IndexList> lists(n);
-#pragma omp parallel for schedule(static) num_threads(resolve_threads(threads))
-  for (Index i = 0; i < n; ++i) {
-    const std::int64_t cx = cell_of(i, 0), cy = cell_of(i, 1), cz = cell_of(i, 2);
-    IndexList& l = lists[i];
-    for (std::int64_t z = std::max<std::int64_t>(cz - 1, 0); z <= std::min(cz + 1, nz - 1); ++z)
-      for (std::int64_t y = std::max<std::int64_t>(cy - 1, 0); y <= std::min(cy + 1, ny - 1); ++y)
-        for (std::int64_t x = std::max<std::int64_t>(cx - 1, 0); x <= std::min(cx + 1, nx - 1); ++x) {
-          const std::int64_t c = x + nx * (y + ny * z);
-          for (std::int64_t k = start[c]; k < start[c + 1]; ++k) {
-            const Index j = sorted[k];
-            if (j != i && (points.row(j) - points.row(i)).squaredNorm() <= r2) l.push_back(j);
+  constexpr Index kBlock = 1024;
+  const Index blocks = (n + kBlock - 1) / kBlock;
+  std::vector<IndexList> found(blocks);
+  std::vector<std::int64_t> offsets(static_cast<std::size_t>(n) + 1, 0);
+#pragma omp parallel for schedule(dynamic) num_threads(resolve_threads(threads))
+  for (Index blk = 0; blk < blocks; ++blk) {
+    IndexList& out = found[blk];
+    for (Index i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) {
+      const std::size_t before = out.size();
+      const std::int64_t cx = cxyz[3 * i], cy = cxyz[3 * i + 1], cz = cxyz[3 * i + 2];
+      const double xi = points(i, 0), yi = points(i, 1), zi = points(i, 2);
+      const std::int64_t x0 = std::max<std::int64_t>(cx - 1, 0), x1 = std::min(cx + 1, nx - 1);
+      for (std::int64_t z = std::max<std::int64_t>(cz - 1, 0); z <= std::min(cz + 1, nz - 1); ++z)
+        for (std::int64_t y = std::max<std::int64_t>(cy - 1, 0); y <= std::min(cy + 1, ny - 1); ++y) {
+          const std::int64_t row = nx * (y + ny * z);  // cells x0..x1 of this row are contiguous
+          for (std::int64_t k = start[row + x0]; k < start[row + x1 + 1]; ++k) {
+            const double dx = sp(k, 0) - xi, dy = sp(k, 1) - yi, dz = sp(k, 2) - zi;
+            if (dx * dx + dy * dy + dz * dz <= r2 && sorted[k] != i) out.push_back(sorted[k]);
           }
         }
-    std::sort(l.begin(), l.end());
+      offsets[i + 1] = static_cast<std::int64_t>(out.size() - before);
+    }
   }
-  return to_csr(lists);
+  for (Index i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  // Pass 2: the relation is symmetric, so its transpose is itself; building the transpose by visiting the
+  // rows in ascending order lists every row ascending, without a sort.
+  Neighbourhood nb;
+  nb.indices.resize(static_cast<std::size_t>(offsets.back()));
+  std::vector<std::int64_t> cursor(offsets.begin(), offsets.end() - 1);
+  for (Index blk = 0; blk < blocks; ++blk) {
+    std::size_t k = 0;
+    for (Index i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i)
+      for (std::int64_t e = offsets[i]; e < offsets[i + 1]; ++e) nb.indices[cursor[found[blk][k++]]++] = i;
+  }
+  nb.offsets = std::move(offsets);
+  return nb;
 }
 
 }  // namespace surfeledit

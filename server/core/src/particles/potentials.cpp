@@ -20,13 +20,7 @@ PairTerm squared_projection(const Vec3& m, double m_norm, const Vec3& ni, const 
   t.force = 2.0 * a * w.phi * m;
   if (!drop_dphi) t.force += a * a * w.dphi_r * r;
   t.torque = 2.0 * a * w.phi * r.cross(ni);
-  // |a| <= m_norm rho; bounds of the x-x, theta-theta and x-theta blocks of the Hessian (docs/particles.md).
-  const double rho = r.norm(), mr = m_norm * rho, phi = w.phi;
-  const double dphi = std::abs(w.dphi), ddphi = std::abs(w.ddphi), dphi_r = std::abs(w.dphi_r);
-  const double kx = 2.0 * m_norm * m_norm * phi + 4.0 * mr * m_norm * dphi + mr * mr * (ddphi + dphi_r);
-  const double kt = (2.0 * rho * rho + 2.0 * mr * rho) * phi;
-  const double kxt = (2.0 * m_norm * rho + 2.0 * mr) * phi + 2.0 * mr * rho * dphi;
-  t.stiffness = kx + kt + kxt;
+  t.stiffness = projection_stiffness(m_norm, r.norm(), w);  // |a| <= m_norm rho
   return t;
 }
 
@@ -46,7 +40,7 @@ PairTerm conormality(const Vec3& ni, const Vec3& nj, const Vec3& r, const Weight
   t.energy = b * w.phi;
   if (!drop_dphi) t.force = b * w.dphi_r * r;
   t.torque = 2.0 * w.phi * ni.cross(nj);
-  t.stiffness = b * (std::abs(w.ddphi) + std::abs(w.dphi_r)) + 2.0 * w.phi + 2.0 * std::abs(w.dphi);
+  t.stiffness = conormality_stiffness(b, w);
   return t;
 }
 

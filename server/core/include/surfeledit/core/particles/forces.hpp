@@ -4,6 +4,9 @@
 // (unless drop_dphi). Damping and region scaling are applied by the integrator.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "surfeledit/core/particles/neighbours.hpp"
 #include "surfeledit/core/particles/params.hpp"
 #include "surfeledit/core/particles/state.hpp"
@@ -15,9 +18,19 @@ struct SystemForces {
   Points torque;     // #P by 3
   Values stiffness;  // #P: sum over neighbours of the pair stiffness bounds (docs/particles.md)
   double energy = 0.0;  // sum over unordered pairs of E_ij
+
+  // Workspace of compute_forces, kept so that repeated calls do not allocate.
+  Points normals;         // #P by 3 unit normals of the state
+  Values pair_energy;     // #P: sum of E_ij over the neighbours j > i
+  Points pair_force;      // #E by 3 (E neighbour entries), threads > 1: force of pair (i, j), i < j, on i
+  Points pair_torque;     // #E by 3, threads > 1: torque of pair (i, j), i < j, on j
+  Values pair_stiffness;  // #E, threads > 1
+  std::vector<std::int64_t> mirror;  // #E, threads > 1: entry of j in row i for the entry of i in row j
 };
 
-// Per particle, so the result does not depend on the thread count.
+// Each unordered pair is evaluated once; `nbrs` must be symmetric (j in N(i) exactly when i in N(j), as
+// both neighbourhood builders give; with threads > 1 InvalidArgument otherwise). The sums run in a fixed
+// order, so the result does not depend on the thread count.
 void compute_forces(const ParticleState& state, const Neighbourhood& nbrs, const ParticleParams& params,
                     SystemForces& out);
 

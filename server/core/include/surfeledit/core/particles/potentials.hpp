@@ -10,6 +10,8 @@
 // sign; the gradient gives tau_N = 2 phi (n_i x n_j) and tau_C = 2 c phi (r x n_i), c = (n_i + n_j) . r.
 #pragma once
 
+#include <cmath>
+
 #include "surfeledit/core/particles/weighting.hpp"
 #include "surfeledit/core/types.hpp"
 
@@ -23,6 +25,22 @@ struct PairTerm {
   double stiffness = 0.0;      // upper bound of the norm of the second derivative w.r.t. (x_i, theta_i)
                                // (used for the stable time step, see docs/particles.md)
 };
+
+// Stiffness bounds (docs/particles.md), shared by the per-term functions below and the fused pair kernel
+// of compute_forces. Phi = (m . r)^2 phi with |m| <= m_norm: bounds of the x-x, theta-theta and x-theta
+// blocks of its Hessian at distance rho = |r|.
+inline double projection_stiffness(double m_norm, double rho, const WeightSample& w) {
+  const double mr = m_norm * rho, phi = w.phi;
+  const double dphi = std::abs(w.dphi), ddphi = std::abs(w.ddphi), dphi_r = std::abs(w.dphi_r);
+  const double kx = 2.0 * m_norm * m_norm * phi + 4.0 * mr * m_norm * dphi + mr * mr * (ddphi + dphi_r);
+  const double kt = (2.0 * rho * rho + 2.0 * mr * rho) * phi;
+  const double kxt = (2.0 * m_norm * rho + 2.0 * mr) * phi + 2.0 * mr * rho * dphi;
+  return kx + kt + kxt;
+}
+// Co-normality, b = |n_i - n_j|^2.
+inline double conormality_stiffness(double b, const WeightSample& w) {
+  return b * (std::abs(w.ddphi) + std::abs(w.dphi_r)) + 2.0 * w.phi + 2.0 * std::abs(w.dphi);
+}
 
 // `w` is the weight at |r|; `r` = x_j - x_i must be non-zero when w.dphi != 0.
 PairTerm coplanarity(const Vec3& ni, const Vec3& r, const WeightSample& w, bool drop_dphi = false);

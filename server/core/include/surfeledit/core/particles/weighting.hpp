@@ -2,6 +2,7 @@
 // potential is multiplied by phi(|r|), which falls from 1 at r = 0 to 0 at the neighbourhood radius d.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 namespace surfeledit {
@@ -26,7 +27,32 @@ struct WeightSample {
   double dphi_r = 0.0; // phi' / r (finite at r = 0), so that phi' r_hat = dphi_r * r without a division
 };
 
-// phi at distance r >= 0 (zero for r >= radius).
-WeightSample weight(const WeightParams& params, double r);
+// The compact weight at r < d (d2 = d^2), without the range test: the branch-free core of weight(), also
+// evaluated by the vectorised pair kernel of compute_forces.
+inline WeightSample compact_weight_inside(double r, double d2) {
+  WeightSample w;
+  const double t2 = r * r / d2;
+  const double u = t2 - 1.0;
+  w.phi = u * u;
+  w.dphi_r = 4.0 * u / d2;
+  w.dphi = w.dphi_r * r;
+  w.ddphi = 4.0 * (3.0 * t2 - 1.0) / d2;
+  return w;
+}
+
+// phi at distance r >= 0 (zero for r >= radius). Inline: it is evaluated once per neighbour pair.
+inline WeightSample weight(const WeightParams& params, double r) {
+  const double d = params.radius;
+  if (r >= d) return WeightSample{};
+  const double d2 = d * d;
+  if (params.kind == WeightKind::Compact) return compact_weight_inside(r, d2);
+  WeightSample w;
+  const double sigma2 = -d2 / (2.0 * std::log(params.eps));  // phi(d) = eps
+  w.phi = std::exp(-r * r / (2.0 * sigma2));
+  w.dphi_r = -w.phi / sigma2;
+  w.dphi = w.dphi_r * r;
+  w.ddphi = (r * r / (sigma2 * sigma2) - 1.0 / sigma2) * w.phi;
+  return w;
+}
 
 }  // namespace surfeledit
