@@ -79,7 +79,7 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
       stack.push_back(c + 1);
       stack.push_back(c);
     }
-    // §10.1.1: minimum leaf extent, then every parent at least as large as (containing) its children.
+    // thesis §10.1.1: minimum leaf extent, then every parent at least as large as (containing) its children.
     for (std::size_t k = nodes_.size(); k-- > 0;) {
       Node& nd = nodes_[k];
       if (nd.leaf()) {

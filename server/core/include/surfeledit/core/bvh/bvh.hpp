@@ -4,7 +4,7 @@
 //   static Box fit(positions, radii, rows, n)          tight box over the balls of rows (kDeadRow skipped)
 //   static Vec3 split_direction(box, positions, rows, n) unit axis the build splits along
 //   expand(p, r), enclose(child), inflate(m), enforce_min_extent(e), contains(p, r), contains(child)
-//   grow_over_child(child) and kContainsChildren   how a parent is made "at least as large" (§10.1.1)
+//   grow_over_child(child) and kContainsChildren   how a parent is made "at least as large" (thesis §10.1.1)
 //
 // Layout: nodes in one flat array; the children of a node are adjacent (first_child, first_child + 1)
 // and always have larger indices than their parent, so a reverse sweep visits children before
@@ -65,8 +65,8 @@ class Bvh {
     build(positions, radii, rows, params);
   }
 
-  // Top-down build (§5 "Build"): split the node's split_direction at the mean of the projected
-  // positions; stop at max_level or at <= leaf_max_surfels; a child never gets fewer than
+  // Top-down build (docs/algorithms.md §5 "Build"): split the node's split_direction at the mean of the
+  // projected positions; stop at max_level or at <= leaf_max_surfels; a child never gets fewer than
   // leaf_min_surfels. Then leaf boxes get min_leaf_extent and parents are grown over their children.
   void build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params);
   // Takes a tree built elsewhere in this layout (e.g. a sphere cluster tree): `nodes` (root 0, children
