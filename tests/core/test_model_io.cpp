@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include "expect_error.hpp"
 #include "surfeledit/core/model_io.hpp"
 
 namespace surfeledit {
@@ -75,7 +76,8 @@ TEST_F(ModelIo, RoundTripKeepsFloat64PositionsInPlyAndPcd) {
 }
 
 // Known bug (found by this test, left for its owner): loading a .ply saved with colours (an UINT32 "rgb"
-// field) throws std::bad_alloc. Enable when fixed.
+// field) throws std::bad_alloc from read_fields() in from_cloud(), sized by what PCL's PLYReader
+// returns for such a file. Enable when fixed.
 TEST_F(ModelIo, DISABLED_PlyRoundTripKeepsColours) { expect_round_trip(random_surfels(300, 5), path("cloud.ply")); }
 
 TEST_F(ModelIo, ObjOctahedronGivesVertexSurfelsWithAnalyticNormals) {
@@ -96,34 +98,24 @@ TEST_F(ModelIo, ObjOctahedronGivesVertexSurfelsWithAnalyticNormals) {
   }
 }
 
-void expect_error(const std::string& file, ErrorCode code) {
-  try {
-    load_surfels(file);
-    ADD_FAILURE() << "loaded " << file;
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), code) << e.what();
-    EXPECT_EQ(e.field(), "path");
-    EXPECT_NE(std::string(e.what()).find(fs::path(file).filename().string()), std::string::npos) << e.what();
-  }
+void expect_load_error(const std::string& file, ErrorCode code) {
+  const std::string msg = testing_util::expect_error([&] { load_surfels(file); }, code, "path");
+  EXPECT_NE(msg.find(fs::path(file).filename().string()), std::string::npos) << msg;
 }
 
 TEST_F(ModelIo, ErrorsAreTypedAndNameTheFile) {
-  expect_error(path("missing.ply"), ErrorCode::NotFound);
-  expect_error(dir_.string(), ErrorCode::Io);  // a directory
+  expect_load_error(path("missing.ply"), ErrorCode::NotFound);
+  expect_load_error(dir_.string(), ErrorCode::Io);  // a directory
   {
     std::ofstream(path("garbage.pcd")) << "this is not a point cloud\n";
   }
-  expect_error(path("garbage.pcd"), ErrorCode::Io);
+  expect_load_error(path("garbage.pcd"), ErrorCode::Io);
   {
     std::ofstream(path("points.xyz")) << "1 2 3\n";
   }
-  expect_error(path("points.xyz"), ErrorCode::InvalidArgument);
-  try {
-    save_surfels(path("out.obj"), random_surfels(3, 1));
-    ADD_FAILURE() << "saved an .obj";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
-  }
+  expect_load_error(path("points.xyz"), ErrorCode::InvalidArgument);
+  testing_util::expect_error([&] { save_surfels(path("out.obj"), random_surfels(3, 1)); },
+                             ErrorCode::InvalidArgument, "path");
   EXPECT_FALSE(fs::exists(path("out.obj")));
 }
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <random>
 
+#include "expect_error.hpp"
 #include "surfeledit/core/selector.hpp"
 
 namespace surfeledit {
@@ -76,13 +77,7 @@ TEST(Selector, BoundaryIsIncludedAndZeroSizeSelectsExactHits) {
 }
 
 void expect_invalid(const Selector& s, const std::string& field) {
-  try {
-    validate(s, "sel");
-    ADD_FAILURE() << "no error for " << field;
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
-    EXPECT_EQ(e.field(), field);
-  }
+  testing_util::expect_error([&] { validate(s, "sel"); }, ErrorCode::InvalidArgument, field);
 }
 
 TEST(Selector, ValidateNamesTheBadField) {

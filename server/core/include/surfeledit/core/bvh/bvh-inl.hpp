@@ -16,14 +16,9 @@
 namespace surfeledit::bvh {
 
 template <class Box>
-void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params) {
-  validate(params);
-  const auto t0 = std::chrono::steady_clock::now();
+void Bvh<Box>::reset_steps(const BvhParams& params) {
   params_ = params;
-  nodes_.clear();
-  order_ = rows;
-  const std::int32_t n = static_cast<std::int32_t>(order_.size());
-  live_ = n;
+  live_ = static_cast<Index>(order_.size());
   extras_ = 0;
   dead_ = 0;
   extra_next_.clear();
@@ -34,6 +29,31 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
   cut_ = 0;
   positions_ = nullptr;
   radii_ = nullptr;
+}
+
+template <class Box>
+void Bvh<Box>::index_nodes() {
+  Index max_row = -1;
+  for (Index r : order_) max_row = std::max(max_row, r);
+  leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
+  for (std::size_t k = 0; k < nodes_.size(); ++k)
+    if (nodes_[k].leaf())
+      for (std::int32_t s = nodes_[k].begin; s < nodes_[k].end; ++s) leaf_of_row_[order_[s]] = static_cast<std::int32_t>(k);
+  extra_head_.assign(nodes_.size(), -1);
+  stamp_.assign(nodes_.size(), 0);
+  masks_.assign(nodes_.size(), 0);
+  marks_.assign(nodes_.size(), 0);
+  mark_ = 1;
+}
+
+template <class Box>
+void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexList& rows, const BvhParams& params) {
+  validate(params);
+  const auto t0 = std::chrono::steady_clock::now();
+  nodes_.clear();
+  order_ = rows;
+  reset_steps(params);
+  const std::int32_t n = static_cast<std::int32_t>(order_.size());
   if (n > 0) {
     nodes_.reserve(static_cast<std::size_t>(2 * (n / std::max(1, params.leaf_min_surfels)) + 1));
     Node root;
@@ -90,17 +110,7 @@ void Bvh<Box>::build(const Points& positions, const Values& radii, const IndexLi
       }
     }
   }
-  Index max_row = -1;
-  for (Index r : order_) max_row = std::max(max_row, r);
-  leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
-  for (std::size_t k = 0; k < nodes_.size(); ++k)
-    if (nodes_[k].leaf())
-      for (std::int32_t s = nodes_[k].begin; s < nodes_[k].end; ++s) leaf_of_row_[order_[s]] = static_cast<std::int32_t>(k);
-  extra_head_.assign(nodes_.size(), -1);
-  stamp_.assign(nodes_.size(), 0);
-  masks_.assign(nodes_.size(), 0);
-  marks_.assign(nodes_.size(), 0);
-  mark_ = 1;
+  index_nodes();
   build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -128,34 +138,13 @@ void Bvh<Box>::adopt(std::vector<Node> nodes, IndexList order, const BvhParams& 
         l.level != nd.level + 1 || r.level != nd.level + 1)
       broken(k, "children do not split the parent's range");
   }
-  Index max_row = -1;
-  for (Index r : order) {
+  for (Index r : order)
     if (r < 0) throw Error(ErrorCode::Internal, "order", "adopted tree: negative row");
-    max_row = std::max(max_row, r);
-  }
-  params_ = params;
   nodes_ = std::move(nodes);
   order_ = std::move(order);
-  live_ = n_rows;
-  extras_ = 0;
-  dead_ = 0;
-  extra_next_.clear();
-  extra_row_.clear();
-  refit_since_build_ = false;
-  step_ = 0;
+  reset_steps(params);
   height_ = height;
-  cut_ = 0;
-  positions_ = nullptr;
-  radii_ = nullptr;
-  leaf_of_row_.assign(static_cast<std::size_t>(max_row + 1), -1);
-  for (std::size_t k = 0; k < nodes_.size(); ++k)
-    if (nodes_[k].leaf())
-      for (std::int32_t s = nodes_[k].begin; s < nodes_[k].end; ++s) leaf_of_row_[order_[s]] = static_cast<std::int32_t>(k);
-  extra_head_.assign(nodes_.size(), -1);
-  stamp_.assign(nodes_.size(), 0);
-  masks_.assign(nodes_.size(), 0);
-  marks_.assign(nodes_.size(), 0);
-  mark_ = 1;
+  index_nodes();
   build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

@@ -128,6 +128,11 @@ class Bvh {
 
  private:
   Node& mut(std::int32_t i) { return nodes_[static_cast<std::size_t>(i)]; }
+  // build() and adopt(), once nodes_ and order_ are set: a tree with no step, insertion or removal
+  // behind it (params_ = params, live_ = order_.size(), height_ = 0) ...
+  void reset_steps(const BvhParams& params);
+  // ... then the leaf of every row (leaf_of_row_) and the per-node step and mark arrays.
+  void index_nodes();
   // Slow path of touch(): `node` was not refit in this step yet (its stamp is already set).
   template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
   void refit_touched(std::int32_t node, BvhCounters& counters);
