@@ -1,5 +1,5 @@
-// Deformation tool (§1): blend fields from nearest-neighbour distances to F0 and F1, and one
-// step F(p, s) = R(a, s alpha)(p - c) + c + s t applied to positions, normals and tangent axes.
+// Deformation tool (docs/algorithms.md §1): blend fields from nearest-neighbour distances to F0 and F1, and
+// one step F(p, s) = R(a, s alpha)(p - c) + c + s t applied to positions, normals and tangent axes.
 #include "surfeledit/core/deformation.hpp"
 
 #include <omp.h>

@@ -1,4 +1,5 @@
-// Inside/outside test of §2: nearest surfel (p2, n2) of the query p1; inside iff (p1 - p2) . n2 <= W.
+// Inside/outside test (docs/algorithms.md §2): nearest surfel (p2, n2) of the query p1; inside iff
+// (p1 - p2) . n2 <= W.
 #include "surfeledit/core/inside_outside.hpp"
 #include "surfeledit/core/util.hpp"
 

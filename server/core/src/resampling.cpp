@@ -1,5 +1,5 @@
-// Dynamic resampling (§1): split surfels whose deformed tangent ellipse is stretched beyond a
-// threshold, along the direction of greatest stretch.
+// Dynamic resampling (docs/algorithms.md §1): split surfels whose deformed tangent ellipse is stretched
+// beyond a threshold, along the direction of greatest stretch.
 #include "surfeledit/core/resampling.hpp"
 
 #include <Eigen/Geometry>

@@ -1,4 +1,4 @@
-"""Slow from-scratch references of the four collision algorithms (ALGORITHMS.md §4.1-§4.4).
+"""Slow from-scratch references of the four collision algorithms (docs/algorithms.md §4.1-§4.4).
 
 Written independently of the C++ detectors: scipy's cKDTree for nearest neighbours, numpy for the
 tests, per-surfel state keyed by surfel id (not by row), and plain Python loops where order

@@ -22,7 +22,7 @@ struct LooseNode {
   std::int32_t cluster = -1;           // leaves: cluster index
 };
 
-// Huffman-like pairing (§9.4.2): merges the two entries of `group` whose merged sphere is smallest,
+// Huffman-like pairing (thesis §9.4.2): merges the two entries of `group` whose merged sphere is smallest,
 // until one is left; returns it. Pairwise merged radii are kept in a table, so each merge costs O(m)
 // new sphere merges (O(m^2) over the node) plus a scan of the table.
 std::int32_t pair_up(std::vector<LooseNode>& nodes, std::vector<std::int32_t> group) {

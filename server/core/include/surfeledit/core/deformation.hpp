@@ -1,4 +1,4 @@
-// The deformation tool (§1, Pauly et al. 2003): a zero region F0 that never moves, a
+// The deformation tool (docs/algorithms.md §1, Pauly et al. 2003): a zero region F0 that never moves, a
 // one region F1 that moves fully, and a smooth blend in between, scaled by
 //   lambda = d0 / (d0 + d1),  s = beta(lambda),
 //   F(p, s) = R(axis, s * angle) (p - c) + c + s * t.

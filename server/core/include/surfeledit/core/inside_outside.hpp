@@ -1,4 +1,4 @@
-// Inside/outside classification of query points against a closed surfel model (§2).
+// Inside/outside classification of query points against a closed surfel model (docs/algorithms.md §2).
 //
 //   p1 is inside  <=>  (p1 - p2) . n2 <= W
 // with p2, n2 the position and normal of the surfel nearest to p1.

@@ -1,5 +1,5 @@
-// Dynamic resampling (§1 "Dynamic resampling"; Pauly et al. 2003): surfels stretched by the
-// deformation are split in two along their direction of greatest stretch.
+// Dynamic resampling (docs/algorithms.md §1 "Dynamic resampling"; Pauly et al. 2003): surfels stretched by
+// the deformation are split in two along their direction of greatest stretch.
 //
 // Stretch of a surfel: with its deformed tangent axes u, v (lengths = radii along them), the first
 // fundamental form G = [u.u, u.v; v.u, v.v]; its largest semi-axis is sqrt(lambda_max(G)).

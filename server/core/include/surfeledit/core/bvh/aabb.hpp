@@ -1,7 +1,7 @@
 // Axis-aligned bounding box (thesis §8.1): the box kind of the deformable tree and one choice for
 // the zero region. Stored as its corners lo/hi (model units); centre and half extents (`ext` in
 // Eqs. 8.4, 8.5) are derived. The corner form makes containment exact (no rounding) and lets a
-// refit recompute single axes (the per-axis masks of §8.3.1).
+// refit recompute single axes (the per-axis masks of thesis §8.3.1).
 //
 // A box bounds the *balls* of its surfels: every surfel (position p, radius r) lies in the box with
 // its whole sphere, so a surfel sphere touching another surfel sphere always touches its box.
@@ -40,7 +40,7 @@ struct Aabb {
     hi = hi.cwiseMax(b.hi);
   }
   void enclose(const Aabb& child) { expand(child); }
-  // A parent's box after the build: contains its children (§10.1.1, "at least as large").
+  // A parent's box after the build: contains its children (thesis §10.1.1, "at least as large").
   static constexpr bool kContainsChildren = true;
   void grow_over_child(const Aabb& child) { enclose(child); }
   // Adds a margin of `m` model units on every side.
@@ -48,7 +48,7 @@ struct Aabb {
     lo.array() -= m;
     hi.array() += m;
   }
-  // Widens every axis to at least `extent` model units, around the current centre (§10.1.1).
+  // Widens every axis to at least `extent` model units, around the current centre (thesis §10.1.1).
   void enforce_min_extent(double extent) {
     for (int d = 0; d < 3; ++d) {
       const double w = hi[d] - lo[d];
@@ -77,7 +77,7 @@ struct Aabb {
     return b;
   }
   // Split direction of the top-down build: the coordinate axis along which the positions spread
-  // most (largest variance, "splatter", §8.1.1).
+  // most (largest variance, "splatter", thesis §8.1.1).
   static Vec3 split_direction(const Aabb&, const Points& positions, const Index* rows, std::size_t n) {
     Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero();
     for (std::size_t k = 0; k < n; ++k) {

@@ -1,9 +1,9 @@
-// Extended ("concave") narrow phase (ALGORITHMS.md §5 "Extended", thesis §8.4): the hierarchy stays
+// Extended ("concave") narrow phase (docs/algorithms.md §5 "Extended", thesis §8.4): the hierarchy stays
 // over the zero region, but a candidate deformable surfel is classified inside/outside against the
-// ORIGINAL (undeformed) whole model, as the Robust algorithm does (§4.4): its collision state flips
-// when its inside state differs from the one before this step and its nearest original surfel is a
-// zero surfel. The state before the step is cached with its step number; it is recomputed (at the
-// surfel's previous position) only when the cache is not from the previous step.
+// ORIGINAL (undeformed) whole model, as the Robust algorithm does (docs/algorithms.md §4.4): its collision
+// state flips when its inside state differs from the one before this step and its nearest original surfel is
+// a zero surfel. The state before the step is cached with its step number; it is recomputed (at the surfel's
+// previous position) only when the cache is not from the previous step.
 //
 // Use as the `narrow` policy of collide(): call begin_step() once per step, then collide().
 // inside  <=>  (p - p2) . n2 < W  (strict, as in collision.hpp).

@@ -22,7 +22,7 @@ struct Obb {
   void expand(const Vec3& p, double r);
   // Grows (axes kept) to contain the 8 corners of a child box.
   void enclose(const Obb& child);
-  // §10.1.1 for OBBs: a parent is at least as large as its children (half extents at least the
+  // thesis §10.1.1 for OBBs: a parent is at least as large as its children (half extents at least the
   // children's, axis by axis in variance order), but is NOT grown to contain their corners: a child
   // turned against its parent overhangs at the corners, and enclosing them level by level inflated
   // the root of a 3 x 3 slab to half extents of ~6.7 instead of ~2.1. Correctness needs only that
@@ -30,7 +30,7 @@ struct Obb {
   static constexpr bool kContainsChildren = false;
   void grow_over_child(const Obb& child) { ext = ext.cwiseMax(child.ext); }
   void inflate(double m) { ext.array() += m; }
-  // Every axis at least `extent` wide (§10.1.1).
+  // Every axis at least `extent` wide (thesis §10.1.1).
   void enforce_min_extent(double extent) { ext = ext.cwiseMax(Vec3::Constant(0.5 * extent)); }
   // Containment with a relative tolerance of 1e-9 of the box size (the fit pads by about 1e-12).
   bool contains(const Vec3& p, double r) const;
@@ -38,7 +38,7 @@ struct Obb {
 
   // PCA fit over the balls of rows[0..n) (kDeadRow skipped).
   static Obb fit(const Points& positions, const Values& radii, const Index* rows, std::size_t n);
-  // The principal axis (row 0 of the fitted box's axes, §8.2.1).
+  // The principal axis (row 0 of the fitted box's axes, thesis §8.2.1).
   static Vec3 split_direction(const Obb& box, const Points&, const Index*, std::size_t) {
     return box.axes.row(0).transpose();
   }

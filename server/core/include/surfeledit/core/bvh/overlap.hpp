@@ -1,4 +1,4 @@
-// Overlap tests between box kinds and between a box and a surfel sphere (ALGORITHMS.md §5, thesis
+// Overlap tests between box kinds and between a box and a surfel sphere (docs/algorithms.md §5, thesis
 // Eqs. 8.4, 8.5, 8.7, 8.9-8.10, 9.1). Each returns true when the two volumes may overlap; false
 // means they are certainly disjoint. Inline: they run in the traversal's hot path.
 // Squared distances are named dist2.

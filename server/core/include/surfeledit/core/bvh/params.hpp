@@ -1,5 +1,6 @@
-// Parameters of a bounding volume hierarchy: how it is built (§5 "Build", thesis §7.3.6, §10.1.1)
-// and how a deforming AABB tree is kept up to date (§8.3.1).
+// Parameters of a bounding volume hierarchy: how it is built (docs/algorithms.md §5 "Build", thesis §7.3.6,
+// §10.1.1)
+// and how a deforming AABB tree is kept up to date (thesis §8.3.1).
 #pragma once
 
 #include <cstdint>
@@ -9,7 +10,7 @@
 
 namespace surfeledit::bvh {
 
-// How a deforming tree follows its surfels between rebuilds (§8.3.1, Fig. 8.7).
+// How a deforming tree follows its surfels between rebuilds (thesis §8.3.1, Fig. 8.7).
 enum class UpdateMode : std::uint8_t {
   BottomUp = 0,  // selective bottom-up refit of every node each step (per-axis masks)
   TopDown = 1,   // lazy: a node is refit from its surfels when a traversal first visits it in a step

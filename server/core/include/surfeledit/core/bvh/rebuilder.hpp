@@ -1,9 +1,9 @@
-// Rebuild aside (§5 "rebuild on idle", thesis §8.3.3): a fresh tree is built on a background
-// thread from a snapshot (copy) of the positions, while steps keep refitting and querying the
-// current tree. The step thread adopts the new tree at a step boundary with take(), which never
-// waits: it either hands over a completely built tree or nothing. The worker publishes the tree
-// with a release store of the state after the build has finished, take() reads it with an acquire
-// load, so no step can see a half-built tree.
+// Rebuild aside (docs/algorithms.md §5 "rebuild on idle", thesis §8.3.3): a fresh tree is built on a
+// background thread from a snapshot (copy) of the positions, while steps keep refitting and querying the
+// current tree. The step thread adopts the new tree at a step boundary with take(), which never waits: it
+// either hands over a completely built tree or nothing. The worker publishes the tree with a release store of
+// the state after the build has finished, take() reads it with an acquire load, so no step can see a
+// half-built tree.
 //
 // Since the snapshot is older than the step that adopts it, the adopter refits the new tree to the
 // current positions (a bottom-up refit is cheap), and drops it if the model's rows were inserted or

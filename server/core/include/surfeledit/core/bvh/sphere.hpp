@@ -28,11 +28,11 @@ struct Sphere {
   }
   // Grows (radius only) to contain a child sphere.
   void enclose(const Sphere& child) { expand(child.center, child.radius); }
-  // A parent's sphere after the build: contains its children (§10.1.1).
+  // A parent's sphere after the build: contains its children (thesis §10.1.1).
   static constexpr bool kContainsChildren = true;
   void grow_over_child(const Sphere& child) { enclose(child); }
   void inflate(double m) { radius += m; }
-  // Diameter at least `extent` (§10.1.1).
+  // Diameter at least `extent` (thesis §10.1.1).
   void enforce_min_extent(double extent) { radius = std::max(radius, 0.5 * extent); }
   bool contains(const Vec3& p, double r) const { return (p - center).norm() + r <= radius * (1.0 + 1e-12) + 1e-300; }
   bool contains(const Sphere& s) const { return contains(s.center, s.radius); }

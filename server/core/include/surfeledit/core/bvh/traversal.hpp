@@ -1,4 +1,4 @@
-// Broad-phase traversals (ALGORITHMS.md §5 "Traversal"):
+// Broad-phase traversals (docs/algorithms.md §5 "Traversal"):
 //  - surfel/tree with a FIFO queue, breadth first (thesis Code 7.6);
 //  - tree/tree between the zero tree (any box kind) and the deformable AABB tree (Code 8.4):
 //    descend the node with more surfels; at a pair of overlapping leaves hand each deformable

@@ -1,6 +1,6 @@
-// Clustering of surfels for surface simplification (ALGORITHMS.md §6, thesis §9.2, Pauly et al. 2002):
-// region growing (§9.2.1) and hierarchical splitting (§9.2.2). Both work on a subset of a model's
-// rows (e.g. its deformable surfels) and put every listed row into exactly one cluster.
+// Clustering of surfels for surface simplification (docs/algorithms.md §6, thesis §9.2, Pauly et al. 2002):
+// region growing (thesis §9.2.1) and hierarchical splitting (thesis §9.2.2). Both work on a subset of a
+// model's rows (e.g. its deformable surfels) and put every listed row into exactly one cluster.
 #pragma once
 
 #include <cstdint>
@@ -33,14 +33,14 @@ struct Clustering {
   const Index* rows(Index c) const { return members.data() + offsets[c]; }                 // its rows
 };
 
-// §9.2.1: visiting `rows` in order, an unclustered surfel and its k - 1 nearest other listed surfels
+// thesis §9.2.1: visiting `rows` in order, an unclustered surfel and its k - 1 nearest other listed surfels
 // (k = cluster_size) become a new cluster if none of them is clustered yet. With max_variation < 1/3
 // only the longest distance-ordered prefix of them whose variation stays <= max_variation is taken.
 // Left-over ("stray") surfels then join the cluster of their nearest clustered surfel, so clusters may
 // exceed k. Deterministic (sequential; the k-d tree queries are exact).
 Clustering cluster_region_growing(const Points& positions, const IndexList& rows, const SimplifyParams& params);
 
-// §9.2.2: starting from all `rows`, a cluster is split at its centroid by the plane normal to its
+// thesis §9.2.2: starting from all `rows`, a cluster is split at its centroid by the plane normal to its
 // largest-variance axis while it holds more than cluster_size surfels or its variation exceeds
 // max_variation (the thesis stops when either bound is met; we stop when both are, so the size bound
 // always holds, as in Pauly et al.'s adaptive variant). Fills Clustering::tree.

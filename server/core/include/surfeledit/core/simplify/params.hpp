@@ -1,5 +1,5 @@
-// Settings of surface simplification (ALGORITHMS.md §6, thesis §9.2): which clustering, how large a
-// cluster may grow and how much it may bend, and how approximate collision detection (§9.3) decides
+// Settings of surface simplification (docs/algorithms.md §6, thesis §9.2): which clustering, how large a
+// cluster may grow and how much it may bend, and how approximate collision detection (thesis §9.3) decides
 // to look at the original surfels of a cluster.
 #pragma once
 
@@ -14,8 +14,8 @@ namespace surfeledit {
 // How the surfels are grouped into clusters (each cluster becomes one simplified surfel).
 enum class SimplifyMethod : std::uint8_t {
   None = 0,           // no simplification: every surfel is its own cluster
-  RegionGrowing = 1,  // §9.2.1: a surfel and its k nearest form a cluster if none of them is taken yet
-  Hierarchical = 2,   // §9.2.2: split at the centroid, normal to the largest-variance axis, top-down
+  RegionGrowing = 1,  // thesis §9.2.1: a surfel and its k nearest form a cluster if none of them is taken yet
+  Hierarchical = 2,   // thesis §9.2.2: split at the centroid, normal to the largest-variance axis, top-down
 };
 
 constexpr EnumNames<SimplifyMethod, 3> names_of(SimplifyMethod) {

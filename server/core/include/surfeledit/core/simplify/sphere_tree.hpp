@@ -1,4 +1,4 @@
-// Sphere cluster trees (ALGORITHMS.md §6, thesis §9.4): a binary sphere hierarchy whose leaves are the
+// Sphere cluster trees (docs/algorithms.md §6, thesis §9.4): a binary sphere hierarchy whose leaves are the
 // clusters of a simplification.
 //  - From hierarchical clustering the binary split tree is given; each leaf gets the minimal enclosing
 //    sphere of its surfels' balls (position, radius), each inner node the minimal sphere enclosing its

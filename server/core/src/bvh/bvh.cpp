@@ -1,0 +1,14 @@
+// The one place Bvh<Box> is compiled: explicit instantiations for the three box kinds (bvh.hpp
+// declares them `extern template`), and the Aabb-only members of deforming trees.
+#include "surfeledit/core/bvh/bvh-inl.hpp"
+
+namespace surfeledit::bvh {
+
+template class Bvh<Aabb>;
+template class Bvh<Obb>;
+template class Bvh<Sphere>;
+template BvhCounters Bvh<Aabb>::refit<Aabb, void>(const Points&, const Values&);
+template void Bvh<Aabb>::refit_touched<Aabb, void>(std::int32_t, BvhCounters&);
+template void Bvh<Aabb>::touch_all<Aabb, void>(BvhCounters&);
+
+}  // namespace surfeledit::bvh

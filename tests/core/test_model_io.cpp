@@ -1,0 +1,123 @@
+// Model I/O (PCL hidden in model_io.cpp): float64 round trips through .ply and .pcd, an OBJ mesh whose
+// area-weighted vertex normals are known analytically (an octahedron: the normal at vertex +-e_i is
+// +-e_i), and the typed errors naming the file. The Python tests add real meshes and normal estimation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include <unistd.h>
+
+#include "expect_error.hpp"
+#include "surfeledit/core/model_io.hpp"
+
+namespace surfeledit {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh directory per test, removed afterwards.
+class ModelIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("surfeledit_model_io_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+SurfelArrays random_surfels(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  SurfelArrays a;
+  a.positions.resize(n, 3);
+  a.normals.resize(n, 3);
+  a.radii.resize(n);
+  a.colors.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    // Large offsets: only float64 storage keeps these positions exact.
+    a.positions.row(i) << 1e6 + u(rng), -3e5 + u(rng), 7.0 + 1e-9 * u(rng);
+    Vec3 nrm(u(rng), u(rng), u(rng) + 2.0);
+    a.normals.row(i) = nrm.normalized().transpose();
+    a.radii[i] = 0.01 + 0.001 * (u(rng) + 1.0);
+    a.colors.row(i) << std::uint8_t(i % 256), std::uint8_t((7 * i) % 256), std::uint8_t(255 - i % 256);
+  }
+  return a;
+}
+
+// Saves `a` as `file`, loads it back and compares: positions bit-identical (float64 on disk), normals and
+// radii to float32 precision, colours exactly when saved.
+void expect_round_trip(const SurfelArrays& a, const std::string& file) {
+  save_surfels(file, a);
+  const SurfelArrays b = load_surfels(file);
+  ASSERT_EQ(b.positions.rows(), a.positions.rows());
+  EXPECT_EQ(b.positions, a.positions);
+  EXPECT_LT((b.normals - a.normals).cwiseAbs().maxCoeff(), 1e-6);
+  ASSERT_EQ(b.radii.size(), a.radii.size());
+  EXPECT_LT(((b.radii - a.radii).array() / a.radii.array()).abs().maxCoeff(), 1e-6);
+  ASSERT_EQ(b.colors.rows(), a.colors.rows());
+  EXPECT_EQ(b.colors, a.colors);
+}
+
+TEST_F(ModelIo, RoundTripKeepsFloat64PositionsInPlyAndPcd) {
+  const SurfelArrays a = random_surfels(300, 5);
+  expect_round_trip(a, path("cloud.pcd"));
+  SurfelArrays plain = a;
+  plain.colors.resize(0, 3);
+  expect_round_trip(plain, path("cloud.ply"));
+}
+
+// Known bug (found by this test, left for its owner): loading a .ply saved with colours (an UINT32 "rgb"
+// field) throws std::bad_alloc from read_fields() in from_cloud(), sized by what PCL's PLYReader
+// returns for such a file. Enable when fixed.
+TEST_F(ModelIo, DISABLED_PlyRoundTripKeepsColours) { expect_round_trip(random_surfels(300, 5), path("cloud.ply")); }
+
+TEST_F(ModelIo, ObjOctahedronGivesVertexSurfelsWithAnalyticNormals) {
+  const std::string file = path("octahedron.obj");
+  {
+    std::ofstream out(file);
+    out << "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\nv 5 5 5\n";  // vertex 7: unreferenced
+    // Counter-clockwise seen from outside: (x, y, z) in each octant with the right orientation.
+    out << "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+  }
+  const SurfelArrays a = load_surfels(file);
+  ASSERT_EQ(a.positions.rows(), 6);  // the unreferenced vertex is dropped
+  for (Eigen::Index i = 0; i < 6; ++i) {
+    const Vec3 p = a.positions.row(i).transpose();
+    EXPECT_NEAR(p.norm(), 1.0, 1e-12);
+    // By symmetry the four incident faces' normals sum to a multiple of the vertex direction.
+    EXPECT_LT((a.normals.row(i).transpose() - p).norm(), 1e-6) << "vertex " << i;
+  }
+}
+
+void expect_load_error(const std::string& file, ErrorCode code) {
+  const std::string msg = testing_util::expect_error([&] { load_surfels(file); }, code, "path");
+  EXPECT_NE(msg.find(fs::path(file).filename().string()), std::string::npos) << msg;
+}
+
+TEST_F(ModelIo, ErrorsAreTypedAndNameTheFile) {
+  expect_load_error(path("missing.ply"), ErrorCode::NotFound);
+  expect_load_error(dir_.string(), ErrorCode::Io);  // a directory
+  {
+    std::ofstream(path("garbage.pcd")) << "this is not a point cloud\n";
+  }
+  expect_load_error(path("garbage.pcd"), ErrorCode::Io);
+  {
+    std::ofstream(path("points.xyz")) << "1 2 3\n";
+  }
+  expect_load_error(path("points.xyz"), ErrorCode::InvalidArgument);
+  testing_util::expect_error([&] { save_surfels(path("out.obj"), random_surfels(3, 1)); },
+                             ErrorCode::InvalidArgument, "path");
+  EXPECT_FALSE(fs::exists(path("out.obj")));
+}
+
+}  // namespace
+}  // namespace surfeledit
