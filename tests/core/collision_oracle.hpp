@@ -1,5 +1,5 @@
 // Test oracle for the collision detectors: a from-scratch, brute-force (no k-d tree) re-implementation
-// of each algorithm's definition (ALGORITHMS.md §4), and a small mutable scene to script steps on.
+// of each algorithm's definition (docs/algorithms.md §4), and a small mutable scene to script steps on.
 #pragma once
 
 #include <algorithm>

@@ -100,13 +100,19 @@ TEST(EditSession, FailuresChangeNothing) {
 namespace surfeledit {
 namespace {
 
-TEST(EditSessionCollision, DetectsByDefaultAndReportsIds) {
-  Fixture f;
+// Sets the regions and pushes the one region 0.6 down into the zero region in six steps; the last step.
+StepResult push_one_into_zero(Fixture& f) {
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   DeformParams p;
   p.translation = Vec3(0, 0, -0.1);
   StepResult o;
   for (int k = 0; k < 6; ++k) o = f.session.deform(p);
+  return o;
+}
+
+TEST(EditSessionCollision, DetectsByDefaultAndReportsIds) {
+  Fixture f;
+  const StepResult o = push_one_into_zero(f);
   EXPECT_TRUE(o.detected);
   EXPECT_EQ(o.seq, 6u);
   EXPECT_FALSE(o.colliding.empty());
@@ -141,11 +147,7 @@ TEST(EditSessionCollision, ConfigureSwitchesAlgorithmWithoutTouchingTheModel) {
 
 TEST(EditSessionCollision, RemoveKeepsIdsAndDetection) {
   Fixture f;
-  f.session.set_regions({f.zero, {}}, {f.one, {}});
-  DeformParams p;
-  p.translation = Vec3(0, 0, -0.1);
-  StepResult o;
-  for (int k = 0; k < 6; ++k) o = f.session.deform(p);
+  StepResult o = push_one_into_zero(f);
   ASSERT_GE(o.colliding.size(), 3u);
   const IdList gone = {o.colliding[0], o.colliding[2], f.zero[5]};
   const auto v = f.session.version();
@@ -171,6 +173,8 @@ TEST(EditSessionCollision, RemoveKeepsIdsAndDetection) {
   EXPECT_EQ(f.session.state_hash(), h);
   EXPECT_EQ(f.session.version(), v + 1);
   // Detection continues on the compacted rows.
+  DeformParams p;
+  p.translation = Vec3(0, 0, -0.1);
   o = f.session.deform(p);
   EXPECT_TRUE(o.detected);
   EXPECT_EQ(o.stats.deformable, static_cast<Index>(f.one.size() - 2));

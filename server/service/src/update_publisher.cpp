@@ -17,12 +17,12 @@ UpdatePublisher::UpdatePublisher(Writer writer, std::size_t max_queued_bytes)
 
 UpdatePublisher::~UpdatePublisher() { shutdown(); }
 
-bool UpdatePublisher::push(PreparedUpdate& update) {
+bool UpdatePublisher::enqueue(PreparedUpdate& update, bool bounded) {
   const std::size_t b = update.bytes();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopping_) return false;
-    if (!queue_.empty() && bytes_ + b > max_bytes_) return false;
+    if (bounded && !queue_.empty() && bytes_ + b > max_bytes_) return false;
     bytes_ += b;
     counters_.max_queued_bytes = std::max(counters_.max_queued_bytes, bytes_);
     counters_.queued += 1;
@@ -32,19 +32,9 @@ bool UpdatePublisher::push(PreparedUpdate& update) {
   return true;
 }
 
-bool UpdatePublisher::push_anyway(PreparedUpdate&& update) {
-  const std::size_t b = update.bytes();
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (stopping_) return false;
-    bytes_ += b;
-    counters_.max_queued_bytes = std::max(counters_.max_queued_bytes, bytes_);
-    counters_.queued += 1;
-    queue_.push_back(std::move(update));
-  }
-  wake_.notify_one();
-  return true;
-}
+bool UpdatePublisher::push(PreparedUpdate& update) { return enqueue(update, true); }
+
+bool UpdatePublisher::push_anyway(PreparedUpdate&& update) { return enqueue(update, false); }
 
 std::vector<PreparedUpdate> UpdatePublisher::take_pending(const std::string& session, std::uint64_t next_version,
                                                           const std::vector<std::string>& incremental) {

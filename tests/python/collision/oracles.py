@@ -206,6 +206,22 @@ class SimpleRef(Reference):
         return ids[self.colliding[ids]]
 
 
+def _split_sphere_child_b(ref, b, a, pb):
+    """§4.4 split rule (docs/algorithms.md): child b takes parent a's sphere when it lies inside it, else an empty one."""
+    e = pb - ref.center[a]
+    if float(e @ e) < ref.rho2[a]:
+        ref.center[b], ref.rho2[b] = ref.center[a], ref.rho2[a]
+    else:
+        ref.center[b], ref.rho2[b] = pb, 0.0
+
+
+def _split_sphere_child_a(ref, a, pa):
+    """§4.4 split rule: the parent row (child a) keeps its sphere only while it still lies inside it."""
+    e = pa - ref.center[a]
+    if not float(e @ e) < ref.rho2[a]:
+        ref.center[a], ref.rho2[a] = pa, 0.0
+
+
 class TemporalRef(SimpleRef):
     """§4.3: Simple with spheres."""
 
@@ -222,16 +238,10 @@ class TemporalRef(SimpleRef):
 
     def _inherit(self, b, a, pb):
         super()._inherit(b, a, pb)
-        e = pb - self.center[a]
-        if float(e @ e) < self.rho2[a]:
-            self.center[b], self.rho2[b] = self.center[a], self.rho2[a]
-        else:
-            self.center[b], self.rho2[b] = pb, 0.0
+        _split_sphere_child_b(self, b, a, pb)
 
     def _child_a(self, a, pa):
-        e = pa - self.center[a]
-        if not float(e @ e) < self.rho2[a]:
-            self.center[a], self.rho2[a] = pa, 0.0
+        _split_sphere_child_a(self, a, pa)
 
     def _detect(self, ids, pos, rad):
         e = pos - self.center[ids]
@@ -288,16 +298,10 @@ class RobustRef(Reference):
     def _inherit(self, b, a, pb):
         for name in ("inside", "colliding", "first", "old"):
             getattr(self, name)[b] = getattr(self, name)[a]
-        e = pb - self.center[a]
-        if float(e @ e) < self.rho2[a]:
-            self.center[b], self.rho2[b] = self.center[a], self.rho2[a]
-        else:
-            self.center[b], self.rho2[b] = pb, 0.0
+        _split_sphere_child_b(self, b, a, pb)
 
     def _child_a(self, a, pa):
-        e = pa - self.center[a]
-        if not float(e @ e) < self.rho2[a]:
-            self.center[a], self.rho2[a] = pa, 0.0
+        _split_sphere_child_a(self, a, pa)
 
     def _detect(self, ids, pos, rad):
         e = pos - self.center[ids]

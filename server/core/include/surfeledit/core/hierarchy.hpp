@@ -1,4 +1,4 @@
-// Bounding volume hierarchies of a collision detector (ALGORITHMS.md §5, issue 4): which trees a
+// Bounding volume hierarchies of a collision detector (docs/algorithms.md §5; thesis ch. 7-8): which trees a
 // session builds and how, chosen per session by name (settings.hpp).
 //
 // With a hierarchy the detector runs a broad phase first: a deformable surfel is a *candidate* when
@@ -22,7 +22,7 @@ namespace surfeledit {
 
 struct CollisionParams;
 
-// Box kind of the tree over the zero region: a top-down Bvh, or a sphere cluster tree (ALGORITHMS.md §6,
+// Box kind of the tree over the zero region: a top-down Bvh, or a sphere cluster tree (docs/algorithms.md §6,
 // simplify/sphere_tree.hpp) whose leaves are clusters of the zero surfels (HierarchyParams::clusters).
 enum class ZeroHierarchy : std::uint8_t {
   None = 0,                // no hierarchy

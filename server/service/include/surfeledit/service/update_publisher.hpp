@@ -67,6 +67,9 @@ class UpdatePublisher {
   void wait_idle() const;
 
  private:
+  // push() (bounded) and push_anyway(): queues `update` (moved from) unless stopping or, when
+  // `bounded`, beyond the byte bound of a non-empty queue.
+  bool enqueue(PreparedUpdate& update, bool bounded);
   void run();
 
   Writer writer_;
