@@ -1,0 +1,52 @@
+// Merge (union) of the deformed region with the zero region (§7 d of docs/algorithms.md; thesis §11.3).
+//
+// The colliding deformable surfels go; the zero surfels inside the deformed region go, classified by
+// the nearest-surfel test (§2) against the deformed region closed up with the original deformable
+// surfels, normals flipped; the kept surfels within one radius of a removed one are the feature
+// surfels of the intersection (both sides), the input of the sharp crease (crease.hpp).
+#pragma once
+
+#include <vector>
+
+#include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/surfel_model.hpp"
+
+namespace surfeledit {
+
+struct MergeParams {
+  double inside_margin = 0.1;   // a zero surfel is inside when its offset (p1 - p2) . n2 <= -margin x its
+                                // radius: surfels on (or within margin of) the deformed surface stay
+  bool close_with_originals = true;  // thesis: close the open deformed region with the original deformable
+                                     // surfels, normals flipped, before classifying the zero surfels
+  double feature_radius_factor = 1.0;  // a kept surfel within this x its radius of a removed surfel is a
+                                       // feature surfel (thesis: one radius)
+  int threads = 0;              // worker threads for the classification; 0 = all; results do not depend on it
+};
+
+// Throws InvalidArgument naming the field on a non-finite or negative factor, threads < 0.
+void validate(const MergeParams& params);
+
+struct MergeStats {
+  Index candidates = 0;      // zero surfels classified (those near the deformed region)
+  Index removed_zero = 0;    // of them, inside the deformed region
+  double merge_ms = 0.0;     // time of merge_regions
+};
+
+struct MergeResult {
+  IdList removed;              // ids to remove, ascending: the colliding deformable surfels and the zero
+                               // surfels inside the deformed region
+  IdList features_deformable;  // kept deformable feature surfels, ascending
+  IdList features_zero;        // kept zero feature surfels, ascending
+  MergeStats stats;
+};
+
+// `model`: the deformed model; `regions`: #P labels of its rows (Zero = rigid); `original_positions`,
+// `original_normals`: #D by 3, the deformable surfels before the deformation (any order, unit normals;
+// may be empty when `params.close_with_originals` is off); `colliding`: ids of the colliding deformable
+// surfels (a detector's result). Validates everything first (InvalidArgument / NotFound naming the
+// field); the model is not changed. No colliding surfel: an empty result.
+MergeResult merge_regions(const SurfelModel& model, const std::vector<Region>& regions,
+                          const Points& original_positions, const Points& original_normals,
+                          const IdList& colliding, const MergeParams& params = {});
+
+}  // namespace surfeledit
