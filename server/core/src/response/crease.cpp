@@ -1,7 +1,9 @@
 // Sharp crease: feature surfels onto the intersection curve, clip lines, gap copies; see crease.hpp.
 #include "surfeledit/core/response/crease.hpp"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "detail.hpp"
@@ -70,7 +72,7 @@ void add_gap_copy(const SurfelModel& model, Index r, const Vec3& d, SurfelArrays
     const bool along_v = std::abs(d.dot(tv.normalized())) > std::abs(d.dot(tu.normalized()));
     const Vec3 u = along_v ? tv : tu, v = along_v ? tu : tv;  // u: the axis the move projects on most
     const double lu = u.norm(), du = d.dot(u / lu);
-    centre = p - std::copysign(0.5 * (lu - std::abs(du)), du) * (u / lu);
+    centre = p - (du < 0.0 ? -0.5 : 0.5) * (lu - std::abs(du)) * (u / lu);
     const Vec3 u_new = u * (0.5 * (lu + std::abs(du)) / lu);
     out.tangent_u.row(k) = (along_v ? v : u_new).transpose();
     out.tangent_v.row(k) = (along_v ? u_new : v).transpose();

@@ -3,6 +3,7 @@
 
 #include <omp.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 
@@ -102,6 +103,54 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
   return flag;
 }
 
+
+// Feature surfels (see MergeParams::feature_radius_factor): kept surfels near the rim of the removed part
+// of their own surface whose estimated distance to the intersection, the offset o to the other surface
+// (nearest surfel of the other side) over the sine of the angle between the two normals, is within
+// reach. Only surfels near the removed set are looked at.
+void mark_features(const SurfelModel& model, const std::vector<Region>& regions,
+                   const std::vector<bool>& removed, const MergeParams& params, MergeResult& out) {
+  const Points& pos = model.positions();
+  const Points& nrm = model.normals();
+  const Values& rad = model.radii();
+  const double gate_factor = 2.0 * params.feature_radius_factor;  // own-side removed surfel within this x r
+  Box near_removed;
+  for (Index r = 0; r < model.size(); ++r)
+    if (removed[static_cast<std::size_t>(r)]) near_removed.add(pos.row(r).transpose());
+  near_removed.grow(gate_factor * rad.maxCoeff());
+  IndexList removed_rows[2], nearby_rows[2];  // per side: [0] zero, [1] deformable
+  for (Index r = 0; r < model.size(); ++r) {
+    if (!near_removed.contains(pos.row(r).transpose())) continue;
+    const int side = regions[r] != Region::Zero;
+    nearby_rows[side].push_back(r);
+    if (removed[static_cast<std::size_t>(r)]) removed_rows[side].push_back(r);
+  }
+  KdTreeParams tp;
+  tp.threads = 1;
+  const KdTree removed_tree[2] = {KdTree(pos, removed_rows[0], tp), KdTree(pos, removed_rows[1], tp)};
+  const KdTree surface[2] = {KdTree(pos, nearby_rows[0], tp), KdTree(pos, nearby_rows[1], tp)};
+  std::vector<bool> feature[2] = {std::vector<bool>(removed.size(), false),
+                                  std::vector<bool>(removed.size(), false)};
+  for (int side = 0; side < 2; ++side) {
+    for (Index r : nearby_rows[side]) {
+      if (removed[static_cast<std::size_t>(r)]) continue;
+      const Vec3 p = pos.row(r).transpose();
+      const double reach = params.feature_radius_factor * rad[r], gate = gate_factor * rad[r];
+      double dist2 = INFINITY;
+      removed_tree[side].nearest(p, &dist2);
+      if (!(dist2 <= gate * gate)) continue;
+      const Index q = surface[1 - side].nearest(p);
+      if (q < 0) continue;
+      const Vec3 n_q = nrm.row(q).transpose();
+      const double offset = std::max(0.0, (p - pos.row(q).transpose()).dot(n_q));
+      const double sine = std::max(0.2, nrm.row(r).transpose().cross(n_q).norm());
+      if (offset <= reach * sine) feature[side][static_cast<std::size_t>(r)] = true;
+    }
+  }
+  out.features_deformable = ids_of(model, feature[1]);
+  out.features_zero = ids_of(model, feature[0]);
+}
+
 }  // namespace
 
 MergeResult merge_regions(const SurfelModel& model, const std::vector<Region>& regions,
@@ -137,32 +186,8 @@ MergeResult merge_regions(const SurfelModel& model, const std::vector<Region>& r
                                           original_normals, box, params, out.stats);
   for (Index r : colliding_rows) removed[static_cast<std::size_t>(r)] = true;
 
-  // Feature surfels: kept surfels near a removed one (either side), looked for near the removed set.
-  IndexList removed_rows;
-  Box near_removed;
-  double max_all = 0.0;
-  for (Index r = 0; r < model.size(); ++r) {
-    max_all = std::max(max_all, rad[r]);
-    if (!removed[static_cast<std::size_t>(r)]) continue;
-    removed_rows.push_back(r);
-    near_removed.add(pos.row(r).transpose());
-  }
-  near_removed.grow(params.feature_radius_factor * max_all);
-  KdTreeParams tp;
-  tp.threads = 1;
-  const KdTree removed_tree(pos, removed_rows, tp);
-  std::vector<bool> feat_d(removed.size(), false), feat_z(removed.size(), false);
-  for (Index r = 0; r < model.size(); ++r) {
-    if (removed[static_cast<std::size_t>(r)] || !near_removed.contains(pos.row(r).transpose())) continue;
-    double dist2 = 0.0;
-    removed_tree.nearest(pos.row(r).transpose(), &dist2);
-    const double reach = params.feature_radius_factor * rad[r];
-    if (dist2 > reach * reach) continue;
-    (regions[r] == Region::Zero ? feat_z : feat_d)[static_cast<std::size_t>(r)] = true;
-  }
+  mark_features(model, regions, removed, params, out);
   out.removed = ids_of(model, removed);
-  out.features_deformable = ids_of(model, feat_d);
-  out.features_zero = ids_of(model, feat_z);
   out.stats.merge_ms = ms_since(start);
   return out;
 }

@@ -17,7 +17,8 @@ namespace surfeledit {
 
 struct CreaseParams {
   double gap_factor = 0.75;      // a surfel moved more than this x its radius gets a gap-covering copy
-  double max_move_factor = 2.0;  // a surfel whose curve point is farther than this x its radius stays put
+  double max_move_factor = 1.0;  // a surfel whose curve point is farther than this x its radius stays put
+                                 // (a tangent plane is off its surface by ~ curvature x move^2 / 2)
   double min_angle = 0.1;        // radians: pairs whose normals are closer than this (near-parallel
                                  // planes, no crease) stay put
 };

@@ -2,8 +2,8 @@
 //
 // The colliding deformable surfels go; the zero surfels inside the deformed region go, classified by
 // the nearest-surfel test (§2) against the deformed region closed up with the original deformable
-// surfels, normals flipped; the kept surfels within one radius of a removed one are the feature
-// surfels of the intersection (both sides), the input of the sharp crease (crease.hpp).
+// surfels, normals flipped; the kept surfels within about one radius of the intersection are the
+// feature surfels, on both sides: the input of the sharp crease (crease.hpp).
 #pragma once
 
 #include <vector>
@@ -18,8 +18,10 @@ struct MergeParams {
                                 // radius: surfels on (or within margin of) the deformed surface stay
   bool close_with_originals = true;  // thesis: close the open deformed region with the original deformable
                                      // surfels, normals flipped, before classifying the zero surfels
-  double feature_radius_factor = 1.0;  // a kept surfel within this x its radius of a removed surfel is a
-                                       // feature surfel (thesis: one radius)
+  double feature_radius_factor = 1.0;  // a kept surfel is a feature surfel when its estimated distance to the
+                                       // intersection (offset to the other surface / sine of the angle of
+                                       // the normals) is within this x its radius (thesis: one radius) and
+                                       // a removed surfel of its own side is within twice that
   int threads = 0;              // worker threads for the classification; 0 = all; results do not depend on it
 };
 
