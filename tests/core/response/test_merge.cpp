@@ -116,20 +116,6 @@ TEST(Merge, NoCollisionNoChange) {
   EXPECT_TRUE(m.features_zero.empty());
 }
 
-TEST(Merge, ThreadsGiveIdenticalResults) {
-  const ResponseScene sc = testing::two_contacts();
-  MergeParams one, two;
-  one.threads = 1;
-  two.threads = 2;
-  const MergeResult a = merge_regions(sc.model, sc.regions, sc.original_positions, sc.original_normals,
-                                      sc.colliding, one);
-  const MergeResult b = merge_regions(sc.model, sc.regions, sc.original_positions, sc.original_normals,
-                                      sc.colliding, two);
-  EXPECT_EQ(a.removed, b.removed);
-  EXPECT_EQ(a.features_zero, b.features_zero);
-  EXPECT_EQ(a.features_deformable, b.features_deformable);
-}
-
 TEST(Merge, ValidatesInputs) {
   const ResponseScene sc = testing::sphere_into_box();
   auto field_of = [](const std::function<void()>& f) -> std::string {

@@ -1,8 +1,6 @@
 // Merge (union) of the deformed and the zero region; see merge.hpp (thesis §11.3).
 #include "surfeledit/core/response/merge.hpp"
 
-#include <omp.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
@@ -19,10 +17,7 @@ using response_detail::require_at_least;
 void validate(const MergeParams& params) {
   require_at_least(params.inside_margin, 0.0, "inside_margin");
   require_at_least(params.feature_radius_factor, 0.0, "feature_radius_factor");
-  if (params.threads < 0) {
-    throw Error(ErrorCode::InvalidArgument, "threads",
-                "thread count must be >= 0, got " + std::to_string(params.threads));
-  }
+  require_at_least(params.knn_eps, 0.0, "knn_eps");
 }
 
 namespace {
@@ -66,37 +61,60 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
 
   KdTreeParams tp;
   tp.threads = 1;
-  const KdTree deformed(pos, deformable, tp);
+  KdTreeParams approximate = tp;
+  approximate.eps = params.knn_eps;
+  const KdTree deformed(pos, deformable, approximate);
   // The closing surfels: the original deformable surfels near the deformed region.
   IndexList closing;
   if (params.close_with_originals) {
     for (Index k = 0; k < original_positions.rows(); ++k)
       if (box.contains(original_positions.row(k).transpose())) closing.push_back(k);
   }
-  const KdTree originals(original_positions, closing, tp);
+  const KdTree originals(original_positions, closing, approximate);
 
-  std::vector<std::uint8_t> inside(candidates.size(), 0);
-  const int threads = resolve_threads(params.threads);
-#pragma omp parallel for schedule(static) num_threads(threads)
+  // Spatial coherence (as the Improved Simple Algo, §4.2): a candidate whose nearest surfel is at
+  // distance d settles every candidate within d - max_radius (no surface passes in between), so deep
+  // candidates, whose nearest-surfel queries are the slowest, are mostly never queried.
+  const double max_radius = rad.maxCoeff();
+  const KdTree candidate_tree(pos, candidates, tp);
+  std::vector<std::int32_t> candidate_of(static_cast<std::size_t>(model.size()), -1);
+  for (std::size_t c = 0; c < candidates.size(); ++c) candidate_of[static_cast<std::size_t>(candidates[c])] = static_cast<std::int32_t>(c);
+  std::vector<std::int8_t> inside(candidates.size(), -1);
+  IndexList hits;
+  std::vector<double> hit_dist2;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (inside[c] >= 0) continue;
+    ++stats.queried;
     const Index r = candidates[c];
     const Vec3 q = pos.row(r).transpose();
     const double w = -params.inside_margin * rad[r];
     double dist2_d = 0.0;
     const Index d = deformed.nearest(q, &dist2_d);
-    if ((q - pos.row(d).transpose()).dot(nrm.row(d).transpose()) > w) continue;  // outside
-    // The deformed region alone says inside; where an original surfel is nearer, the closed-up
-    // surface decides (its normal flipped): this keeps the zero surfels beyond an open region's rim.
-    double dist2_o = 0.0;
-    const Index o = originals.size() ? originals.nearest(q, &dist2_o) : -1;
-    if (o >= 0 && dist2_o < dist2_d &&
-        -(q - original_positions.row(o).transpose()).dot(original_normals.row(o).transpose()) > w)
-      continue;
-    inside[c] = 1;
+    // Distance to the nearest surfel that decides (a lower bound with approximate queries).
+    double clear = std::sqrt(dist2_d / (1.0 + params.knn_eps));
+    bool in = (q - pos.row(d).transpose()).dot(nrm.row(d).transpose()) <= w;
+    if (in && originals.size()) {
+      // The deformed region alone says inside; where an original surfel is nearer, the closed-up
+      // surface decides (its normal flipped): this keeps the zero surfels beyond an open region's rim.
+      double dist2_o = 0.0;
+      const Index o = originals.nearest(q, &dist2_o);
+      clear = std::min(clear, std::sqrt(dist2_o / (1.0 + params.knn_eps)));
+      if (dist2_o < dist2_d &&
+          -(q - original_positions.row(o).transpose()).dot(original_normals.row(o).transpose()) > w)
+        in = false;
+    }
+    inside[c] = in;
+    const double settle = clear - max_radius;
+    if (settle <= max_radius) continue;  // too small to pay for the radius query
+    candidate_tree.radius(q, settle, hits, hit_dist2);
+    for (Index h : hits) {
+      std::int8_t& state = inside[static_cast<std::size_t>(candidate_of[static_cast<std::size_t>(h)])];
+      if (state < 0) state = in;
+    }
   }
   std::vector<bool> flag(static_cast<std::size_t>(model.size()), false);
   for (std::size_t c = 0; c < candidates.size(); ++c)
-    if (inside[c]) {
+    if (inside[c] == 1) {
       flag[static_cast<std::size_t>(candidates[c])] = true;
       ++stats.removed_zero;
     }

@@ -18,18 +18,22 @@ struct MergeParams {
                                 // radius: surfels on (or within margin of) the deformed surface stay
   bool close_with_originals = true;  // thesis: close the open deformed region with the original deformable
                                      // surfels, normals flipped, before classifying the zero surfels
+  double knn_eps = 1.0;         // approximate nearest deformed surfel for the zero surfels (as CollisionParams::
+                                // knn_eps: at most sqrt(1 + eps) x as far as the nearest); deep surfels are
+                                // slow to query exactly and any near-nearest surfel classifies them; 0 = exact
   double feature_radius_factor = 1.0;  // a kept surfel is a feature surfel when its estimated distance to the
                                        // intersection (offset to the other surface / sine of the angle of
                                        // the normals) is within this x its radius (thesis: one radius) and
                                        // a removed surfel of its own side is within twice that
-  int threads = 0;              // worker threads for the classification; 0 = all; results do not depend on it
 };
 
-// Throws InvalidArgument naming the field on a non-finite or negative factor, threads < 0.
+// Throws InvalidArgument naming the field on a non-finite or negative value.
 void validate(const MergeParams& params);
 
 struct MergeStats {
-  Index candidates = 0;      // zero surfels classified (those near the deformed region)
+  Index candidates = 0;      // zero surfels classified (those in the deformed region's bounding box)
+  Index queried = 0;         // of them, classified by their own nearest-surfel queries (the rest were
+                             // settled by a neighbour's surfel-free ball)
   Index removed_zero = 0;    // of them, inside the deformed region
   double merge_ms = 0.0;     // time of merge_regions
 };
