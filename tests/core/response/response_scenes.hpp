@@ -27,6 +27,11 @@ struct Frame {
   }
 };
 
+// The numerical extremes: translated by 1e6, scaled by 1e-4 and 1e4, and both.
+inline std::vector<Frame> extreme_frames() {
+  return {{1.0, Vec3(1e6, -1e6, 1e6)}, {1e-4, Vec3::Zero()}, {1e4, Vec3::Zero()}, {1e-4, Vec3(1e6, 0, 0)}};
+}
+
 // A rigid motion about a pivot: p -> R (p - pivot) + pivot + t (world units).
 struct Motion {
   Mat3 rotation = Mat3::Identity();
@@ -71,28 +76,17 @@ inline void append(SampledSurfels& all, const SampledSurfels& s) {
   all.radii.tail(m) = s.radii;
 }
 
-// Samples every solid at `spacing`, moves the deformable ones by `motion` (solids and samples), runs
-// the Robust detector over the move (one step).
-inline ResponseScene build_scene(std::vector<std::unique_ptr<Solid>> zero,
-                                 std::vector<std::unique_ptr<Solid>> deformable, const Motion& motion,
-                                 double spacing) {
+// A scene from samples: the zero surfels stay, the deformable ones move by `motion`; the Robust detector
+// runs over the move (one step). The solids are left to the caller.
+inline ResponseScene build_from_samples(const SampledSurfels& zero, const SampledSurfels& deformable,
+                                        const Motion& motion, double spacing) {
   ResponseScene sc;
   sc.spacing = spacing;
-  SampleParams sp;
-  sp.spacing = spacing;
-  SampledSurfels all, def;
-  for (const auto& s : zero) {
-    append(all, s->sample(sp));
-    ++sp.seed;
-  }
+  SampledSurfels all = zero;
   const Index nz = static_cast<Index>(all.positions.rows());
-  for (const auto& s : deformable) {
-    append(def, s->sample(sp));
-    ++sp.seed;
-  }
-  sc.original_positions = def.positions;
-  sc.original_normals = def.normals;
-  append(all, def);
+  sc.original_positions = deformable.positions;
+  sc.original_normals = deformable.normals;
+  append(all, deformable);
   const Index n = static_cast<Index>(all.positions.rows());
   sc.regions.assign(static_cast<std::size_t>(n), Region::Zero);
   for (Index r = nz; r < n; ++r) sc.regions[static_cast<std::size_t>(r)] = Region::One;
@@ -107,18 +101,37 @@ inline ResponseScene build_scene(std::vector<std::unique_ptr<Solid>> zero,
     all.normals.row(r) = (motion.rotation * all.normals.row(r).transpose()).transpose();
   }
   const CollisionResult hit = detector->detect({all.positions, all.normals, all.radii, sc.regions}, before);
-  for (auto& s : deformable) {
-    s->pose.translation = motion.apply(s->pose.translation);
-    s->pose.rotation = motion.rotation * s->pose.rotation;
-  }
-  sc.zero = std::move(zero);
-  sc.deformed = std::move(deformable);
   SurfelArrays arrays;
   arrays.positions = all.positions;
   arrays.normals = all.normals;
   arrays.radii = all.radii;
   sc.model = SurfelModel::from_arrays(std::move(arrays));
   for (Index r : hit.colliding) sc.colliding.push_back(sc.model.ids()[r]);
+  return sc;
+}
+
+// Samples every solid at `spacing` and moves the deformable ones (samples and solids) by `motion`.
+inline ResponseScene build_scene(std::vector<std::unique_ptr<Solid>> zero,
+                                 std::vector<std::unique_ptr<Solid>> deformable, const Motion& motion,
+                                 double spacing) {
+  SampleParams sp;
+  sp.spacing = spacing;
+  SampledSurfels z, d;
+  for (const auto& s : zero) {
+    append(z, s->sample(sp));
+    ++sp.seed;
+  }
+  for (const auto& s : deformable) {
+    append(d, s->sample(sp));
+    ++sp.seed;
+  }
+  ResponseScene sc = build_from_samples(z, d, motion, spacing);
+  for (auto& s : deformable) {
+    s->pose.translation = motion.apply(s->pose.translation);
+    s->pose.rotation = motion.rotation * s->pose.rotation;
+  }
+  sc.zero = std::move(zero);
+  sc.deformed = std::move(deformable);
   return sc;
 }
 

@@ -123,5 +123,13 @@ TEST(Crease, MovedFeaturesLieOnBothExactSurfaces) {
   check_crease("two_contacts", testing::two_contacts());
 }
 
+TEST(Crease, NumericalExtremes) {
+  for (const testing::Frame& f : testing::extreme_frames()) {
+    SCOPED_TRACE("scale " + std::to_string(f.scale) + " offset " + std::to_string(f.offset.norm()));
+    check_crease("sphere_into_box", testing::sphere_into_box(f));
+    check_crease("arm_into_sphere", testing::arm_into_sphere(f));
+  }
+}
+
 }  // namespace
 }  // namespace surfeledit

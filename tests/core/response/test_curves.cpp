@@ -88,5 +88,13 @@ TEST(Curves, AgainstTheExactIntersection) {
   check_curves("two_contacts", testing::two_contacts(), 2);
 }
 
+TEST(Curves, NumericalExtremes) {
+  for (const testing::Frame& f : testing::extreme_frames()) {
+    SCOPED_TRACE("scale " + std::to_string(f.scale) + " offset " + std::to_string(f.offset.norm()));
+    check_curves("sphere_into_box", testing::sphere_into_box(f), 1);
+    check_curves("two_contacts", testing::two_contacts(f), 2);
+  }
+}
+
 }  // namespace
 }  // namespace surfeledit

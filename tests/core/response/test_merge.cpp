@@ -99,9 +99,7 @@ TEST(Merge, AgainstExactTruth) {
 }
 
 TEST(Merge, NumericalExtremes) {
-  const Frame frames[] = {{1.0, Vec3(1e6, -1e6, 1e6)}, {1e-4, Vec3::Zero()}, {1e4, Vec3::Zero()},
-                          {1e-4, Vec3(1e6, 0, 0)}};
-  for (const Frame& f : frames) {
+  for (const Frame& f : testing::extreme_frames()) {
     SCOPED_TRACE("scale " + std::to_string(f.scale) + " offset " + std::to_string(f.offset.norm()));
     for (const auto& s : scenes()) check_merge(s.name, s.fn(f));
   }
@@ -138,6 +136,67 @@ TEST(Merge, ValidatesInputs) {
   MergeParams bad;
   bad.feature_radius_factor = -1.0;
   EXPECT_EQ(field_of([&] { validate(bad); }), "feature_radius_factor");
+}
+
+}  // namespace
+}  // namespace surfeledit
+
+namespace surfeledit {
+namespace {
+
+// An open deformable region (thesis Fig. 11.1 b/c): a cap cut out of a sphere (z > 0.1), pushed up
+// into a box; the rest of the sphere is zero region and stays whole, with or without closing up.
+TEST(Merge, OpenRegionIsClosedWithTheOriginals) {
+  const double s = 0.05, cut = 0.1;
+  auto sphere = make_sphere(0.5, Pose{testing::generic_rotation(), Vec3::Zero()});
+  Pose moved;
+  moved.translation = Vec3(0, 0, 0.2);
+  auto box = make_box(Vec3(1.0, 1.0, 0.2), Pose{Mat3::Identity(), Vec3(0, 0, 0.5 + 2 * s + 0.2)});
+  SampleParams sp;
+  sp.spacing = s;
+  const SampledSurfels ball = sphere->sample(sp);
+  SampledSurfels zero = box->sample(sp), cap;
+  for (Eigen::Index i = 0; i < ball.positions.rows(); ++i) {
+    SampledSurfels one;
+    one.positions = ball.positions.row(i);
+    one.normals = ball.normals.row(i);
+    one.radii = ball.radii.segment(i, 1);
+    testing::append(ball.positions(i, 2) > cut ? cap : zero, one);
+  }
+  testing::Motion up;
+  up.translation = moved.translation;
+  const ResponseScene sc = testing::build_from_samples(zero, cap, up, s);
+  sphere->pose.translation = moved.translation;
+  ASSERT_FALSE(sc.colliding.empty());
+  const Index box_rows = static_cast<Index>(box->sample(sp).positions.rows());
+
+  for (bool close : {true, false}) {
+    MergeParams p;
+    p.close_with_originals = close;
+    const MergeResult m = merge_regions(sc.model, sc.regions, sc.original_positions, sc.original_normals,
+                                        sc.colliding, p);
+    const std::vector<bool> removed = flags(sc.model, m.removed);
+    std::size_t sphere_zero_removed = 0, tp = 0, truth = 0, found = 0;
+    for (Index r = 0; r < sc.model.size(); ++r) {
+      if (sc.regions[r] != Region::Zero) continue;
+      const bool rm = removed[static_cast<std::size_t>(r)];
+      if (r >= box_rows) {  // the sphere's own zero surfels: all stay
+        sphere_zero_removed += rm;
+        continue;
+      }
+      const double d = sphere->sdf(sc.model.positions().row(r).transpose());
+      if (std::abs(d) < s) continue;
+      truth += d < 0.0;
+      found += rm;
+      tp += rm && d < 0.0;
+    }
+    std::printf("[merge open cap, closed up %d] sphere zero surfels removed %zu; box: truth %zu found %zu hit %zu\n",
+                close, sphere_zero_removed, truth, found, tp);
+    EXPECT_EQ(sphere_zero_removed, 0u);
+    EXPECT_GT(truth, 20u);
+    EXPECT_GE(double(tp) / found, 0.99);
+    EXPECT_GE(double(tp) / truth, 0.99);
+  }
 }
 
 }  // namespace
