@@ -23,15 +23,20 @@ Vec3 numeric_gradient(const F& f, const Vec3& p, double h) {
   return g;
 }
 
-struct ExactCurve {
-  Points points;  // #C by 3 on both surfaces (to 1e-6 spacing)
-  // Distance from p to the nearest curve sample (the samples are ~spacing/10 apart).
-  double distance(const Vec3& p) const {
+// The largest distance from a row of `from` (#F by 3) to its nearest row of `to` (#T by 3).
+inline double max_nearest_distance(const Points& from, const Points& to) {
+  const KdTree tree(to);
+  double worst2 = 0.0;
+  for (Eigen::Index i = 0; i < from.rows(); ++i) {
     double dist2 = 0.0;
-    tree->nearest(p, &dist2);
-    return std::sqrt(dist2);
+    tree.nearest(from.row(i).transpose(), &dist2);
+    worst2 = std::max(worst2, dist2);
   }
-  std::unique_ptr<KdTree> tree;
+  return std::sqrt(worst2);
+}
+
+struct ExactCurve {
+  Points points;  // #C by 3 on both surfaces (to 1e-6 spacing), ~spacing/10 apart
 };
 
 inline ExactCurve exact_curve(const ResponseScene& sc) {
@@ -59,7 +64,6 @@ inline ExactCurve exact_curve(const ResponseScene& sc) {
   ExactCurve c;
   c.points.resize(static_cast<Eigen::Index>(pts.size()), 3);
   for (std::size_t k = 0; k < pts.size(); ++k) c.points.row(static_cast<Eigen::Index>(k)) = pts[k].transpose();
-  c.tree = std::make_unique<KdTree>(c.points);
   return c;
 }
 

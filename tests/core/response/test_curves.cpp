@@ -53,27 +53,20 @@ void check_curves(const char* name, const ResponseScene& sc, std::size_t expecte
   const std::vector<Curve> curves = intersection_curves(c.positions, radii);
   ASSERT_EQ(curves.size(), expected);
   const testing::ExactCurve exact = testing::exact_curve(sc);
-  double worst = 0.0, longest = 0.0;
+  double longest = 0.0;
   Eigen::Index total = 0;
   for (const Curve& cv : curves) {
     EXPECT_TRUE(cv.closed);
     const Eigen::Index k = cv.points.rows();
     total += k;
-    for (Eigen::Index i = 0; i < k; ++i) {
-      worst = std::max(worst, exact.distance(cv.points.row(i).transpose()));
-      if (i + 1 < k || cv.closed) longest = std::max(longest, (cv.points.row((i + 1) % k) - cv.points.row(i)).norm());
-    }
+    for (Eigen::Index i = 0; i + 1 < k || (cv.closed && i < k); ++i)
+      longest = std::max(longest, (cv.points.row((i + 1) % k) - cv.points.row(i)).norm());
   }
   Points all(total, 3);
   Eigen::Index j = 0;
   for (const Curve& cv : curves) all.middleRows(j, cv.points.rows()) = cv.points, j += cv.points.rows();
-  const KdTree tree(all);
-  double cover = 0.0;
-  for (Eigen::Index i = 0; i < exact.points.rows(); ++i) {
-    double dist2 = 0.0;
-    tree.nearest(exact.points.row(i).transpose(), &dist2);
-    cover = std::max(cover, std::sqrt(dist2));
-  }
+  const double worst = testing::max_nearest_distance(all, exact.points);
+  const double cover = testing::max_nearest_distance(exact.points, all);
   EXPECT_LE(worst, 0.5 * s);
   EXPECT_LE(longest, 3.0 * s);
   EXPECT_LE(cover, 2.0 * s);

@@ -58,20 +58,12 @@ void check_merge(const char* name, const ResponseScene& sc) {
   ASSERT_GT(curve.points.rows(), 50);
   IdList features = m.features_deformable;
   features.insert(features.end(), m.features_zero.begin(), m.features_zero.end());
-  double worst_feature = 0.0;
-  for (Index r : sc.model.rows_of(features, "features"))
-    worst_feature = std::max(worst_feature, curve.distance(sc.model.positions().row(r).transpose()));
-  EXPECT_LE(worst_feature, 2.0 * s);
   Points fpos(static_cast<Eigen::Index>(features.size()), 3);
   const IndexList frows = sc.model.rows_of(features, "features");
   for (std::size_t k = 0; k < frows.size(); ++k) fpos.row(static_cast<Eigen::Index>(k)) = sc.model.positions().row(frows[k]);
-  const KdTree ftree(fpos);
-  double worst_curve = 0.0;
-  for (Eigen::Index i = 0; i < curve.points.rows(); ++i) {
-    double dist2 = 0.0;
-    ftree.nearest(curve.points.row(i).transpose(), &dist2);
-    worst_curve = std::max(worst_curve, std::sqrt(dist2));
-  }
+  const double worst_feature = testing::max_nearest_distance(fpos, curve.points);
+  const double worst_curve = testing::max_nearest_distance(curve.points, fpos);
+  EXPECT_LE(worst_feature, 2.0 * s);
   EXPECT_LE(worst_curve, 2.0 * s);
   std::printf("[merge %s] P=%ld colliding=%zu removed=%zu (zero %d) features=%zu+%zu precision=%.4f recall=%.4f "
               "deepest kept=%.3f s, feature->curve %.2f s, curve->feature %.2f s, %.1f ms\n",
