@@ -97,6 +97,20 @@ TEST(Merge, NumericalExtremes) {
   }
 }
 
+TEST(Merge, ApproximateQueriesRemoveWhatExactOnesRemove) {
+  for (const auto& s : scenes()) {
+    SCOPED_TRACE(s.name);
+    const ResponseScene sc = s.fn(Frame{});
+    MergeParams exact;
+    exact.knn_eps = 0.0;
+    const MergeResult a = merge(sc);
+    const MergeResult b = merge_regions(sc.model, sc.regions, sc.original_positions, sc.original_normals,
+                                        sc.colliding, exact);
+    EXPECT_EQ(a.removed, b.removed);
+    EXPECT_EQ(a.features_zero, b.features_zero);
+  }
+}
+
 TEST(Merge, NoCollisionNoChange) {
   const ResponseScene sc = testing::sphere_into_box();
   const MergeResult m =

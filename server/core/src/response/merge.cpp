@@ -78,7 +78,8 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
   const double max_radius = rad.maxCoeff();
   const KdTree candidate_tree(pos, candidates, tp);
   std::vector<std::int32_t> candidate_of(static_cast<std::size_t>(model.size()), -1);
-  for (std::size_t c = 0; c < candidates.size(); ++c) candidate_of[static_cast<std::size_t>(candidates[c])] = static_cast<std::int32_t>(c);
+  for (std::size_t c = 0; c < candidates.size(); ++c)
+    candidate_of[static_cast<std::size_t>(candidates[c])] = static_cast<std::int32_t>(c);
   std::vector<std::int8_t> inside(candidates.size(), -1);
   IndexList hits;
   std::vector<double> hit_dist2;
@@ -120,7 +121,6 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
     }
   return flag;
 }
-
 
 // Feature surfels (see MergeParams::feature_radius_factor): kept surfels near the rim of the removed part
 // of their own surface whose estimated distance to the intersection, the offset o to the other surface

@@ -4,6 +4,9 @@
 // the nearest-surfel test (§2) against the deformed region closed up with the original deformable
 // surfels, normals flipped; the kept surfels within about one radius of the intersection are the
 // feature surfels, on both sides: the input of the sharp crease (crease.hpp).
+// Only the zero surfels in the deformed region's bounding box (grown by the largest radius) are
+// classified; a classified surfel settles every candidate in its surfel-free ball (spatial coherence,
+// as §4.2), so the surfels deep inside are mostly never queried.
 #pragma once
 
 #include <vector>
