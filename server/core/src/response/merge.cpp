@@ -46,24 +46,27 @@ IdList ids_of(const SurfelModel& model, const std::vector<bool>& flag) {
   return out;
 }
 
-// The zero surfels inside the deformed region: flags #P (true = inside) over the zero rows in `box`.
-std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region>& regions,
-                              const IndexList& deformable, const Points& original_positions,
+// The two sides near the deformed region, each with a k-d tree: [0] the zero surfels in the deformed
+// region's bounding box (exact queries), [1] the deformable surfels (approximate, MergeParams::knn_eps).
+struct Sides {
+  IndexList rows[2];
+  std::unique_ptr<KdTree> tree[2];
+};
+
+// The zero surfels inside the deformed region: flags #P (true = inside) over the zero candidates.
+std::vector<bool> zero_inside(const SurfelModel& model, const Sides& sides, const Points& original_positions,
                               const Points& original_normals, const Box& box, const MergeParams& params,
                               MergeStats& stats) {
   const Points& pos = model.positions();
   const Points& nrm = model.normals();
   const Values& rad = model.radii();
-  IndexList candidates;
-  for (Index r = 0; r < model.size(); ++r)
-    if (regions[r] == Region::Zero && box.contains(pos.row(r).transpose())) candidates.push_back(r);
+  const IndexList& candidates = sides.rows[0];
+  const KdTree& candidate_tree = *sides.tree[0];
+  const KdTree& deformed = *sides.tree[1];
   stats.candidates = static_cast<Index>(candidates.size());
-
-  KdTreeParams tp;
-  tp.threads = 1;
-  KdTreeParams approximate = tp;
+  KdTreeParams approximate;
+  approximate.threads = 1;
   approximate.eps = params.knn_eps;
-  const KdTree deformed(pos, deformable, approximate);
   // The closing surfels: the original deformable surfels near the deformed region.
   IndexList closing;
   if (params.close_with_originals) {
@@ -76,7 +79,6 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
   // distance d settles every candidate within d - max_radius (no surface passes in between), so deep
   // candidates, whose nearest-surfel queries are the slowest, are mostly never queried.
   const double max_radius = rad.maxCoeff();
-  const KdTree candidate_tree(pos, candidates, tp);
   std::vector<std::int32_t> candidate_of(static_cast<std::size_t>(model.size()), -1);
   for (std::size_t c = 0; c < candidates.size(); ++c)
     candidate_of[static_cast<std::size_t>(candidates[c])] = static_cast<std::int32_t>(c);
@@ -126,7 +128,7 @@ std::vector<bool> zero_inside(const SurfelModel& model, const std::vector<Region
 // of their own surface whose estimated distance to the intersection, the offset o to the other surface
 // (nearest surfel of the other side) over the sine of the angle between the two normals, is within
 // reach. Only surfels near the removed set are looked at.
-void mark_features(const SurfelModel& model, const std::vector<Region>& regions,
+void mark_features(const SurfelModel& model, const Sides& sides,
                    const std::vector<bool>& removed, const MergeParams& params, MergeResult& out) {
   const Points& pos = model.positions();
   const Points& nrm = model.normals();
@@ -136,33 +138,23 @@ void mark_features(const SurfelModel& model, const std::vector<Region>& regions,
   for (Index r = 0; r < model.size(); ++r)
     if (removed[static_cast<std::size_t>(r)]) near_removed.add(pos.row(r).transpose());
   near_removed.grow(gate_factor * rad.maxCoeff());
-  IndexList removed_rows[2], nearby_rows[2];  // per side: [0] zero, [1] deformable
-  for (Index r = 0; r < model.size(); ++r) {
-    if (!near_removed.contains(pos.row(r).transpose())) continue;
-    const int side = regions[r] != Region::Zero;
-    nearby_rows[side].push_back(r);
-    if (removed[static_cast<std::size_t>(r)]) removed_rows[side].push_back(r);
-  }
-  KdTreeParams tp;
-  tp.threads = 1;
-  const KdTree removed_tree[2] = {KdTree(pos, removed_rows[0], tp), KdTree(pos, removed_rows[1], tp)};
-  const KdTree surface[2] = {KdTree(pos, nearby_rows[0], tp), KdTree(pos, nearby_rows[1], tp)};
   std::vector<bool> feature[2] = {std::vector<bool>(removed.size(), false),
                                   std::vector<bool>(removed.size(), false)};
+  IndexList near;
+  std::vector<double> near_dist2;
   for (int side = 0; side < 2; ++side) {
-    for (Index r : nearby_rows[side]) {
-      if (removed[static_cast<std::size_t>(r)]) continue;
+    for (Index r : sides.rows[side]) {
       const Vec3 p = pos.row(r).transpose();
-      const double reach = params.feature_radius_factor * rad[r], gate = gate_factor * rad[r];
-      double dist2 = INFINITY;
-      removed_tree[side].nearest(p, &dist2);
-      if (!(dist2 <= gate * gate)) continue;
-      const Index q = surface[1 - side].nearest(p);
+      if (removed[static_cast<std::size_t>(r)] || !near_removed.contains(p)) continue;
+      sides.tree[side]->radius(p, gate_factor * rad[r], near, near_dist2);
+      if (std::none_of(near.begin(), near.end(), [&](Index h) { return removed[static_cast<std::size_t>(h)]; }))
+        continue;
+      const Index q = sides.tree[1 - side]->nearest(p);
       if (q < 0) continue;
       const Vec3 n_q = nrm.row(q).transpose();
       const double offset = std::max(0.0, (p - pos.row(q).transpose()).dot(n_q));
       const double sine = std::max(0.2, nrm.row(r).transpose().cross(n_q).norm());
-      if (offset <= reach * sine) feature[side][static_cast<std::size_t>(r)] = true;
+      if (offset <= params.feature_radius_factor * rad[r] * sine) feature[side][static_cast<std::size_t>(r)] = true;
     }
   }
   out.features_deformable = ids_of(model, feature[1]);
@@ -189,22 +181,28 @@ MergeResult merge_regions(const SurfelModel& model, const std::vector<Region>& r
 
   const Points& pos = model.positions();
   const Values& rad = model.radii();
-  IndexList deformable;
+  Sides sides;
   Box box;
-  double max_radius = 0.0;
   for (Index r = 0; r < model.size(); ++r) {
     if (regions[r] == Region::Zero) continue;
-    deformable.push_back(r);
+    sides.rows[1].push_back(r);
     box.add(pos.row(r).transpose());
-    max_radius = std::max(max_radius, rad[r]);
   }
-  box.grow(max_radius);
+  box.grow(rad.maxCoeff());
+  for (Index r = 0; r < model.size(); ++r)
+    if (regions[r] == Region::Zero && box.contains(pos.row(r).transpose())) sides.rows[0].push_back(r);
+  KdTreeParams exact;
+  exact.threads = 1;
+  KdTreeParams approximate = exact;
+  approximate.eps = params.knn_eps;
+  sides.tree[0] = std::make_unique<KdTree>(pos, sides.rows[0], exact);
+  sides.tree[1] = std::make_unique<KdTree>(pos, sides.rows[1], approximate);
 
-  std::vector<bool> removed = zero_inside(model, regions, deformable, original_positions,
-                                          original_normals, box, params, out.stats);
+  std::vector<bool> removed = zero_inside(model, sides, original_positions, original_normals, box, params,
+                                          out.stats);
   for (Index r : colliding_rows) removed[static_cast<std::size_t>(r)] = true;
 
-  mark_features(model, regions, removed, params, out);
+  mark_features(model, sides, removed, params, out);
   out.removed = ids_of(model, removed);
   out.stats.merge_ms = ms_since(start);
   return out;
