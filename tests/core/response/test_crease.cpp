@@ -80,6 +80,20 @@ TEST(Crease, GapCopiesOfCircularDiscs) {
   EXPECT_EQ(c.inserted.tangent_u.rows(), 0);
 }
 
+TEST(Crease, AppliedToTheModel) {
+  SurfelModel m = corner(true);
+  CreaseParams p;
+  p.max_move_factor = 2.0;
+  const CreaseResult c = crease(m, {0}, {1}, p);
+  const IdList copies = apply_crease(m, c);
+  ASSERT_EQ(copies, (IdList{2, 3}));
+  EXPECT_EQ(Vec3(m.positions().row(0)), Vec3(c.positions.row(0)));
+  EXPECT_EQ(Vec3(m.clip_dirs().row(1)), Vec3(c.clip_dirs.row(1)));
+  EXPECT_EQ(Vec3(m.clip_dirs().row(m.row_of(2))), Vec3::Zero());  // copies are unclipped
+  EXPECT_EQ(Vec3(m.tangent_u().row(m.row_of(3))), Vec3(c.inserted.tangent_u.row(1)));
+  EXPECT_EQ(m.size(), 4);
+}
+
 TEST(Crease, SmallMovesNeedNoCopy) {
   CreaseParams p;
   p.gap_factor = 10.0;
@@ -121,6 +135,28 @@ TEST(Crease, MovedFeaturesLieOnBothExactSurfaces) {
   check_crease("arm_into_sphere", testing::arm_into_sphere());
   check_crease("ball_into_cup", testing::ball_into_cup());
   check_crease("two_contacts", testing::two_contacts());
+}
+
+// Merge, remove, crease, apply: the model keeps nothing deep inside the other solid, copies included.
+TEST(Crease, EndToEndOnTheModel) {
+  const ResponseScene sc = testing::two_contacts();
+  const MergeResult m = merge_regions(sc.model, sc.regions, sc.original_positions, sc.original_normals, sc.colliding);
+  SurfelModel model = sc.model;
+  model.remove(m.removed);
+  const CreaseResult c = crease(model, m.features_deformable, m.features_zero);
+  const IdList copies = apply_crease(model, c);
+  ASSERT_EQ(model.size(), sc.model.size() - static_cast<Index>(m.removed.size()) + static_cast<Index>(copies.size()));
+  ASSERT_TRUE(model.has_clips());
+  for (Index r = 0; r < model.size(); ++r) {
+    const Vec3 p = model.positions().row(r).transpose();
+    // The side of a row: the deformable ids are those of the original model's deformable rows.
+    const Index original_row = sc.model.row_of(model.ids()[r]);
+    const SurfelId parent = original_row >= 0 ? model.ids()[r]
+                                              : c.inserted_parents[static_cast<std::size_t>(model.ids()[r] - copies.front())];
+    const bool zero = sc.regions[static_cast<std::size_t>(sc.model.row_of(parent))] == Region::Zero;
+    const double other = zero ? sc.sdf_deformed(p) : sc.sdf_zero(p);
+    EXPECT_GE(other, -0.25 * sc.spacing) << "id " << model.ids()[r];
+  }
 }
 
 TEST(Crease, NumericalExtremes) {

@@ -134,4 +134,19 @@ CreaseResult crease(const SurfelModel& model, const IdList& features_a, const Id
   return out;
 }
 
+IdList apply_crease(SurfelModel& model, const CreaseResult& crease) {
+  const IndexList rows = model.rows_of(crease.moved, "moved");
+  if (crease.positions.rows() != static_cast<Eigen::Index>(rows.size())) {
+    throw Error(ErrorCode::InvalidArgument, "positions",
+                "has " + std::to_string(crease.positions.rows()) + " rows, expected " +
+                    std::to_string(rows.size()) + " (one per moved id)");
+  }
+  require_finite(crease.positions, "positions");
+  validate_arrays(crease.inserted, model.has_tangents(), model.has_colors());
+  model.set_clips(crease.moved, crease.clip_points, crease.clip_dirs);
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    model.arrays().positions.row(rows[k]) = crease.positions.row(static_cast<Eigen::Index>(k));
+  return model.insert(crease.inserted);
+}
+
 }  // namespace surfeledit

@@ -43,6 +43,11 @@ struct CreaseResult {
 CreaseResult crease(const SurfelModel& model, const IdList& features_a, const IdList& features_b,
                     const CreaseParams& params = {});
 
+// Applies `crease` to `model` (before or after removing MergeResult::removed: it touches kept surfels
+// only): moves the surfels, sets their clip lines, appends the copies (unclipped). Returns the copies'
+// ids, in the order of crease.inserted. Validates first (the model is unchanged on a throw).
+IdList apply_crease(SurfelModel& model, const CreaseResult& crease);
+
 // The point where the tangent planes (p_i, n_i), (p_j, n_j) and the plane through their midpoint
 // orthogonal to both meet; false (x untouched) when the normals are parallel within `min_angle`.
 bool crease_point(const Vec3& p_i, const Vec3& n_i, const Vec3& p_j, const Vec3& n_j, double min_angle,
