@@ -35,6 +35,14 @@ void hash_bytes(std::uint64_t& h, const void* data, std::size_t n) {
   }
 }
 
+// Unit clip directions; zero ones (unclipped) stay zero.
+void normalise_clip_dirs(Points& dirs) {
+  for (Eigen::Index i = 0; i < dirs.rows(); ++i) {
+    const double len = dirs.row(i).norm();
+    if (len > 0.0) dirs.row(i) /= len;
+  }
+}
+
 }  // namespace
 
 void validate_arrays(const SurfelArrays& a, std::optional<bool> expect_tangents,
@@ -56,12 +64,19 @@ void validate_arrays(const SurfelArrays& a, std::optional<bool> expect_tangents,
     throw Error(ErrorCode::InvalidArgument, "tangent_v", "tangent_u and tangent_v come together");
   }
   check_optional_rows(a.colors.rows(), n, expect_colors, "colors");
+  check_optional_rows(a.clip_points.rows(), n, std::nullopt, "clip_points");
+  check_optional_rows(a.clip_dirs.rows(), n, std::nullopt, "clip_dirs");
+  if ((a.clip_points.rows() == 0) != (a.clip_dirs.rows() == 0)) {
+    throw Error(ErrorCode::InvalidArgument, "clip_dirs", "clip_points and clip_dirs come together");
+  }
 
   require_finite(a.positions, "positions");
   require_finite(a.normals, "normals");
   require_finite(a.radii, "radii");
   require_finite(a.tangent_u, "tangent_u");
   require_finite(a.tangent_v, "tangent_v");
+  require_finite(a.clip_points, "clip_points");
+  require_finite(a.clip_dirs, "clip_dirs");
   for (Eigen::Index i = 0; i < n; ++i) {
     const double len2 = a.normals.row(i).squaredNorm();
     if (!(len2 > 1e-300)) {
@@ -114,6 +129,7 @@ SurfelModel SurfelModel::from_arrays(SurfelArrays arrays) {
   validate_arrays(arrays);
   arrays.normals.rowwise().normalize();
   if (arrays.radii.size() == 0) arrays.radii = estimate_radii(arrays.positions);
+  normalise_clip_dirs(arrays.clip_dirs);
 
   SurfelModel m;
   const Index n = static_cast<Index>(arrays.positions.rows());
@@ -186,6 +202,12 @@ IdList SurfelModel::insert(SurfelArrays added) {
     throw Error(ErrorCode::InvalidArgument, "radii", "inserted surfels need radii");
   }
   const Index n_add = static_cast<Index>(added.positions.rows());
+  normalise_clip_dirs(added.clip_dirs);
+  if (has_clips() || added.clip_dirs.rows() != 0) {
+    // Either side without clip lines is unclipped (zero rows).
+    if (!has_clips()) a_.clip_points = a_.clip_dirs = Points::Zero(size(), 3);
+    if (added.clip_dirs.rows() == 0) added.clip_points = added.clip_dirs = Points::Zero(n_add, 3);
+  }
   append_rows(a_.positions, added.positions);
   append_rows(a_.normals, added.normals);
   Values radii(a_.radii.size() + n_add);
@@ -194,6 +216,8 @@ IdList SurfelModel::insert(SurfelArrays added) {
   append_rows(a_.tangent_u, added.tangent_u);
   append_rows(a_.tangent_v, added.tangent_v);
   append_rows(a_.colors, added.colors);
+  append_rows(a_.clip_points, added.clip_points);
+  append_rows(a_.clip_dirs, added.clip_dirs);
 
   IdList out(n_add);
   for (Index k = 0; k < n_add; ++k) {
@@ -219,6 +243,8 @@ void SurfelModel::remove(const IdList& ids) {
   a_.tangent_u = keep_rows(a_.tangent_u, keep, kept);
   a_.tangent_v = keep_rows(a_.tangent_v, keep, kept);
   a_.colors = keep_rows(a_.colors, keep, kept);
+  a_.clip_points = keep_rows(a_.clip_points, keep, kept);
+  a_.clip_dirs = keep_rows(a_.clip_dirs, keep, kept);
   Values radii(kept);
   IdList kept_ids;
   kept_ids.reserve(kept);
@@ -242,12 +268,37 @@ std::uint64_t SurfelModel::hash() const {
   hash_bytes(h, a_.positions.data(), a_.positions.size() * sizeof(double));
   hash_bytes(h, a_.normals.data(), a_.normals.size() * sizeof(double));
   hash_bytes(h, a_.radii.data(), a_.radii.size() * sizeof(double));
+  if (has_clips()) {  // only when present, so that hashes of unclipped models stay as they were
+    hash_bytes(h, a_.clip_points.data(), a_.clip_points.size() * sizeof(double));
+    hash_bytes(h, a_.clip_dirs.data(), a_.clip_dirs.size() * sizeof(double));
+  }
   return h;
+}
+
+void SurfelModel::set_clips(const IdList& ids, const Points& points, const Points& dirs) {
+  const auto n = static_cast<Eigen::Index>(ids.size());
+  if (points.rows() != n || dirs.rows() != n) {
+    std::ostringstream msg;
+    msg << "clip_points has " << points.rows() << " rows and clip_dirs " << dirs.rows() << ", expected "
+        << n << " (one per id)";
+    throw Error(ErrorCode::InvalidArgument, points.rows() != n ? "clip_points" : "clip_dirs", msg.str());
+  }
+  require_finite(points, "clip_points");
+  require_finite(dirs, "clip_dirs");
+  const IndexList rows = rows_of(ids, "ids");
+  if (!has_clips()) a_.clip_points = a_.clip_dirs = Points::Zero(size(), 3);
+  Points unit = dirs;
+  normalise_clip_dirs(unit);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    a_.clip_points.row(rows[k]) = points.row(k);
+    a_.clip_dirs.row(rows[k]) = unit.row(k);
+  }
 }
 
 std::size_t SurfelModel::memory_bytes() const {
   return sizeof(double) * (a_.positions.size() + a_.normals.size() + a_.radii.size() +
-                           a_.tangent_u.size() + a_.tangent_v.size()) +
+                           a_.tangent_u.size() + a_.tangent_v.size() + a_.clip_points.size() +
+                           a_.clip_dirs.size()) +
          a_.colors.size() + ids_.size() * sizeof(SurfelId) + row_of_id_.size() * sizeof(Index);
 }
 

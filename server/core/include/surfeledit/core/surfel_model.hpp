@@ -20,6 +20,10 @@ struct SurfelArrays {
   Points tangent_u;  // #P by 3 or empty: first tangent axis, length = radius along it
   Points tangent_v;  // #P by 3 or empty: second tangent axis, length = radius along it
   Colors colors;     // #P by 3 RGB or empty
+  // Sharp-crease clip lines (§7, thesis §11.3), both #P by 3 or both empty. A clipped disc keeps the
+  // half {y : (y - clip_point) . (normal x clip_dir) >= 0}; a zero clip_dir marks an unclipped surfel.
+  Points clip_points;  // #P by 3 or empty: a point of the line, in the surfel's tangent plane
+  Points clip_dirs;    // #P by 3 or empty: unit direction of the line (normalised on load), or zero
 };
 
 class SurfelModel {
@@ -41,6 +45,9 @@ class SurfelModel {
   const Colors& colors() const { return a_.colors; }
   bool has_tangents() const { return a_.tangent_u.rows() == size(); }
   bool has_colors() const { return a_.colors.rows() == size(); }
+  const Points& clip_points() const { return a_.clip_points; }
+  const Points& clip_dirs() const { return a_.clip_dirs; }
+  bool has_clips() const { return a_.clip_dirs.rows() == size() && size() > 0; }
   // Mutable access for in-place updates that keep the row count (deformation).
   SurfelArrays& arrays() { return a_; }
   const SurfelArrays& arrays() const { return a_; }
@@ -55,13 +62,18 @@ class SurfelModel {
   // Next id that insert() will assign.
   SurfelId next_id() const { return next_id_; }
 
-  // Appends validated surfels (same optional arrays as the model); returns their new ids.
+  // Appends validated surfels (same tangents and colors as the model; clip lines may be given or not:
+  // missing ones are unclipped); returns their new ids.
   IdList insert(SurfelArrays added);
   // Removes the given ids (validated first: unknown ids throw, nothing changes);
   // the model may not become empty.
   void remove(const IdList& ids);
+  // Sets the clip lines of `ids` (#ids by 3 each; a zero direction unclips). Adds the clip arrays
+  // (every other surfel unclipped) when the model has none. Validates before changing anything.
+  void set_clips(const IdList& ids, const Points& points, const Points& dirs);
 
-  // Content hash over ids, positions, normals and radii (bitwise), for "unchanged" checks.
+  // Content hash over ids, positions, normals and radii (bitwise), and the clip lines when the
+  // model has them, for "unchanged" checks.
   std::uint64_t hash() const;
   std::size_t memory_bytes() const;
   // Axis-aligned bounds and their diagonal length.
