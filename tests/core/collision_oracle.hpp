@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
 
 #include <Eigen/Geometry>
@@ -382,12 +383,79 @@ inline std::vector<ScriptStep> slab_script() {
   return s;
 }
 
+// Fig. 6.4: a plank sampled at `spacing`, its left half rigid (x < 0), a blend band up to x = 0.3 and
+// the one region beyond; bend() turns it back by half a turn (over `steps` steps) about the y axis
+// through (0, 0, 0.05), just above the seam, so the one region folds into the rigid half.
+struct ConcaveFold {
+  double spacing = 0.04;
+  int steps = 10;
+  SampledSurfels s = make_box(Vec3(1.0, 0.3, 0.1))->sample(SampleParams{spacing, 1, 0.25});
+  std::vector<Region> regions = regions_of(s.positions);
+  DeformationFields fields = compute_fields(s.positions, regions, 1);
+
+  static std::vector<Region> regions_of(const Points& positions) {
+    std::vector<Region> out;
+    for (Index r = 0; r < positions.rows(); ++r) {
+      const double x = positions(r, 0);
+      out.push_back(x < 0.0 ? Region::Zero : x > 0.3 ? Region::One : Region::Blend);
+    }
+    return out;
+  }
+  // One step of the bend: `pos` and `nrm` (#P by 3) move.
+  void bend(Points& pos, Points& nrm) const {
+    DeformParams p;
+    p.angle = M_PI / steps;
+    p.axis = Vec3::UnitY();
+    p.center = Vec3(0.0, 0.0, 0.05);
+    p.blend = Blend::Linear;
+    apply_step(fields, p, pos, nrm);
+  }
+};
+
 // What one run recorded per step: colliding rows (and their ids, rows' ids being tracked by the test).
 struct RunLog {
   std::vector<IndexList> colliding;
   std::vector<std::vector<double>> depths;
   std::vector<CollisionStats> stats;
 };
+
+// Detector parameters for algorithm `a` with `threads` worker threads, the rest default.
+inline CollisionParams params_of(CollisionAlgorithm a, int threads = 1) {
+  CollisionParams p;
+  p.algorithm = a;
+  p.threads = threads;
+  return p;
+}
+
+// Plays `script` on `scene`: each step moves the deformable part (translation t, turn by `angle` about
+// the x axis through its current centroid). With `edits`, at step 4 every 7th deformable row is split
+// (a child appended beside it; `inserted(parents)` is called right after) and at step 7
+// remove_scripted_rows() removes rows (`removed(keep)` is called right after). Then `step(k, previous)`
+// at every step, `previous` being the positions before the step (#P by 3, rows as the scene's now).
+template <typename Inserted, typename Removed, typename Step>
+void play_script(TestScene& scene, const std::vector<ScriptStep>& script, bool edits, Inserted inserted,
+                 Removed removed, Step step) {
+  Vec3 centre = Vec3::Zero();
+  for (Index r = 0, n = 0; r < scene.rows(); ++r)
+    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
+  for (std::size_t k = 0; k < script.size(); ++k) {
+    const Points before = scene.positions;
+    scene.move(script[k].t, Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix(), centre);
+    centre += script[k].t;
+    Points previous = before;
+    if (edits && k == 4) {
+      IndexList parents;
+      for (Index r = 0, j = 0; r < scene.rows(); ++r)
+        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
+      for (Index q : parents) scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
+      previous.conservativeResize(scene.rows(), 3);
+      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(before.rows() + j) = previous.row(parents[j]);
+      inserted(parents);
+    }
+    if (edits && k == 7) removed(remove_scripted_rows(scene, previous));
+    step(k, previous);
+  }
+}
 
 // Runs `script` on `scene` with the detector and the oracle side by side and checks that they agree on
 // every step. With `edits`: at step 4 every 7th deformable row is split (child appended), at step 7
@@ -399,30 +467,15 @@ inline RunLog run_against_oracle(TestScene scene, const CollisionParams& params,
   det->reset(scene.view());
   oracle.reset(scene);
   RunLog log;
-  Vec3 centre = Vec3::Zero();
-  for (Index r = 0, n = 0; r < scene.rows(); ++r)
-    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
-  for (std::size_t k = 0; k < script.size(); ++k) {
-    const Points previous_before = scene.positions;
-    const Mat3 rot = Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix();
-    scene.move(script[k].t, rot, centre);
-    centre += script[k].t;
-    Points previous = previous_before;
-    if (edits && k == 4) {
-      IndexList parents;
-      for (Index r = 0, j = 0; r < scene.rows(); ++r)
-        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
-      for (Index q : parents) scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
-      previous.conservativeResize(scene.rows(), 3);
-      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(previous_before.rows() + j) = previous.row(parents[j]);
-      det->on_inserted(scene.view(), parents);
-      oracle.on_inserted(scene, parents);
-    }
-    if (edits && k == 7) {
-      const std::vector<bool> keep = remove_scripted_rows(scene, previous);
-      det->on_removed(keep);
-      oracle.on_removed(keep);
-    }
+  auto inserted = [&](const IndexList& parents) {
+    det->on_inserted(scene.view(), parents);
+    oracle.on_inserted(scene, parents);
+  };
+  auto removed = [&](const std::vector<bool>& keep) {
+    det->on_removed(keep);
+    oracle.on_removed(keep);
+  };
+  play_script(scene, script, edits, inserted, removed, [&](std::size_t k, const Points& previous) {
     const CollisionResult got = det->detect(scene.view(), previous);
     std::vector<double> want_depths;
     const IndexList want = oracle.detect(scene, previous, &want_depths);
@@ -436,7 +489,7 @@ inline RunLog run_against_oracle(TestScene scene, const CollisionParams& params,
     log.colliding.push_back(got.colliding);
     log.depths.push_back(got.depths);
     log.stats.push_back(got.stats);
-  }
+  });
   return log;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "collision_oracle.hpp"
+#include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/simplify/approximate_detector.hpp"
 
 namespace surfeledit {
@@ -35,32 +36,18 @@ Agreement run_side_by_side(TestScene scene, const CollisionParams& cp, const Sim
   approx->reset(scene.view());
   approx->clusters().check();
   Agreement a;
-  Vec3 centre = Vec3::Zero();
-  for (Index r = 0, n = 0; r < scene.rows(); ++r)
-    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
-  const auto script = slab_script();
-  for (std::size_t k = 0; k < script.size(); ++k) {
-    const Points before = scene.positions;
-    scene.move(script[k].t, Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix(), centre);
-    centre += script[k].t;
-    Points previous = before;
-    if (edits && k == 4) {  // split every 7th deformable surfel
-      IndexList parents;
-      for (Index r = 0, j = 0; r < scene.rows(); ++r)
-        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
-      for (Index q : parents) scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
-      previous.conservativeResize(scene.rows(), 3);
-      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(before.rows() + j) = previous.row(parents[j]);
-      exact->on_inserted(scene.view(), parents);
-      approx->on_inserted(scene.view(), parents);
-      for (std::size_t j = 0; j < parents.size(); ++j)
-        EXPECT_EQ(approx->clusters().cluster_of(before.rows() + static_cast<Index>(j)), approx->clusters().cluster_of(parents[j]));
-    }
-    if (edits && k == 7) {  // drop some zero and some deformable surfels
-      const std::vector<bool> keep = testing::remove_scripted_rows(scene, previous);
-      exact->on_removed(keep);
-      approx->on_removed(keep);
-    }
+  auto inserted = [&](const IndexList& parents) {  // every 7th deformable surfel split
+    exact->on_inserted(scene.view(), parents);
+    approx->on_inserted(scene.view(), parents);
+    const Index first = scene.rows() - static_cast<Index>(parents.size());
+    for (std::size_t j = 0; j < parents.size(); ++j)
+      EXPECT_EQ(approx->clusters().cluster_of(first + static_cast<Index>(j)), approx->clusters().cluster_of(parents[j]));
+  };
+  auto removed = [&](const std::vector<bool>& keep) {  // some zero and some deformable surfels dropped
+    exact->on_removed(keep);
+    approx->on_removed(keep);
+  };
+  testing::play_script(scene, slab_script(), edits, inserted, removed, [&](std::size_t k, const Points& previous) {
     approx->clusters().check();
     const CollisionResult want = exact->detect(scene.view(), previous);
     const CollisionResult got = approx->detect(scene.view(), previous);
@@ -83,15 +70,8 @@ Agreement run_side_by_side(TestScene scene, const CollisionParams& cp, const Sim
     a.fn += fn;
     if (tp + fp) a.worst_precision = std::min(a.worst_precision, double(tp) / double(tp + fp));
     if (tp + fn) a.worst_recall = std::min(a.worst_recall, double(tp) / double(tp + fn));
-  }
+  });
   return a;
-}
-
-CollisionParams collision_params(CollisionAlgorithm a, int threads = 1) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = threads;
-  return p;
 }
 
 SimplifyParams simplify_params(SimplifyMethod m, int size, double margin = 1.0) {
@@ -107,7 +87,7 @@ TEST(ApproximateDetection, ClusterSizeOneEqualsExactEveryStep) {
     for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical, SimplifyMethod::None}) {
       for (bool edits : {false, true}) {
         for (int threads : {1, 2}) {
-          const Agreement g = run_side_by_side(slab_and_sphere(0.05), collision_params(a, threads),
+          const Agreement g = run_side_by_side(slab_and_sphere(0.05), testing::params_of(a, threads),
                                                simplify_params(m, 1), edits, true);
           EXPECT_GT(g.tp, 100u) << to_string(a);  // the scene does collide
           EXPECT_EQ(g.fp + g.fn, 0u) << to_string(a);
@@ -118,11 +98,11 @@ TEST(ApproximateDetection, ClusterSizeOneEqualsExactEveryStep) {
 }
 
 TEST(ApproximateDetection, ImprovedIsRejectedNoneGivesNothing) {
-  EXPECT_THROW(make_approximate_detector(collision_params(CollisionAlgorithm::Improved), SimplifyParams{}), Error);
-  EXPECT_EQ(make_approximate_detector(collision_params(CollisionAlgorithm::None), SimplifyParams{}), nullptr);
+  EXPECT_THROW(make_approximate_detector(testing::params_of(CollisionAlgorithm::Improved), SimplifyParams{}), Error);
+  EXPECT_EQ(make_approximate_detector(testing::params_of(CollisionAlgorithm::None), SimplifyParams{}), nullptr);
   SimplifyParams bad;
   bad.cluster_size = 0;
-  EXPECT_THROW(make_approximate_detector(collision_params(CollisionAlgorithm::Robust), bad), Error);
+  EXPECT_THROW(make_approximate_detector(testing::params_of(CollisionAlgorithm::Robust), bad), Error);
 }
 
 TEST(ApproximateDetection, PrecisionAndRecallAgainstExact) {
@@ -132,7 +112,7 @@ TEST(ApproximateDetection, PrecisionAndRecallAgainstExact) {
     for (auto m : {SimplifyMethod::Hierarchical, SimplifyMethod::RegionGrowing}) {
       for (int size : {1, 18, 100}) {
         for (double margin : {0.0, 1.0}) {
-          const Agreement g = run_side_by_side(slab_and_sphere(0.04), collision_params(a, 2),
+          const Agreement g = run_side_by_side(slab_and_sphere(0.04), testing::params_of(a, 2),
                                                simplify_params(m, size, margin), true, false);
           std::printf("[ approx ] %-8s %-14s %3d %.0f: P %.4f R %.4f (worst %.3f %.3f) tests %zu / %zu, queries %zu / %zu\n",
                       to_string(a), to_string(m), size, margin, g.precision(), g.recall(), g.worst_precision,
@@ -158,6 +138,25 @@ TEST(ApproximateDetection, PrecisionAndRecallAgainstExact) {
       }
     }
   }
+}
+
+// One factory for the session: the settings choose the approximate detector (simplification), a
+// hierarchy's broad phase, the plain detector, or none.
+TEST(ApproximateDetection, MakeDetectorFollowsTheSettings) {
+  SessionSettings s;  // robust, no hierarchy, no simplification
+  auto d = make_detector(s);
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(dynamic_cast<ApproximateDetector*>(d.get()), nullptr);
+  EXPECT_EQ(d->hierarchy_info().status, "");
+  s.hierarchy.zero = ZeroHierarchy::Aabb;
+  d = make_detector(s);
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->hierarchy_info().status, "fresh");
+  s.simplify.method = SimplifyMethod::Hierarchical;
+  d = make_detector(s);
+  EXPECT_NE(dynamic_cast<ApproximateDetector*>(d.get()), nullptr);
+  s.collision.algorithm = CollisionAlgorithm::None;
+  EXPECT_EQ(make_detector(s), nullptr);
 }
 
 }  // namespace

@@ -16,13 +16,6 @@ using namespace surfeledit::testing;
 
 namespace {
 
-CollisionParams params_of(CollisionAlgorithm a) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = 1;
-  return p;
-}
-
 std::string describe(const CollisionParams& c, const HierarchyParams& h) {
   return std::string(to_string(c.algorithm)) + " zero=" + to_string(h.zero) + " deformable=" + to_string(h.deformable) +
          " update=" + bvh::to_string(h.tree.update) + " sat=" + bvh::to_string(h.sat) +
@@ -40,32 +33,16 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
   auto det = CollisionDetector::create(params, hierarchy);
   ref->reset(scene.view());
   det->reset(scene.view());
-  Vec3 centre = Vec3::Zero();
-  for (Index r = 0, n = 0; r < scene.rows(); ++r)
-    if (scene.regions[r] != Region::Zero) centre += (scene.positions.row(r).transpose() - centre) / ++n;
   int differing = 0;
-  for (std::size_t k = 0; k < script.size(); ++k) {
-    const Points previous_before = scene.positions;
-    const Mat3 rot = Eigen::AngleAxisd(script[k].angle, Vec3::UnitX()).toRotationMatrix();
-    scene.move(script[k].t, rot, centre);
-    centre += script[k].t;
-    Points previous = previous_before;
-    if (k == 4) {
-      IndexList parents;
-      for (Index r = 0, j = 0; r < scene.rows(); ++r)
-        if (scene.regions[r] != Region::Zero && j++ % 7 == 0) parents.push_back(r);
-      for (Index q : parents)
-        scene.append_child(q, 0.3 * scene.radii[q] * Vec3(1, 0, 0).cross(scene.normals.row(q).transpose()));
-      previous.conservativeResize(scene.rows(), 3);
-      for (std::size_t j = 0; j < parents.size(); ++j) previous.row(previous_before.rows() + j) = previous.row(parents[j]);
-      ref->on_inserted(scene.view(), parents);
-      det->on_inserted(scene.view(), parents);
-    }
-    if (k == 7) {
-      const std::vector<bool> keep = remove_scripted_rows(scene, previous);
-      ref->on_removed(keep);
-      det->on_removed(keep);
-    }
+  auto inserted = [&](const IndexList& parents) {
+    ref->on_inserted(scene.view(), parents);
+    det->on_inserted(scene.view(), parents);
+  };
+  auto removed = [&](const std::vector<bool>& keep) {
+    ref->on_removed(keep);
+    det->on_removed(keep);
+  };
+  play_script(scene, script, true, inserted, removed, [&](std::size_t k, const Points& previous) {
     const CollisionResult want = ref->detect(scene.view(), previous);
     const CollisionResult got = det->detect(scene.view(), previous);
     if (got.colliding != want.colliding) ++differing;
@@ -73,7 +50,7 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
     EXPECT_GT(got.stats.nv, 0) << describe(params, hierarchy) << " step " << k;
     EXPECT_LE(got.stats.np, got.stats.deformable);
     if (candidates_seen) *candidates_seen += got.stats.np;
-  }
+  });
   return differing;
 }
 
@@ -167,15 +144,9 @@ TEST(CollisionBvh, NoCandidatesWhenFarFromTheZeroRegion) {
 // zero region's own inside test), by design not more -- concave collisions are not its definition;
 // the extended variant (original-model test) equals Robust there on every step.
 TEST(CollisionBvh, ConcaveFoldSimpleAsWithoutExtendedAsRobust) {
-  const double spacing = 0.04;
-  auto plank = make_box(Vec3(1.0, 0.3, 0.1));
-  const SampledSurfels s = plank->sample(SampleParams{spacing, 1, 0.25});
-  std::vector<Region> regions;
-  for (Index r = 0; r < s.positions.rows(); ++r) {
-    const double x = s.positions(r, 0);
-    regions.push_back(x < 0.0 ? Region::Zero : x > 0.3 ? Region::One : Region::Blend);
-  }
-  const DeformationFields fields = compute_fields(s.positions, regions, 1);
+  const ConcaveFold fold;
+  const SampledSurfels& s = fold.s;
+  const std::vector<Region>& regions = fold.regions;
   HierarchyParams tree;
   tree.zero = ZeroHierarchy::Aabb;
   tree.deformable = DeformableHierarchy::Aabb;
@@ -188,16 +159,11 @@ TEST(CollisionBvh, ConcaveFoldSimpleAsWithoutExtendedAsRobust) {
   auto robust_ext = CollisionDetector::create(params_of(CollisionAlgorithm::Robust), extended);
   for (auto* d : {simple.get(), simple_tree.get(), robust.get(), robust_ext.get()})
     d->reset(CollisionScene{pos, nrm, s.radii, regions});
-  const int steps = 10;
+  const int steps = fold.steps;
   std::size_t robust_max = 0;
   for (int k = 0; k < steps; ++k) {
     const Points previous = pos;
-    DeformParams p;
-    p.angle = M_PI / steps;
-    p.axis = Vec3::UnitY();
-    p.center = Vec3(0.0, 0.0, 0.05);
-    p.blend = Blend::Linear;
-    apply_step(fields, p, pos, nrm);
+    fold.bend(pos, nrm);
     const CollisionScene view{pos, nrm, s.radii, regions};
     const IndexList a = simple->detect(view, previous).colliding, b = simple_tree->detect(view, previous).colliding;
     const IndexList c = robust->detect(view, previous).colliding, d = robust_ext->detect(view, previous).colliding;

@@ -11,16 +11,7 @@
 namespace surfeledit {
 namespace {
 
-using testing::run_against_oracle;
-using testing::slab_and_sphere;
-using testing::slab_script;
-
-CollisionParams params_of(CollisionAlgorithm a, int threads = 1) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = threads;
-  return p;
-}
+using namespace testing;
 
 TEST(CollisionRobust, EqualsOracleEveryStep) {
   for (double w : {0.0, 0.01}) {
@@ -101,17 +92,12 @@ TEST(CollisionRobust, MatchesExactTruthOnTheSlab) {
 // (in this fold the one region enters the rigid half far from the seam, through its top face, so the
 // Simple family finds it too: boundary marks only suppress zero surfels next to the seam).
 TEST(CollisionRobust, ConcaveBendIntoTheRigidPart) {
-  const double spacing = 0.04;
-  auto plank = make_box(Vec3(1.0, 0.3, 0.1));
-  const SampledSurfels s = plank->sample(SampleParams{spacing, 1, 0.25});
-  std::vector<Region> regions;
-  for (Index r = 0; r < s.positions.rows(); ++r) {
-    const double x = s.positions(r, 0);
-    regions.push_back(x < 0.0 ? Region::Zero : x > 0.3 ? Region::One : Region::Blend);
-  }
+  const testing::ConcaveFold fold;
+  const double spacing = fold.spacing;
+  const SampledSurfels& s = fold.s;
+  const std::vector<Region>& regions = fold.regions;
   auto rigid = make_box(Vec3(0.5, 0.3, 0.1), Pose{Mat3::Identity(), Vec3(-0.5, 0, 0)});
-  const DeformationFields fields = compute_fields(s.positions, regions, 1);
-  const int steps = 10;
+  const int steps = fold.steps;
   for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Improved, CollisionAlgorithm::Temporal,
                  CollisionAlgorithm::Robust}) {
     Points pos = s.positions, nrm = s.normals;
@@ -120,12 +106,7 @@ TEST(CollisionRobust, ConcaveBendIntoTheRigidPart) {
     Score last;
     for (int k = 0; k < steps; ++k) {
       const Points previous = pos;
-      DeformParams p;
-      p.angle = M_PI / steps;
-      p.axis = Vec3::UnitY();
-      p.center = Vec3(0.0, 0.0, 0.05);
-      p.blend = Blend::Linear;
-      apply_step(fields, p, pos, nrm);
+      fold.bend(pos, nrm);
       const CollisionResult got = det->detect(CollisionScene{pos, nrm, s.radii, regions}, previous);
       // Truth: inside the rigid half, leaving out a band of two spacings around the seam and the
       // surfels lying on the rigid half's surface (|sdf| below half a spacing).

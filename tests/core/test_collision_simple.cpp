@@ -7,16 +7,7 @@
 namespace surfeledit {
 namespace {
 
-using testing::run_against_oracle;
-using testing::slab_and_sphere;
-using testing::slab_script;
-
-CollisionParams params_of(CollisionAlgorithm a, int threads = 1) {
-  CollisionParams p;
-  p.algorithm = a;
-  p.threads = threads;
-  return p;
-}
+using namespace testing;
 
 TEST(CollisionSimple, EqualsOracleEveryStep) {
   for (bool boundary : {true, false}) {

@@ -1,4 +1,4 @@
-// Collision detection: algorithm names, parameter validation, the detector factory, and the
+// Collision detection: algorithm names, parameter validation, the detector factories, and the
 // pieces the detectors share (zero-region copy with boundary marks, the §4.1 test).
 #include "surfeledit/core/collision.hpp"
 
@@ -8,13 +8,16 @@
 #include <cmath>
 #include <sstream>
 
+#include "collision/improved_sweep.hpp"
+#include "collision/robust_kernel.hpp"
+#include "collision/row_detector.hpp"
+#include "collision/temporal_kernel.hpp"
 #include "collision_detail.hpp"
+#include "surfeledit/core/settings.hpp"
+#include "surfeledit/core/simplify/approximate_detector.hpp"
 
 namespace surfeledit {
 
-using detail::make_robust_detector;
-using detail::make_simple_detector;
-using detail::make_temporal_detector;
 
 void validate(const CollisionParams& p) {
   switch (p.algorithm) {
@@ -59,14 +62,8 @@ std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionPara
                                                              const HierarchyParams& hierarchy) {
   validate(params);
   validate(hierarchy, params);
-  std::unique_ptr<detail::NarrowDetector> narrow;
-  switch (params.algorithm) {
-    case CollisionAlgorithm::None: return nullptr;
-    case CollisionAlgorithm::Simple: narrow = make_simple_detector(params, false); break;
-    case CollisionAlgorithm::Improved: narrow = make_simple_detector(params, true); break;
-    case CollisionAlgorithm::Temporal: narrow = make_temporal_detector(params); break;
-    case CollisionAlgorithm::Robust: narrow = make_robust_detector(params); break;
-  }
+  if (params.algorithm == CollisionAlgorithm::None) return nullptr;
+  std::unique_ptr<detail::NarrowDetector> narrow = detail::make_narrow_detector(params);
   if (!hierarchy.any()) return narrow;
   return detail::make_hierarchical_detector(params, hierarchy, std::move(narrow));
 }
@@ -79,7 +76,30 @@ bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 
 HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
 
+std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings) {
+  SimplifyParams clusters = settings.simplify;
+  clusters.threads = settings.collision.threads;
+  // Clusters of the deformable region: approximate detection.
+  if (clusters.method != SimplifyMethod::None && settings.collision.algorithm != CollisionAlgorithm::None) {
+    return make_approximate_detector(settings.collision, clusters);
+  }
+  HierarchyParams hierarchy = settings.hierarchy;
+  hierarchy.clusters = clusters;  // leaves of sphere cluster trees (unused by the other kinds)
+  return CollisionDetector::create(settings.collision, hierarchy);
+}
+
 namespace detail {
+
+std::unique_ptr<NarrowDetector> make_narrow_detector(const CollisionParams& params) {
+  switch (params.algorithm) {
+    case CollisionAlgorithm::Simple: return std::make_unique<RowDetector<SimpleKernel>>(params);
+    case CollisionAlgorithm::Improved: return std::make_unique<RowDetector<SimpleKernel, ImprovedSweep>>(params);
+    case CollisionAlgorithm::Temporal: return std::make_unique<RowDetector<TemporalKernel>>(params);
+    case CollisionAlgorithm::Robust: return std::make_unique<RowDetector<RobustKernel>>(params);
+    case CollisionAlgorithm::None: break;
+  }
+  throw Error(ErrorCode::Internal, "algorithm", "no detector for algorithm none");
+}
 
 void require_scene_rows(const CollisionScene& scene, Index rows, const char* what) {
   const Eigen::Index n = rows;
@@ -100,28 +120,6 @@ void split_rows(const CollisionScene& scene, IndexList& deformable, IndexList& z
     (scene.regions[r] == Region::Zero ? zero : deformable).push_back(static_cast<Index>(r));
 }
 
-void split_spheres(const Points& positions, const IndexList& parents, Index first_child, Points& center,
-                   Values& rho2) {
-  for (std::size_t k = 0; k < parents.size(); ++k) {
-    const Index q = parents[k], b = first_child + static_cast<Index>(k);
-    const Vec3 pb = row3(positions, b);
-    if ((pb - row3(center, q)).squaredNorm() < rho2[q]) {
-      center.row(b) = center.row(q);
-      rho2[b] = rho2[q];
-    } else {
-      center.row(b) = pb.transpose();
-      rho2[b] = 0.0;
-    }
-  }
-  for (Index q : parents) {
-    const Vec3 pa = row3(positions, q);
-    if (!((pa - row3(center, q)).squaredNorm() < rho2[q])) {
-      center.row(q) = pa.transpose();
-      rho2[q] = 0.0;
-    }
-  }
-}
-
 IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const IndexList& new_row) {
   IndexList out;
   out.reserve(rows.size());
@@ -138,16 +136,6 @@ void require_deformable_parents(const CollisionScene& scene, Index rows, const I
       throw Error(ErrorCode::InvalidArgument, "parents", "inserted surfels must be split from deformable rows");
     }
   }
-}
-
-void append_row(Points& a, const Vec3& v) {
-  a.conservativeResize(a.rows() + 1, 3);
-  a.row(a.rows() - 1) = v.transpose();
-}
-
-void append_value(Values& a, double v) {
-  a.conservativeResize(a.size() + 1);
-  a[a.size() - 1] = v;
 }
 
 void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, double eps) {

@@ -1,4 +1,4 @@
-// Collision detection with bounding volume hierarchies (ALGORITHMS.md §5, thesis ch. 7-8): a broad
+// Collision detection with bounding volume hierarchies (docs/algorithms.md §5, thesis ch. 7-8): a broad
 // phase over a zero tree (AABB, OBB or sphere boxes, one std::visit per step) and optionally a
 // deformable AABB tree, in front of the configured algorithm's narrow test (collision_detail.hpp:
 // NarrowDetector, the same code as without a hierarchy) or of the extended narrow phase.
@@ -13,10 +13,10 @@
 // which is the step bound of §4.1, so Simple leaves its state unchanged -- the same colliding set
 // as without a hierarchy, by construction. Temporal needs the nearest zero distance of every surfel
 // that leaves its sphere anyway (for the next sphere), so it ignores the candidates and is exactly
-// Temporal. Robust has no step bound; a non-candidate did
-// not come within its step of the zero surface, so its parity cannot have changed by crossing it (its
-// inside state is re-derived once it is a candidate again, see collision_robust.cpp); the tests check
-// the equality on every step of the scenario scenes.
+// Temporal. Robust has no step bound; a non-candidate did not come within its step of the zero
+// surface, so its parity cannot have changed by crossing it (its inside state is re-derived once it
+// is a candidate again, see RobustKernel::not_candidate in collision/robust_kernel.hpp); the tests
+// check the equality on every step of the scenario scenes.
 //
 // Rebuild on idle (thesis §8.3.3): start_rebuild() builds a fresh deformable tree on a background
 // thread (bvh::BvhRebuilder); detect() adopts it at its start when it is finished and the rows were

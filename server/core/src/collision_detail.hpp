@@ -1,4 +1,5 @@
-// Internal pieces shared by the collision detectors (not a public header).
+// Internal pieces shared by the collision detectors (not a public header). The per-point kernels and
+// the detector that drives them over rows live in collision/ (kernel.hpp, row_detector.hpp).
 #pragma once
 
 #include <chrono>
@@ -18,7 +19,7 @@ class NarrowDetector : public CollisionDetector {
  public:
   // detect() where only rows with candidate[r] != 0 are tested (`candidate`: one flag per row;
   // nullptr = every row). The other deformable rows keep their collision state; what happens to
-  // their spheres is documented by each detector.
+  // their spheres is each kernel's not_candidate() (collision/kernel.hpp).
   virtual CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
                                             const std::vector<std::uint8_t>* candidate) = 0;
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
@@ -29,10 +30,9 @@ class NarrowDetector : public CollisionDetector {
   using CollisionDetector::CollisionDetector;
 };
 
-// Defined in collision_simple.cpp, collision_temporal.cpp, collision_robust.cpp.
-std::unique_ptr<NarrowDetector> make_simple_detector(const CollisionParams& params, bool improved);
-std::unique_ptr<NarrowDetector> make_temporal_detector(const CollisionParams& params);
-std::unique_ptr<NarrowDetector> make_robust_detector(const CollisionParams& params);
+// Defined in collision.cpp: the row detector (collision/row_detector.hpp) of `params.algorithm`'s kernel
+// (not None).
+std::unique_ptr<NarrowDetector> make_narrow_detector(const CollisionParams& params);
 // Defined in collision_bvh.cpp: `narrow` behind the broad phase of `hierarchy` (validated by the caller).
 std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionParams& params,
                                                               const HierarchyParams& hierarchy,
@@ -52,9 +52,6 @@ IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const
 // Checks the rows appended after `rows` existing ones: each split from a deformable parent row and
 // deformable itself; InvalidArgument ("parents") otherwise.
 void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
-
-void append_row(Points& a, const Vec3& v);
-void append_value(Values& a, double v);
 
 // Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact).
 inline KdTreeParams nearest_tree_params(double eps) {
@@ -116,13 +113,6 @@ inline double sphere_rho2(double dist2, double radius, double margin) {
   const double rho = std::sqrt(dist2) - margin * radius;
   return rho > 0.0 ? rho * rho : 0.0;
 }
-
-// The spheres of split surfels (§4.4, thesis §6.5): rows first_child + k were split from parents[k].
-// A child B takes its parent's sphere when it lies inside it, else an empty sphere (tested at the
-// next step); the parent row (child A) keeps its sphere only when it still lies inside it.
-// `center` (#P by 3) and `rho2` (#P) already have rows for the children.
-void split_spheres(const Points& positions, const IndexList& parents, Index first_child, Points& center,
-                   Values& rho2);
 
 // One evaluation of the §4.1 test for deformable surfel s1 at p1 against zero surfel k.
 struct SimpleTest {

@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "surfeledit/core/resampling.hpp"
-#include "surfeledit/core/simplify/approximate_detector.hpp"
 #include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
@@ -17,20 +16,10 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
 }
 
-// A detector for `settings` reset from the model as it is now (nullptr for algorithm none); it
-// builds only the trees the settings ask for.
-std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings, const SurfelModel& m,
-                                                 const DeformationFields& f) {
-  std::unique_ptr<CollisionDetector> d;
-  SimplifyParams clusters = settings.simplify;
-  clusters.threads = settings.collision.threads;
-  if (clusters.method != SimplifyMethod::None && settings.collision.algorithm != CollisionAlgorithm::None) {
-    d = make_approximate_detector(settings.collision, clusters);  // clusters of the deformable region
-  } else {
-    HierarchyParams h = settings.hierarchy;
-    h.clusters = clusters;  // leaves of sphere cluster trees (unused by the other kinds)
-    d = CollisionDetector::create(settings.collision, h);
-  }
+// The detector for `settings` (make_detector), reset from the model as it is now.
+std::unique_ptr<CollisionDetector> reset_detector(const SessionSettings& settings, const SurfelModel& m,
+                                                  const DeformationFields& f) {
+  std::unique_ptr<CollisionDetector> d = make_detector(settings);
   if (d) d->reset(scene_of(m, f));
   return d;
 }
@@ -101,7 +90,7 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
     r = Region::One;
   }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
-  std::unique_ptr<CollisionDetector> detector = make_detector(settings_, model_, *fields);
+  std::unique_ptr<CollisionDetector> detector = reset_detector(settings_, model_, *fields);
   fields_ = std::move(fields);
   detector_ = std::move(detector);
   colliding_.clear();
@@ -188,7 +177,7 @@ StepResult EditSession::deform(const DeformParams& params) {
 void EditSession::configure(const std::vector<NamedSetting>& changes) {
   const SessionSettings next = apply_settings(settings_, changes);
   std::unique_ptr<CollisionDetector> detector;
-  if (fields_ && !model_.empty()) detector = make_detector(next, model_, *fields_);
+  if (fields_ && !model_.empty()) detector = reset_detector(next, model_, *fields_);
   settings_ = next;
   detector_ = std::move(detector);
   colliding_.clear();

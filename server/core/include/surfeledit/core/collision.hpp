@@ -1,5 +1,5 @@
 // Collision detection between the deformable part of a model and its zero region (§4 of
-// ALGORITHMS.md; thesis ch. 6): four algorithms behind one interface.
+// docs/algorithms.md; thesis ch. 6): four algorithms behind one interface.
 //
 // A deformable surfel s1 (position p1) with nearest reference surfel s2 (p2, normal n2) is
 // *inside* when (p1 - p2) . n2 < W (strict; W = `threshold`, 0 by default). The reference set is
@@ -92,6 +92,8 @@ struct HierarchyInfo {
   Index rebuilds_adopted = 0;      // background rebuilds swapped in since the last reset
 };
 
+struct SessionSettings;
+
 class CollisionDetector {
  public:
   // A detector for `params.algorithm` (nullptr for None). Validates params (and `hierarchy`); with
@@ -131,5 +133,11 @@ class CollisionDetector {
   explicit CollisionDetector(CollisionParams params) : params_(params) {}
   CollisionParams params_;
 };
+
+// The detector `settings` ask for, not yet reset (nullptr for algorithm none): the approximate
+// detector on clusters when settings.simplify.method != None (simplify/approximate_detector.hpp),
+// else CollisionDetector::create(settings.collision, settings.hierarchy). The collision thread count
+// also drives the clustering, whose parameters also shape sphere cluster trees. Validates.
+std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings);
 
 }  // namespace surfeledit

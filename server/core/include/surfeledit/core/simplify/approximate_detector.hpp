@@ -1,4 +1,4 @@
-// Approximate collision detection on the simplified deformable region (ALGORITHMS.md §6, thesis §9.3).
+// Approximate collision detection on the simplified deformable region (docs/algorithms.md §6, thesis §9.3).
 //
 // The deformable surfels are clustered once at reset (SimplifyParams). Each step, every cluster's
 // simplified surfel is rebuilt from its members' current positions (centroid; radius covering their

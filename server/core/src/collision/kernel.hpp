@@ -1,0 +1,134 @@
+// The per-point kernel contract of the collision detectors (internal header).
+//
+// An algorithm (Simple §4.1, Temporal §4.3, Robust §4.4 of docs/algorithms.md; thesis ch. 6) is a
+// *kernel*: the state one tested point carries from step to step, and what one step does to it. The
+// row detector (row_detector.hpp) drives a kernel over the deformable rows of a model, behind a
+// hierarchy's broad phase or not; the simplified detector (collision_simplified.cpp) drives the same
+// kernel over its tested points (original surfels and cluster surfels). A kernel never loops over
+// rows and never touches threads: it is called once per point, from any thread, concurrently for
+// different points. The contract, as code (every kernel provides exactly this):
+//
+//   struct Kernel {
+//     // Per tested point; a default-constructed State is "not colliding, empty sphere".
+//     struct State {
+//       bool colliding() const;  // colliding after the last evaluation
+//     };
+//     // Depth estimate (model units, >= 0) of a point colliding after this step's update, now at p.
+//     double depth(const State& s, const Vec3& p) const;
+//     static constexpr bool kSeeded;  // init() needs the nearest zero surfel of the point
+//     static constexpr int kChunk;    // OpenMP dynamic chunk of the row loop (rows per task)
+//
+//     explicit Kernel(const CollisionParams& params);
+//     // Builds the references (zero set, original model) from the model as it is now.
+//     void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
+//                int threads);
+//     // Row detector: the initial states of the deformable rows (`states` has #P entries).
+//     void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
+//               int threads, std::vector<State>& states) const;
+//     // The state right after reset of a point at p whose nearest zero surfel is `zero`.
+//     State init(const Vec3& p, const NearestZero& zero) const;
+//     // One step for a tested point. Returns the nearest-neighbour queries made (> 0: it was tested).
+//     Index update(State& s, const TestPoint& pt) const;
+//     // One step for a point the broad phase ruled out (no zero surfel within its step). Returns
+//     // the queries made.
+//     Index not_candidate(State& s, const TestPoint& pt) const;
+//     // A point not tested this step because its cluster is inactive (it keeps "not colliding").
+//     void skip(State& s) const;
+//     // The state of a child split from `parent`, the child at p (§4.4, thesis §6.5); then the
+//     // parent's own state once it sits at p. Called through split_states() (children first).
+//     State child(const State& parent, const Vec3& p) const;
+//     void keep_parent(State& parent, const Vec3& p) const;
+//     // Rows removed (`keep` per old row, `new_row` from remap_rows) / `added` rows appended.
+//     void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
+//     void on_inserted(Index added);
+//     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
+//     const ZeroSet* zero_set() const;
+//     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
+//   };
+#pragma once
+
+#include <vector>
+
+#include "../collision_detail.hpp"
+
+namespace surfeledit::detail {
+
+// One tested point of a step: a deformable surfel or a cluster's simplified surfel. Radius and
+// previous position are read through pointers, only by a point that is tested (most are skipped).
+struct TestPoint {
+  Vec3 p;                        // position now
+  const double* r = nullptr;     // -> disc radius (model units)
+  const double* prev = nullptr;  // -> position before the step (3 doubles, for the step bound)
+
+  double radius() const { return *r; }
+  Vec3 previous() const { return Vec3(prev[0], prev[1], prev[2]); }
+};
+
+// The TestPoint of row r of a step (`previous`: #P by 3, row-major).
+inline TestPoint row_point(const CollisionScene& scene, const Points& previous, Index r) {
+  return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0)};
+}
+
+// The zero surfel nearest to a point, as init() needs it.
+struct NearestZero {
+  double dist2 = 0.0;   // squared distance to it
+  double radius = 0.0;  // its disc radius
+};
+
+// A temporal-coherence sphere (c, rho2): it holds no reference surfel, so a point strictly inside it
+// keeps its state.
+struct Sphere {
+  Vec3 center = Vec3::Zero();  // c
+  double rho2 = 0.0;           // squared radius; 0 = empty (the point is tested at its next step)
+
+  bool contains(const Vec3& p) const { return (p - center).squaredNorm() < rho2; }
+  // Keeps the sphere when it still contains p, else empties it at p.
+  void keep_if_contains(const Vec3& p) {
+    if (contains(p)) return;
+    center = p;
+    rho2 = 0.0;
+  }
+};
+
+// The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p)` gives
+// the NearestZero of p.
+template <typename Kernel, typename Nearest>
+void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads,
+                 Nearest nearest, std::vector<typename Kernel::State>& states) {
+  const Index n = static_cast<Index>(rows.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (Index q = 0; q < n; ++q) {
+    const Index r = rows[q];
+    const Vec3 p = row3(positions, r);
+    states[r] = kernel.init(p, nearest(p));
+  }
+}
+
+// The NearestZero of p in `zero`.
+inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
+  const Index k = zero.nearest(p);
+  return {(p - row3(zero.positions, k)).squaredNorm(), zero.radii[k]};
+}
+
+// Appends the states of split surfels: rows first_child + k were split from parents[k] (all children
+// first, from their parent's state before the split; then the parents).
+template <typename Kernel>
+void split_states(const Kernel& kernel, const Points& positions, const IndexList& parents,
+                  std::vector<typename Kernel::State>& states) {
+  const Index first_child = static_cast<Index>(states.size());
+  for (std::size_t k = 0; k < parents.size(); ++k)
+    states.push_back(kernel.child(states[parents[k]], row3(positions, first_child + static_cast<Index>(k))));
+  for (Index q : parents) kernel.keep_parent(states[q], row3(positions, q));
+}
+
+// Sphere-carrying kernels split alike: a child inside its parent's sphere takes the parent's state,
+// sphere included; otherwise the parent's state with an empty sphere at the child. The parent keeps
+// its sphere only while it lies inside it.
+template <typename State>
+State split_child(const State& parent, const Vec3& p) {
+  State child = parent;
+  child.sphere.keep_if_contains(p);
+  return child;
+}
+
+}  // namespace surfeledit::detail

@@ -1,0 +1,127 @@
+// Robust Algo as a kernel (§4.4 of docs/algorithms.md, thesis §6.3, Code 6.8): points are classified
+// against the ORIGINAL whole model (a frozen snapshot taken at reset: zero surfels plus the deformable
+// ones at their positions then, k-d tree built once). A change of that inside state counts as a
+// collision change only when the nearest original surfel is a zero surfel; a point collides iff its
+// state changed an odd number of times (Def. 4.3). Each point keeps a sphere (c, rho2) and is only
+// re-tested once it leaves it. Depth (Eq. 6.4): rho - |p - c|.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel.hpp"
+
+namespace surfeledit::detail {
+
+class RobustKernel {
+ public:
+  static constexpr std::uint8_t kInside = 1;       // inside the original model at the last test
+  static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
+  static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at old_position
+
+  // One cache line per point: the row sweep touches every state every step.
+  struct alignas(64) State {
+    Sphere sphere;                     // holds no original surfel
+    Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
+    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate
+    bool colliding() const { return (flags & kColliding) != 0; }
+  };
+  static constexpr bool kSeeded = true;
+  static constexpr int kChunk = 512;
+
+  explicit RobustKernel(const CollisionParams& params) : params_(params) {}
+
+  // Takes the snapshot of the model as it is now. Throws InvalidArgument when there are no zero rows.
+  void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
+  // Spheres start with the distance to the nearest zero surfel (a temporary tree over the zero rows).
+  void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads,
+            std::vector<State>& states) const;
+  State init(const Vec3& p, const NearestZero& z) const {
+    State s;
+    s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
+    s.old_position = p;
+    s.flags = kFirstUpdate;
+    return s;
+  }
+  // rho - |p - c| (Eq. 6.4), p being where the point was at its update this step.
+  double depth(const State& s, const Vec3& p) const {
+    return std::max(0.0, std::sqrt(s.sphere.rho2) - (p - s.sphere.center).norm());
+  }
+  Index update(State& s, const TestPoint& pt) const {
+    Index made = 0;
+    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p);
+    finish(s, pt.p);
+    return made;
+  }
+  // Not a candidate: it keeps its collision state. If it left its sphere and does not collide, its
+  // inside state is forgotten (re-derived at its previous position when it is tested next) and its
+  // sphere emptied, so that it is tested as soon as it is a candidate again; a colliding one keeps
+  // everything (it is still inside, farther than its step from the zero surface).
+  Index not_candidate(State& s, const TestPoint& pt) const {
+    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2 && !(s.flags & kColliding)) {
+      s.flags |= kFirstUpdate;
+      s.sphere = {pt.p, 0.0};
+    }
+    finish(s, pt.p);
+    return 0;
+  }
+  // Its inside state may go stale while it is not tested, so its next test re-derives it from
+  // old_position (the last position at which it was found not colliding), as after a reset: the
+  // parity then compares that position with the new one, across the untested steps.
+  void skip(State& s) const { s.flags |= kFirstUpdate; }
+  // Child: the parent's state (inside, colliding, first update, old position) and the sphere rule.
+  State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
+  void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
+
+  // A removed zero surfel leaves the original model too (the rigid part no longer has it); removed
+  // deformable surfels stay in it (they still describe the undeformed shape).
+  void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
+  void on_inserted(Index added) { orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1); }
+  const ZeroSet* zero_set() const { return nullptr; }
+  std::size_t memory_bytes() const;
+
+ private:
+  // The original model, frozen at reset (#O rows = rows at reset).
+  struct Snapshot {
+    Points positions;                 // #O by 3
+    Points normals;                   // #O by 3
+    Values radii;                     // #O
+    std::vector<std::uint8_t> zero;   // #O: 1 = zero surfel
+    std::vector<std::uint8_t> alive;  // #O: 0 once a zero surfel was removed from the model
+    std::unique_ptr<KdTree> tree;     // over the alive rows of `positions`
+  };
+
+  // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
+  // of it against a zero surfel, re-centres the sphere. Returns the queries made.
+  Index test(State& s, const Vec3& p1) const {
+    Index made = 0;
+    const double w = params_.threshold;
+    if (s.flags & kFirstUpdate) {
+      s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
+      const Index k = orig_.tree->nearest(s.old_position);
+      ++made;
+      set_inside(s, (s.old_position - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < w);
+    }
+    const Index k = orig_.tree->nearest(p1);
+    ++made;
+    const Vec3 d = p1 - row3(orig_.positions, k);
+    s.sphere = {p1, sphere_rho2(d.squaredNorm(), orig_.radii[k], params_.sphere_margin)};
+    const bool inside_now = d.dot(row3(orig_.normals, k)) < w;
+    if (orig_.zero[k] && inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    set_inside(s, inside_now);
+    return made;
+  }
+  // End of every step: the position of a point that does not collide is the last non-colliding one.
+  static void finish(State& s, const Vec3& p1) {
+    if (!(s.flags & kColliding)) s.old_position = p1;
+  }
+  static void set_inside(State& s, bool in) {
+    s.flags = in ? (s.flags | kInside) : (s.flags & static_cast<std::uint8_t>(~kInside));
+  }
+
+  CollisionParams params_;
+  Snapshot orig_;
+  IndexList orig_of_row_;  // #P: row of the original model, -1 for inserted rows
+};
+
+}  // namespace surfeledit::detail

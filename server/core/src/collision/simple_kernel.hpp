@@ -1,0 +1,69 @@
+// Simple Algo as a kernel (§4.1 of docs/algorithms.md, thesis Code 6.1): every step a tested point
+// queries its nearest zero surfel and is tested with the §4.1 heuristics (boundary marks, per-point
+// step bound). Depth of a colliding point: its distance |d| to that zero surfel (Eq. 6.4).
+// Also the zero-region reference that Simple and Temporal share (ZeroSetKernel).
+#pragma once
+
+#include <cmath>
+
+#include "kernel.hpp"
+
+namespace surfeledit::detail {
+
+// The reference of the kernels that test against the zero region: its copy, k-d tree and boundary
+// marks (ZeroSet), rebuilt at reset and kept in step with removals.
+class ZeroSetKernel {
+ public:
+  explicit ZeroSetKernel(const CollisionParams& params) : params_(params) {}
+
+  // Copies the zero rows and builds their tree; marks the boundary surfels when params.boundary.
+  void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
+  void on_removed(const std::vector<bool>& keep, const IndexList& new_row) { zero_.on_removed(keep, new_row); }
+  void on_inserted(Index /*added*/) {}
+  const ZeroSet* zero_set() const { return &zero_; }
+  std::size_t memory_bytes() const { return zero_.memory_bytes(); }
+
+ protected:
+  // The §4.1 test of a point against its nearest zero surfel k (`previous_state`: before the step).
+  SimpleTest test(Index k, const TestPoint& pt, bool previous_state) const {
+    return simple_test(params_, zero_, k, pt.p, pt.radius(), pt.previous(), previous_state);
+  }
+
+  CollisionParams params_;
+  ZeroSet zero_;
+};
+
+class SimpleKernel : public ZeroSetKernel {
+ public:
+  struct State {
+    double depth = 0.0;     // |d| at the last test (model units)
+    std::uint8_t hit = 0;   // colliding
+    bool colliding() const { return hit != 0; }
+  };
+  static constexpr bool kSeeded = false;  // nothing to measure at reset
+  static constexpr int kChunk = 256;
+
+  using ZeroSetKernel::ZeroSetKernel;
+
+  void seed(const CollisionScene&, const IndexList&, const IndexList&, int, std::vector<State>&) const {}
+  State init(const Vec3&, const NearestZero&) const { return {}; }
+  double depth(const State& s, const Vec3&) const { return s.depth; }
+  // One §4.1 test of s; returns it (Improved's sweep needs |d|^2).
+  SimpleTest test(State& s, const TestPoint& pt) const {
+    const SimpleTest t = ZeroSetKernel::test(zero_.nearest(pt.p), pt, s.colliding());
+    s.hit = t.state;
+    s.depth = std::sqrt(t.dist2);
+    return t;
+  }
+  Index update(State& s, const TestPoint& pt) const {
+    test(s, pt);
+    return 1;
+  }
+  // No zero surfel within the point's step: the step bound keeps its state and depth.
+  Index not_candidate(State&, const TestPoint&) const { return 0; }
+  void skip(State&) const {}
+  State child(const State& parent, const Vec3&) const { return parent; }
+  void keep_parent(State&, const Vec3&) const {}
+};
+
+}  // namespace surfeledit::detail

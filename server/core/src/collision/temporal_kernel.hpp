@@ -1,0 +1,60 @@
+// Temporal Coherence Algo as a kernel (§4.3 of docs/algorithms.md, thesis §6.2): each point keeps a
+// sphere (c, rho2) that holds no zero surfel; while the point stays strictly inside it its state
+// cannot have changed and it is skipped. Otherwise it queries its nearest zero surfel, re-centres the
+// sphere (c = p, rho2 from |d| and the sphere margin) and is tested with the §4.1 heuristics.
+// Depth (Eq. 6.4): rho - |p - c| while skipped, |d| when tested.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "simple_kernel.hpp"
+
+namespace surfeledit::detail {
+
+class TemporalKernel : public ZeroSetKernel {
+ public:
+  struct State {
+    Sphere sphere;          // holds no zero surfel
+    double depth = 0.0;     // depth estimate of the last evaluation (model units)
+    std::uint8_t hit = 0;   // colliding
+    bool colliding() const { return hit != 0; }
+  };
+  static constexpr bool kSeeded = true;
+  static constexpr int kChunk = 512;
+
+  using ZeroSetKernel::ZeroSetKernel;
+
+  void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
+            std::vector<State>& states) const {
+    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p) { return nearest_zero(zero_, p); },
+                states);
+  }
+  State init(const Vec3& p, const NearestZero& z) const {
+    State s;
+    s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
+    return s;
+  }
+  double depth(const State& s, const Vec3&) const { return s.depth; }
+  Index update(State& s, const TestPoint& pt) const {
+    const double moved2 = (pt.p - s.sphere.center).squaredNorm();
+    if (moved2 < s.sphere.rho2) {
+      if (s.colliding()) s.depth = std::max(0.0, std::sqrt(s.sphere.rho2) - std::sqrt(moved2));
+      return 0;
+    }
+    const Index k = zero_.nearest(pt.p);
+    const SimpleTest t = test(k, pt, s.colliding());
+    s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};
+    s.hit = t.state;
+    s.depth = std::sqrt(t.dist2);
+    return 1;
+  }
+  // A point that leaves its sphere needs its nearest zero distance for its next sphere whether or not
+  // the broad phase ruled it out (the step bound then keeps its state): Temporal ignores candidates.
+  Index not_candidate(State& s, const TestPoint& pt) const { return update(s, pt); }
+  void skip(State&) const {}
+  State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
+  void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
+};
+
+}  // namespace surfeledit::detail
