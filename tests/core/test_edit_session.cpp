@@ -61,12 +61,12 @@ TEST(EditSession, BuildsFieldsOnlyWhenRegionsAreSet) {
     for (const auto& s : f.session.report().structures) n.push_back(s.name);
     return n;
   };
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "history"}));  // issue 9: the history is listed last
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   // The default settings run the Robust detector once regions are set.
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust", "history"}));
   f.session.configure({{"algorithm", std::string("none")}});
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "history"}));
   const SessionReport r = f.session.report();
   EXPECT_GT(r.bytes_per_surfel, 0.0);
   EXPECT_EQ(r.surfels, static_cast<Index>(f.s.part.size()));

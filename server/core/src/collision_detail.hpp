@@ -68,7 +68,7 @@ struct ZeroSet {
   Values radii;                      // #Z
   std::vector<std::uint8_t> marked;  // #Z: 1 = boundary surfel
   IndexList rows;                    // #Z: row in the model
-  std::unique_ptr<KdTree> tree;      // over `positions`
+  std::shared_ptr<const KdTree> tree;  // over `positions`; immutable once built, shared by copies
   double knn_eps = 0.0;              // approximate search of `tree` (CollisionParams::knn_eps)
 
   // Copies the zero rows of `scene` and builds the tree (approximate search `eps`). Throws

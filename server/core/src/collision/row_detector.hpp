@@ -93,6 +93,31 @@ class RowDetector final : public NarrowDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override { rows_.on_inserted(scene, parents); }
   std::size_t memory_bytes() const override { return rows_.memory_bytes() + hit_.capacity(); }
 
+  // A step changes only the deformable rows' states and the sweep's tallies (hit_ is scratch); the
+  // kernel's references change at reset, removal and insertion only (clone() copies them; their
+  // trees are immutable and shared).
+  struct Image final : DetectorImage {
+    std::vector<typename Kernel::State> states;  // #deformable, in the order of rows_.deformable
+    Sweep sweep;
+    std::size_t bytes() const override { return states.capacity() * sizeof(typename Kernel::State) + sizeof(*this); }
+  };
+  std::shared_ptr<const DetectorImage> save_image() const override {
+    auto image = std::make_shared<Image>();
+    image->states.reserve(rows_.deformable.size());
+    for (Index r : rows_.deformable) image->states.push_back(rows_.states[r]);
+    image->sweep = sweep_;
+    return image;
+  }
+  void restore_image(const DetectorImage& image) override {
+    const auto* mine = dynamic_cast<const Image*>(&image);
+    if (!mine || mine->states.size() != rows_.deformable.size()) {
+      throw Error(ErrorCode::Internal, "history", "detector image does not fit this detector");
+    }
+    for (std::size_t q = 0; q < mine->states.size(); ++q) rows_.states[rows_.deformable[q]] = mine->states[q];
+    sweep_ = mine->sweep;
+  }
+  std::unique_ptr<CollisionDetector> clone() const override { return std::make_unique<RowDetector>(*this); }
+
  private:
   KernelRows<Kernel> rows_;
   Sweep sweep_;

@@ -94,6 +94,13 @@ struct HierarchyInfo {
 
 struct SessionSettings;
 
+// What one detect() changes in a detector (per-row states, the step's tallies), saved for undo
+// (history.hpp). Opaque; only the detector that saved it reads it.
+struct DetectorImage {
+  virtual ~DetectorImage() = default;
+  virtual std::size_t bytes() const = 0;  // memory held
+};
+
 class CollisionDetector {
  public:
   // A detector for `params.algorithm` (nullptr for None). Validates params (and `hierarchy`); with
@@ -128,6 +135,14 @@ class CollisionDetector {
   virtual bool start_rebuild(const CollisionScene& scene);
   // State of the hierarchies (all empty / zero without one).
   virtual HierarchyInfo hierarchy_info() const;
+
+  // Undo support. save_image(): what detect() may change, nullptr when this detector cannot save it
+  // (hierarchies, approximate detection). restore_image(): puts back an image this detector saved,
+  // with the rows it had then (Internal otherwise). clone(): an independent deep copy whose every
+  // later result equals this one's, nullptr when not supported.
+  virtual std::shared_ptr<const DetectorImage> save_image() const;
+  virtual void restore_image(const DetectorImage& image);
+  virtual std::unique_ptr<CollisionDetector> clone() const;
 
  protected:
   explicit CollisionDetector(CollisionParams params) : params_(params) {}
