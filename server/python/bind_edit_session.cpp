@@ -146,6 +146,7 @@ void bind_edit_session(pyb::module_& m) {
       }, "back-off: iterations, kept (fraction of the step), final_depth (model units)")
       .def_property_readonly("features", [](const StepResult& o) { return ids_array(o.features); })
       .def_readonly("response_ms", &StepResult::response_ms)
+      .def_readonly("history_ms", &StepResult::history_ms, "time of recording the step in the history")
       .def("__repr__", [](const StepResult& o) {
         return "StepResult(seq=" + std::to_string(o.seq) + ", moved=" + std::to_string(o.moved.size()) +
                ", inserted=" + std::to_string(o.inserted.size()) + ", colliding=" + std::to_string(o.colliding.size()) + ")";

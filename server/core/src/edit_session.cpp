@@ -109,16 +109,20 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   validate(params);
   const std::uint64_t version_before = version_;
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image.
+  const auto t_capture = std::chrono::steady_clock::now();
   SessionImage before = settings_.resample.enabled ? capture_whole(true) : capture_rows(fields_->deformable);
+  const double capture_ms = ms_since(t_capture);
   StepResult out;
   step_once(params, out);
   respond(params, before, version_before, out);
+  const auto t_record = std::chrono::steady_clock::now();
   if (out.response != "cancelled") {
     IdList touched;
     touched.reserve(out.moved.size());
     for (Index r : out.moved) touched.push_back(model_.ids()[r]);
     record("deform", author, std::move(touched), std::move(before));
   }
+  out.history_ms = capture_ms + ms_since(t_record);
   return out;
 }
 

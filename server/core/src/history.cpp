@@ -30,7 +30,10 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
   entries_.resize(applied_);
   entries_.push_back(std::move(entry));
   applied_ = entries_.size();
-  recount();
+  recount();  // the dropped redo tail
+  HistoryEntry& e = entries_.back();
+  e.bytes = e.image.bytes();
+  bytes_ += e.bytes;
   trim(limit_bytes);
 }
 
@@ -40,7 +43,7 @@ void History::trim(std::size_t limit_bytes) {
       clear();
       return;
     }
-    bytes_ -= entries_.front().image.bytes();
+    bytes_ -= entries_.front().bytes;
     entries_.pop_front();
     if (applied_ > 0) --applied_;
   }
@@ -68,7 +71,14 @@ std::vector<HistoryItem> History::items() const {
 
 void History::recount() {
   bytes_ = 0;
-  for (const HistoryEntry& e : entries_) bytes_ += e.image.bytes();
+  for (const HistoryEntry& e : entries_) bytes_ += e.bytes;
+}
+
+void History::replace_image(HistoryEntry& entry, SessionImage image) {
+  bytes_ -= entry.bytes;
+  entry.image = std::move(image);
+  entry.bytes = entry.image.bytes();
+  bytes_ += entry.bytes;
 }
 
 }  // namespace surfeledit

@@ -1,6 +1,7 @@
 // EditSession's history: capturing and restoring images of the session, recording entries, undo and
 // redo (history.hpp).
 #include <algorithm>
+#include <cstring>
 #include <unordered_set>
 
 #include "surfeledit/core/edit_session.hpp"
@@ -10,16 +11,21 @@ namespace surfeledit {
 namespace {
 
 // Rows `rows` of `a` (#rows by 3); empty when `a` is empty.
+// (Points are row-major: row r is the 3 doubles at data() + 3 r.)
 Points take_rows(const Points& a, const IndexList& rows) {
   if (a.rows() == 0) return Points();
   Points out(static_cast<Eigen::Index>(rows.size()), 3);
-  for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = a.row(rows[k]);
+  const double* from = a.data();
+  double* to = out.data();
+  for (std::size_t k = 0; k < rows.size(); ++k) std::memcpy(to + 3 * k, from + 3 * rows[k], 3 * sizeof(double));
   return out;
 }
 
 void put_rows(Points& a, const IndexList& rows, const Points& values) {
   if (values.rows() == 0) return;
-  for (std::size_t k = 0; k < rows.size(); ++k) a.row(rows[k]) = values.row(static_cast<Eigen::Index>(k));
+  const double* from = values.data();
+  double* to = a.data();
+  for (std::size_t k = 0; k < rows.size(); ++k) std::memcpy(to + 3 * rows[k], from + 3 * k, 3 * sizeof(double));
 }
 
 }  // namespace
@@ -97,7 +103,7 @@ std::size_t EditSession::history_limit() const {
 }
 
 void EditSession::record(const char* op, const std::string& author, IdList touched, SessionImage before) {
-  std::sort(touched.begin(), touched.end());
+  if (!std::is_sorted(touched.begin(), touched.end())) std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   HistoryEntry e;
   e.item = {version_, op, author, std::move(touched), false};
@@ -114,7 +120,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   SessionImage now = entry.image.rows ? capture_rows(entry.image.rows->rows) : capture_whole(false);
   const IdList ids_before = model_.ids();
   restore(entry.image, false);
-  entry.image = std::move(now);
+  history_.replace_image(entry, std::move(now));
   // The restored rows count as changed now; ids that went away are logged as removed.
   ++version_;
   if (entry.item.op == "load") model_version_ = version_;
@@ -124,7 +130,6 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
     if (touched.count(ids[r])) row_version_[r] = version_;
   for (SurfelId id : ids_before)
     if (model_.row_of(id) < 0) removed_log_.emplace_back(version_, id);
-  history_.recount();
   return version_;
 }
 

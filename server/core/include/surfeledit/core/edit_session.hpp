@@ -68,6 +68,7 @@ struct StepResult {
   BackoffInfo backoff;            // response "backed_off" only
   IdList features;                // feature surfels of a merge (always empty: merge is not offered yet)
   double response_ms = 0.0;       // time of the response (cancel / back-off)
+  double history_ms = 0.0;        // time of recording the step's before-image in the history
 };
 
 // Region selection: explicit ids and/or selectors, merged.

@@ -71,6 +71,7 @@ struct HistoryItem {
 struct HistoryEntry {
   HistoryItem item;
   SessionImage image;  // before the op while applied, after it once undone
+  std::size_t bytes = 0;  // image.bytes(), kept by History
 };
 
 // The entries of one session, oldest first, with the undo cursor and the memory bound.
@@ -90,10 +91,13 @@ class History {
 
   std::vector<HistoryItem> items() const;
   std::size_t bytes() const { return bytes_; }
-  // Recount after an entry's image was swapped.
-  void recount();
+  // Replaces an entry's image (undo / redo swap), keeping the byte count.
+  void replace_image(HistoryEntry& entry, SessionImage image);
 
  private:
+  // Sums the entries' bytes (after entries were dropped).
+  void recount();
+
   std::deque<HistoryEntry> entries_;
   std::size_t applied_ = 0;  // entries_[0, applied_) are applied; the rest is the redo tail
   std::size_t bytes_ = 0;
