@@ -3,23 +3,12 @@
 
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "session_fixture.hpp"
 
 namespace surfeledit {
 namespace {
 
-struct Fixture {
-  SampledSurfels s = make_default_scene().sample(SampleParams{0.08, 1, 0.25});
-  EditSession session{"t"};
-  IdList zero, one;
-  Fixture() {
-    SurfelArrays a;
-    a.positions = s.positions;
-    a.normals = s.normals;
-    a.radii = s.radii;
-    session.load(SurfelModel::from_arrays(a));
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
-  }
-};
+using Fixture = SessionFixture;
 
 TEST(EditSession, VersionsAndChangesSince) {
   Fixture f;

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "surfeledit/core/edit_session.hpp"
-#include "surfeledit/core/scene.hpp"
+#include "session_fixture.hpp"
 
 namespace surfeledit {
 namespace {
@@ -38,20 +38,9 @@ void expect_same(const Snapshot& a, const Snapshot& b, const std::string& where)
   EXPECT_EQ(a.hash, b.hash);
 }
 
-// The default scene (slab + sphere 0.35 above it), sphere deformable.
-struct Fixture {
-  SampledSurfels s = make_default_scene().sample(SampleParams{0.08, 1, 0.25});
-  EditSession session{"h"};
-  IdList zero, one;
-  Fixture() {
-    SurfelArrays a;
-    a.positions = s.positions;
-    a.normals = s.normals;
-    a.radii = s.radii;
-    session.load(SurfelModel::from_arrays(a), "alice");
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
-    session.set_regions({zero, {}}, {one, {}});
-  }
+// The default scene (slab + sphere 0.35 above it) with its regions set, sphere deformable.
+struct Fixture : SessionFixture {
+  Fixture() : SessionFixture("alice") { session.set_regions({zero, {}}, {one, {}}); }
 };
 
 DeformParams down(double dz) {

@@ -11,8 +11,9 @@ import pytest
 
 import surfeledit
 from surfeledit import ConflictError, InvalidArgumentError, LocalSession
+from surfeledit.scenes import SceneSetup
 
-from .conftest import Approach, approach
+from .conftest import approach
 
 STEPS = [dict(translation=(0, 0, -3.0)), dict(translation=(0, 0, -3.0), angle=0.2, axis=(1, 0, 0)),
          dict(translation=(0, 0, -5.0))]  # in spacings
@@ -23,7 +24,7 @@ def steps(h: float):
         yield {**st, "translation": tuple(h * np.asarray(st["translation"]))}
 
 
-def load(session, a: Approach) -> None:
+def load(session, a: SceneSetup) -> None:
     session.load_points(a.positions, a.normals, a.radii)
     session.set_regions(zero=a.zero, one=a.one)
 

@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from surfeledit import ConflictError, InvalidArgumentError, LocalSession
+from surfeledit.scenes import SceneSetup
 
-from .conftest import Approach, approach
+from .conftest import approach
 
 
-def open_session(a: Approach, **settings: object) -> LocalSession:
+def open_session(a: SceneSetup, **settings: object) -> LocalSession:
     s = LocalSession("response")
     s.load_points(a.positions, a.normals, a.radii)
     s.set_regions(zero=a.zero, one=a.one)
@@ -35,7 +36,7 @@ def assert_same(a: tuple, b: tuple) -> None:
     assert a[5] == b[5]
 
 
-def test_cancel_restores_everything_bit_for_bit(plate_and_ball: Approach) -> None:
+def test_cancel_restores_everything_bit_for_bit(plate_and_ball: SceneSetup) -> None:
     s = open_session(plate_and_ball, response="cancel")
     before = snapshot(s)
     version = s.version
@@ -55,7 +56,7 @@ def test_backoff_touches_without_penetrating(offset: float, scale: float, angle:
     s = open_session(a, response="backoff")
     r = s.deform(translation=(0, 0, -8 * h), angle=angle, axis=(1, 0, 0))
     assert r.response == "backed_off"
-    d = a.sdf(s.state().positions[a.one])
+    d = a.truth_sdf(s.state().positions[a.one])
     assert d.min() >= -0.25 * h, f"inside by {-d.min() / h:.3f} spacings"
     assert d.min() <= 1.0 * h, f"over-retreated: closest {d.min() / h:.3f} spacings"
     assert 1 <= r.backoff.iterations <= 20
@@ -65,7 +66,7 @@ def test_backoff_touches_without_penetrating(offset: float, scale: float, angle:
     assert r.backoff.final_depth >= 0.0
 
 
-def test_bad_response_arguments_change_nothing(plate_and_ball: Approach) -> None:
+def test_bad_response_arguments_change_nothing(plate_and_ball: SceneSetup) -> None:
     s = open_session(plate_and_ball)
     settings, before = s.settings(), snapshot(s)
     for bad in ({"response": "merge"}, {"response": "nope"}, {"backoff_epsilon": -1.0},
