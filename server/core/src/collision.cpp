@@ -76,7 +76,12 @@ bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 
 HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
 
-std::shared_ptr<const DetectorImage> CollisionDetector::save_image() const { return nullptr; }
+CollisionResult CollisionDetector::detect_only(const CollisionScene& scene, const Points& previous,
+                                               const std::vector<std::uint8_t>&) {
+  return detect(scene, previous);
+}
+
+std::shared_ptr<const DetectorImage> CollisionDetector::save_image(const IndexList*) const { return nullptr; }
 
 void CollisionDetector::restore_image(const DetectorImage&) {
   throw Error(ErrorCode::Internal, "history", "this detector saves no images");

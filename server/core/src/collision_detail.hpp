@@ -25,6 +25,10 @@ class NarrowDetector : public CollisionDetector {
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
     return detect_candidates(scene, previous, nullptr);
   }
+  CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
+                              const std::vector<std::uint8_t>& candidate) override {
+    return detect_candidates(scene, previous, &candidate);  // the row detector re-tests only the candidates
+  }
 
  protected:
   using CollisionDetector::CollisionDetector;

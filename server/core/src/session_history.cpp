@@ -30,7 +30,7 @@ void put_rows(Points& a, const IndexList& rows, const Points& values) {
 
 }  // namespace
 
-SessionImage EditSession::capture_rows(const IndexList& rows) const {
+SessionImage EditSession::capture_rows(const IndexList& rows, bool subset) const {
   SessionImage image;
   RowsImage r;
   r.rows = rows;
@@ -45,7 +45,7 @@ SessionImage EditSession::capture_rows(const IndexList& rows) const {
   for (Index row : rows) r.row_version.push_back(row_version_[row]);
   image.rows = std::move(r);
   if (detector_) {
-    image.detector = detector_->save_image();
+    image.detector = detector_->save_image(subset ? &rows : nullptr);
     image.complete = image.detector != nullptr;
   }
   image.colliding = colliding_;

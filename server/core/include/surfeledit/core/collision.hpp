@@ -118,6 +118,11 @@ class CollisionDetector {
   // Evaluates the model after a step. `previous`: positions before the step (#P by 3), for each
   // surfel's own displacement t. Zero surfels must not have moved since reset.
   virtual CollisionResult detect(const CollisionScene& scene, const Points& previous) = 0;
+  // detect() re-testing only rows with candidate[r] != 0 (one flag per row); the result lists only
+  // those rows, the others' states are not touched (row detectors). For back-off's re-tests of the
+  // surfels that collided (§7 c). The default ignores `candidate` and runs detect().
+  virtual CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
+                                      const std::vector<std::uint8_t>& candidate);
   // Rows removed from the model: `keep` has one flag per old row; state of kept rows is compacted.
   virtual void on_removed(const std::vector<bool>& keep) = 0;
   // Rows appended to the model (after the existing ones), each split from `parents[k]` (a row
@@ -140,7 +145,8 @@ class CollisionDetector {
   // (hierarchies, approximate detection). restore_image(): puts back an image this detector saved,
   // with the rows it had then (Internal otherwise). clone(): an independent deep copy whose every
   // later result equals this one's, nullptr when not supported.
-  virtual std::shared_ptr<const DetectorImage> save_image() const;
+  // `rows` (ascending deformable rows): save only those (nullptr: every deformable row).
+  virtual std::shared_ptr<const DetectorImage> save_image(const IndexList* rows = nullptr) const;
   virtual void restore_image(const DetectorImage& image);
   virtual std::unique_ptr<CollisionDetector> clone() const;
 

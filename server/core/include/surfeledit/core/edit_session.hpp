@@ -138,7 +138,8 @@ class EditSession {
   void touch_rows(const IndexList& rows);
   // History (session_history.cpp). An image of the rows a step may move (the deformable rows), or of
   // everything (`clone`: the detector is cloned, else the live object is shared).
-  SessionImage capture_rows(const IndexList& rows) const;
+  // `subset`: the detector saves only `rows` too (else every deformable row).
+  SessionImage capture_rows(const IndexList& rows, bool subset = false) const;
   SessionImage capture_whole(bool clone) const;
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
