@@ -168,6 +168,18 @@ TEST(History, MemoryIsBoundedAndReported) {
   EXPECT_TRUE(listed);
 }
 
+TEST(History, StepsBehindAHierarchyCannotBeUndone) {
+  Fixture f;
+  f.session.configure({{"zero_hierarchy", std::string("aabb")}});
+  f.session.deform(down(0.1));
+  try {
+    f.session.undo();
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+  }
+}
+
 TEST(Response, CancelRestoresTheStateBitForBit) {
   Fixture f;
   f.session.configure({{"response", std::string("cancel")}});

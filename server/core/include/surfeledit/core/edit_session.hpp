@@ -58,7 +58,8 @@ struct StepResult {
   IdList inserted;             // ids of surfels inserted by resampling (appended rows)
   Vec3 center = Vec3::Zero();  // rotation centre used
   bool detected = false;       // a collision detector ran
-  IdList colliding;            // colliding surfel ids after the step, ascending
+  IdList colliding;            // colliding surfel ids after the step and its response, ascending (response
+                               // "cancelled": those that would have collided; the session keeps its own)
   std::vector<double> depths;  // per colliding id: penetration depth estimate, model units
   CollisionStats stats;        // of the detector (zeros when none ran)
   double deform_ms = 0.0;      // time of the deformation itself
