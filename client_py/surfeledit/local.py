@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 
 from .arrays import ArrayLike, Vec3Like, readonly
-from .results import Changes, CollisionStats, SettingValue, State, StepResult
+from .results import Backoff, Changes, CollisionStats, HistoryEntry, SettingValue, State, StepResult
 from .session_api import StateArrays, settings_doc
 
 __all__ = ["LocalSession"]
@@ -28,7 +28,8 @@ def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
     colliding = np.asarray(o.colliding, np.uint64)
     depths = np.asarray(o.depths, np.float64)
     inserted = np.asarray(o.inserted, np.uint64)
-    readonly((colliding, depths, inserted))
+    features = np.asarray(o.features, np.uint64)
+    readonly((colliding, depths, inserted, features))
     raw = o.stats
     stats = CollisionStats(**{k: raw[k] for k in _STATS_FIELDS if k in raw})
     timings = {"apply": float(o.deform_ms)}
@@ -39,7 +40,8 @@ def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
     timings["total"] = call_ms
     return StepResult(seq=int(o.seq), version=version, moved=int(o.moved),
                       center=np.asarray(o.center, np.float64).reshape(3), timings=timings, round_trip_ms=call_ms,
-                      detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted)
+                      detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted,
+                      response=str(o.response), backoff=Backoff(**o.backoff), features=features)
 
 
 class LocalSession(StateArrays):
@@ -107,6 +109,20 @@ class LocalSession(StateArrays):
     def remove(self, ids: ArrayLike) -> None:
         """Removes surfels by (K,) integer id."""
         self.core.remove(ids)
+
+    def undo(self) -> int:
+        """Undoes the last change; returns the new version (ConflictError: nothing to undo)."""
+        return int(self.core.undo())
+
+    def redo(self) -> int:
+        """Redoes the last undone change; returns the new version (ConflictError: nothing to redo)."""
+        return int(self.core.redo())
+
+    def history(self) -> List[HistoryEntry]:
+        """The history entries, oldest first."""
+        return [HistoryEntry(version=int(h["version"]), op=str(h["op"]), client=str(h["client"]),
+                             touched=np.asarray(h["touched"], np.uint64), undone=bool(h["undone"]))
+                for h in self.core.history()]
 
     def report(self) -> Dict[str, Any]:
         """``surfels``, ``structures`` {name: bytes}, ``total_bytes``, ``bytes_per_surfel`` and

@@ -14,7 +14,7 @@ import numpy as np
 
 from .arrays import NO_IDS
 
-__all__ = ["CollisionStats", "StepResult", "State", "Changes", "UpdateEvent", "SettingValue", "merge"]
+__all__ = ["CollisionStats", "Backoff", "StepResult", "HistoryEntry", "State", "Changes", "UpdateEvent", "SettingValue", "merge"]
 
 #: A session setting's value: a flag, an integer, a number or a text.
 SettingValue = Union[bool, int, float, str]
@@ -62,6 +62,37 @@ _STATS_FIELDS = tuple(f.name for f in dataclasses.fields(CollisionStats))
 
 
 @dataclasses.dataclass(frozen=True)
+class Backoff:
+    """What a back-off response did (zeros and ``kept=1`` otherwise).
+
+    Attributes:
+        iterations: re-tests made. kept: fraction of the requested step that was kept, in [0, 1].
+        final_depth: largest penetration depth after the response, model units.
+    """
+
+    iterations: int = 0
+    kept: float = 1.0
+    final_depth: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class HistoryEntry:
+    """One entry of a session's edit history.
+
+    Attributes:
+        version: session version after the change. op: ``"load"``, ``"set_regions"``, ``"deform"``,
+        ``"configure"`` or ``"remove"``. client: who made it (``""`` in-process).
+        touched: (K,) uint64 ids changed, inserted or removed, ascending. undone: in the redo tail.
+    """
+
+    version: int
+    op: str
+    client: str
+    touched: np.ndarray
+    undone: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
 class StepResult:
     """The outcome of one deformation step.
 
@@ -78,6 +109,10 @@ class StepResult:
         depths: (C,) float64 penetration depth estimate per colliding id, model units.
         stats: the detector's :class:`CollisionStats` for this step.
         inserted: (I,) uint64 ids of surfels inserted by dynamic resampling in this step.
+        response: the session's response: ``"none"`` (nothing collided), ``"reported"``, ``"cancelled"``
+            (the step was taken back; ``colliding`` lists what would have collided) or ``"backed_off"``.
+        backoff: :class:`Backoff` of a back-off response.
+        features: (F,) uint64 feature surfel ids of a merge (empty: merge is not offered yet).
     """
 
     seq: int
@@ -91,6 +126,9 @@ class StepResult:
     depths: np.ndarray = dataclasses.field(default_factory=_no_values)
     stats: CollisionStats = dataclasses.field(default_factory=CollisionStats)
     inserted: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
+    response: str = "none"
+    backoff: Backoff = dataclasses.field(default_factory=Backoff)
+    features: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,7 +180,7 @@ class UpdateEvent:
 
     Attributes:
         session: session name. version: version after the change.
-        cause: ``"load"``, ``"regions"``, ``"deform"``, ``"remove"`` or ``"close"``.
+        cause: ``"load"``, ``"regions"``, ``"deform"``, ``"remove"``, ``"undo"``, ``"redo"`` or ``"close"``.
         full: a new model (replaces everything the watcher had). step: deform step number (0 otherwise).
         ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64 of the changed surfels
         (for a deform: moved surfels and those inserted by resampling); removed (R,) uint64.

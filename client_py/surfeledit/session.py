@@ -17,7 +17,7 @@ import numpy as np
 from . import errors
 from ._protocol import proto
 from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_surfels, readonly, vec3
-from .results import Changes, CollisionStats, SettingValue, State, StepResult, merge
+from .results import Backoff, Changes, CollisionStats, HistoryEntry, SettingValue, State, StepResult, merge
 from .session_api import StateArrays, settings_doc
 from .watcher import Watcher
 
@@ -66,7 +66,8 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
         raise errors.InternalServerError(
             f"step reply has {depths.size} depths for {colliding.size} colliding ids", "step.depths")
     inserted = np.asarray(step.inserted, dtype=np.uint64)
-    readonly((colliding, depths, inserted))
+    features = np.asarray(step.features, dtype=np.uint64)
+    readonly((colliding, depths, inserted, features))
     st = step.stats
     stats = CollisionStats(deformable=int(st.deformable), tested=int(st.tested), queries=int(st.queries),
                            colliding=int(st.colliding), detect_ms=float(st.detect_ms),
@@ -75,7 +76,10 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
                       center=np.array([step.center.x, step.center.y, step.center.z]),
                       timings={t.name: float(t.ms) for t in reply.timings}, round_trip_ms=round_trip_ms,
                       detected=bool(step.detected), colliding=colliding, depths=depths, stats=stats,
-                      inserted=inserted)
+                      inserted=inserted, response=str(step.response) or "none",
+                      backoff=Backoff(iterations=int(step.backoff_iterations), kept=float(step.backoff_kept),
+                                      final_depth=float(step.backoff_depth)),
+                      features=features)
 
 
 class Session(StateArrays):
@@ -268,6 +272,24 @@ class Session(StateArrays):
             raise errors.InvalidArgumentError("remove needs at least one id", "ids")
         self._request(proto.Op.OP_REMOVE, remove=proto.Remove(ids=id_list))
         return self._info
+
+    # -- history -----------------------------------------------------------------------------
+    def undo(self) -> int:
+        """Undoes the session's last change (any client's; published to watchers with cause
+        ``"undo"``); returns the new version. ConflictError when there is nothing to undo."""
+        return int(self._request(proto.Op.OP_UNDO).version)
+
+    def redo(self) -> int:
+        """Redoes the last undone change (cause ``"redo"``); returns the new version. ConflictError
+        when there is nothing to redo."""
+        return int(self._request(proto.Op.OP_REDO).version)
+
+    def history(self) -> List[HistoryEntry]:
+        """The session's history entries, oldest first (``client`` is the client id that made each)."""
+        reply = self._request(proto.Op.OP_HISTORY)
+        return [HistoryEntry(version=int(h.version), op=str(h.op), client=str(h.client_id),
+                             touched=np.asarray(h.touched, np.uint64), undone=bool(h.undone))
+                for h in reply.history]
 
     # -- state -------------------------------------------------------------------------------
     def _fetch_pages(self, changes_only: bool, since: int) -> Optional[Tuple[int, List["proto.StatePage"]]]:

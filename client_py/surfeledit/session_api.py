@@ -12,12 +12,12 @@ are the typed errors of :mod:`surfeledit.errors` (same class for the same mistak
 
 from __future__ import annotations
 
-from typing import Any, Dict, Optional, Protocol, runtime_checkable
+from typing import Any, Dict, List, Optional, Protocol, runtime_checkable
 
 import numpy as np
 
 from .arrays import ArrayLike, Vec3Like
-from .results import Changes, SettingValue, State, StepResult
+from .results import Changes, HistoryEntry, SettingValue, State, StepResult
 
 __all__ = ["EditingSession", "StateArrays", "settings_doc"]
 
@@ -64,6 +64,20 @@ class EditingSession(Protocol):
 
     def remove(self, ids: ArrayLike) -> object:
         """Removes surfels by (K,) id; the other ids stay (NotFoundError, ConflictError: nothing removed)."""
+        ...
+
+    def undo(self) -> int:
+        """Undoes the session's last change (any client's); returns the new version. The state is then
+        bit for bit the one before it. ConflictError when there is nothing to undo."""
+        ...
+
+    def redo(self) -> int:
+        """Redoes the last undone change; returns the new version. ConflictError when there is none
+        (a change after an undo drops what could be redone)."""
+        ...
+
+    def history(self) -> List[HistoryEntry]:
+        """The session's history, oldest first (undone entries last, flagged)."""
         ...
 
     def report(self) -> Dict[str, Any]:

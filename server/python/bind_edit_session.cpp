@@ -135,6 +135,18 @@ void bind_edit_session(pyb::module_& m) {
       .def_property_readonly("stats", [](const StepResult& o) { return stats_dict(o.stats); })
       .def_readonly("deform_ms", &StepResult::deform_ms)
       .def_readonly("resample_ms", &StepResult::resample_ms)
+      .def_readonly("response", &StepResult::response,
+                    "'none', 'reported', 'cancelled' (colliding: what would have collided) or 'backed_off'")
+      .def_property_readonly("backoff", [](const StepResult& o) {
+        pyb::dict d;
+        d["iterations"] = o.backoff.iterations;
+        d["kept"] = o.backoff.kept;
+        d["final_depth"] = o.backoff.final_depth;
+        return d;
+      }, "back-off: iterations, kept (fraction of the step), final_depth (model units)")
+      .def_property_readonly("features", [](const StepResult& o) { return ids_array(o.features); })
+      .def_readonly("response_ms", &StepResult::response_ms)
+      .def_readonly("history_ms", &StepResult::history_ms, "time of recording the step in the history")
       .def("__repr__", [](const StepResult& o) {
         return "StepResult(seq=" + std::to_string(o.seq) + ", moved=" + std::to_string(o.moved.size()) +
                ", inserted=" + std::to_string(o.inserted.size()) + ", colliding=" + std::to_string(o.colliding.size()) + ")";
@@ -214,6 +226,21 @@ void bind_edit_session(pyb::module_& m) {
             s.remove(list);
           },
           pyb::arg("ids"))
+      .def("undo", [](EditSession& s) { return s.undo(); }, "Undoes the last change; returns the new version")
+      .def("redo", [](EditSession& s) { return s.redo(); }, "Redoes the last undone change; returns the new version")
+      .def("history", [](const EditSession& s) {
+        pyb::list out;
+        for (const HistoryItem& h : s.history()) {
+          pyb::dict d;
+          d["version"] = h.version;
+          d["op"] = h.op;
+          d["client"] = h.author;
+          d["touched"] = ids_array(h.touched);
+          d["undone"] = h.undone;
+          out.append(d);
+        }
+        return out;
+      }, "History entries, oldest first: version, op, client, touched (ids), undone")
       .def_property_readonly("version", &EditSession::version)
       .def_property_readonly("state_hash", &EditSession::state_hash)
       .def("ids", [](const EditSession& s) { return ids_array(s.model().ids()); })

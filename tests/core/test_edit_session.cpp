@@ -3,23 +3,12 @@
 
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "session_fixture.hpp"
 
 namespace surfeledit {
 namespace {
 
-struct Fixture {
-  SampledSurfels s = make_default_scene().sample(SampleParams{0.08, 1, 0.25});
-  EditSession session{"t"};
-  IdList zero, one;
-  Fixture() {
-    SurfelArrays a;
-    a.positions = s.positions;
-    a.normals = s.normals;
-    a.radii = s.radii;
-    session.load(SurfelModel::from_arrays(a));
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
-  }
-};
+using Fixture = SessionFixture;
 
 TEST(EditSession, VersionsAndChangesSince) {
   Fixture f;
@@ -61,12 +50,12 @@ TEST(EditSession, BuildsFieldsOnlyWhenRegionsAreSet) {
     for (const auto& s : f.session.report().structures) n.push_back(s.name);
     return n;
   };
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "history"}));  // issue 9: the history is listed last
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   // The default settings run the Robust detector once regions are set.
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust", "history"}));
   f.session.configure({{"algorithm", std::string("none")}});
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "history"}));
   const SessionReport r = f.session.report();
   EXPECT_GT(r.bytes_per_surfel, 0.0);
   EXPECT_EQ(r.surfels, static_cast<Index>(f.s.part.size()));

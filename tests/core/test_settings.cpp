@@ -35,7 +35,10 @@ TEST(Settings, DefaultsAndListingOrder) {
                                              "split_threshold", "zero_hierarchy", "deformable_hierarchy", "update",
                                              "hybrid_f", "sat", "extended", "leaf_max_surfels", "leaf_min_surfels",
                                              "max_level", "min_leaf_extent", "inflation", "knn_eps", "simplify",
-                                             "cluster_size", "max_variation", "member_margin"}));
+                                             "cluster_size", "max_variation", "member_margin",
+                                             // issue 9: responses and history
+                                             "response", "history_mb", "backoff_epsilon",
+                                             "backoff_max_iterations"}));
   EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
   EXPECT_EQ(std::get<std::int64_t>(d[3].value), 10);  // integers are listed as integers
   // The listing applied to defaults is the identity.
@@ -183,7 +186,7 @@ TEST(Settings, IntegersAndNumbers) {
 // The table: unique names, every text setting with its names, defaults = SessionSettings{}.
 TEST(Settings, TableDescribesEverySetting) {
   const auto& specs = setting_specs();
-  EXPECT_EQ(specs.size(), 26u);
+  EXPECT_EQ(specs.size(), 30u);  // 26 + issue 9's response, history_mb, backoff_epsilon, backoff_max_iterations
   const auto listed = describe(SessionSettings{});
   ASSERT_EQ(listed.size(), specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i) {

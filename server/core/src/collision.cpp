@@ -76,6 +76,19 @@ bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 
 HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
 
+CollisionResult CollisionDetector::detect_only(const CollisionScene& scene, const Points& previous,
+                                               const std::vector<std::uint8_t>&) {
+  return detect(scene, previous);
+}
+
+std::shared_ptr<const DetectorImage> CollisionDetector::save_image(const IndexList*) const { return nullptr; }
+
+void CollisionDetector::restore_image(const DetectorImage&) {
+  throw Error(ErrorCode::Internal, "history", "this detector saves no images");
+}
+
+std::unique_ptr<CollisionDetector> CollisionDetector::clone() const { return nullptr; }
+
 std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings) {
   SimplifyParams clusters = settings.simplify;
   clusters.threads = settings.collision.threads;

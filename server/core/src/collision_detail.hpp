@@ -25,6 +25,10 @@ class NarrowDetector : public CollisionDetector {
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
     return detect_candidates(scene, previous, nullptr);
   }
+  CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
+                              const std::vector<std::uint8_t>& candidate) override {
+    return detect_candidates(scene, previous, &candidate);  // the row detector re-tests only the candidates
+  }
 
  protected:
   using CollisionDetector::CollisionDetector;
@@ -68,7 +72,7 @@ struct ZeroSet {
   Values radii;                      // #Z
   std::vector<std::uint8_t> marked;  // #Z: 1 = boundary surfel
   IndexList rows;                    // #Z: row in the model
-  std::unique_ptr<KdTree> tree;      // over `positions`
+  std::shared_ptr<const KdTree> tree;  // over `positions`; immutable once built, shared by copies
   double knn_eps = 0.0;              // approximate search of `tree` (CollisionParams::knn_eps)
 
   // Copies the zero rows of `scene` and builds the tree (approximate search `eps`). Throws

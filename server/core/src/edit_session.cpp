@@ -17,7 +17,7 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
 }
 
 // The detector for `settings` (make_detector), reset from the model as it is now.
-std::unique_ptr<CollisionDetector> reset_detector(const SessionSettings& settings, const SurfelModel& m,
+std::shared_ptr<CollisionDetector> reset_detector(const SessionSettings& settings, const SurfelModel& m,
                                                   const DeformationFields& f) {
   std::unique_ptr<CollisionDetector> d = make_detector(settings);
   if (d) d->reset(scene_of(m, f));
@@ -44,8 +44,11 @@ const SurfelModel& EditSession::model() const {
   return model_;
 }
 
-void EditSession::load(SurfelModel model) {
+void EditSession::load(SurfelModel model, const std::string& author) {
   if (model.empty()) throw Error(ErrorCode::InvalidArgument, "positions", "the model is empty (0 surfels)");
+  SessionImage before = capture_whole(false);
+  IdList touched = model_.ids();
+  touched.insert(touched.end(), model.ids().begin(), model.ids().end());
   ++version_;
   model_ = std::move(model);
   model_version_ = version_;
@@ -55,6 +58,7 @@ void EditSession::load(SurfelModel model) {
   detector_.reset();
   colliding_.clear();
   rest_radius_ = Values();
+  record("load", author, std::move(touched), std::move(before));
 }
 
 IdList EditSession::resolve(const RegionSpec& spec, const std::string& field) const {
@@ -73,7 +77,7 @@ IdList EditSession::resolve(const RegionSpec& spec, const std::string& field) co
   return ids;
 }
 
-void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
+void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, const std::string& author) {
   const IdList zero_ids = resolve(zero, "zero");
   const IdList one_ids = resolve(one, "one");
   if (zero_ids.empty()) throw Error(ErrorCode::InvalidArgument, "zero", "the zero region selects no surfel");
@@ -90,17 +94,39 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one) {
     r = Region::One;
   }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
-  std::unique_ptr<CollisionDetector> detector = reset_detector(settings_, model_, *fields);
+  std::shared_ptr<CollisionDetector> detector = reset_detector(settings_, model_, *fields);
+  SessionImage before = capture_whole(false);
   fields_ = std::move(fields);
   detector_ = std::move(detector);
   colliding_.clear();
   ++version_;
+  record("set_regions", author, {}, std::move(before));
 }
 
-StepResult EditSession::deform(const DeformParams& params) {
+StepResult EditSession::deform(const DeformParams& params, const std::string& author) {
   model();  // throws without a model
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
   validate(params);
+  const std::uint64_t version_before = version_;
+  // Resampling may add tangents, rest radii and rows: the whole session is the before-image.
+  const auto t_capture = std::chrono::steady_clock::now();
+  SessionImage before = settings_.resample.enabled ? capture_whole(true) : capture_rows(fields_->deformable);
+  const double capture_ms = ms_since(t_capture);
+  StepResult out;
+  step_once(params, out);
+  respond(params, before, version_before, out);
+  const auto t_record = std::chrono::steady_clock::now();
+  if (out.response != "cancelled") {
+    IdList touched;
+    touched.reserve(out.moved.size());
+    for (Index r : out.moved) touched.push_back(model_.ids()[r]);
+    record("deform", author, std::move(touched), std::move(before));
+  }
+  out.history_ms = capture_ms + ms_since(t_record);
+  return out;
+}
+
+void EditSession::step_once(const DeformParams& params, StepResult& out) {
   SurfelArrays& a = model_.arrays();
   const bool resample = settings_.resample.enabled;
   if (resample) {
@@ -111,7 +137,7 @@ StepResult EditSession::deform(const DeformParams& params) {
   Points previous;  // positions before the step, for each surfel's own displacement
   if (detector_) previous = a.positions;
   const bool tangents = model_.has_tangents();
-  StepResult out;
+  out = StepResult();
   const auto t_deform = std::chrono::steady_clock::now();
   const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                     tangents ? &a.tangent_v : nullptr, params_.threads);
@@ -171,16 +197,17 @@ StepResult EditSession::deform(const DeformParams& params) {
     out.stats = c.stats;
     colliding_ = out.colliding;
   }
-  return out;
 }
 
-void EditSession::configure(const std::vector<NamedSetting>& changes) {
+void EditSession::configure(const std::vector<NamedSetting>& changes, const std::string& author) {
   const SessionSettings next = apply_settings(settings_, changes);
-  std::unique_ptr<CollisionDetector> detector;
+  std::shared_ptr<CollisionDetector> detector;
   if (fields_ && !model_.empty()) detector = reset_detector(next, model_, *fields_);
+  SessionImage before = capture_whole(false);
   settings_ = next;
   detector_ = std::move(detector);
   colliding_.clear();
+  record("configure", author, {}, std::move(before));
 }
 
 bool EditSession::rebuild_hierarchies() {
@@ -190,7 +217,7 @@ bool EditSession::rebuild_hierarchies() {
 
 HierarchyInfo EditSession::hierarchy_info() const { return detector_ ? detector_->hierarchy_info() : HierarchyInfo{}; }
 
-void EditSession::remove(const IdList& ids) {
+void EditSession::remove(const IdList& ids, const std::string& author) {
   const SurfelModel& m = model();
   const IndexList rows = m.rows_of(ids, "ids");  // NotFound / repeated ids
   if (rows.empty()) return;
@@ -209,6 +236,7 @@ void EditSession::remove(const IdList& ids) {
     if (zero_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the zero region empty");
     if (one_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the one region empty");
   }
+  SessionImage before = capture_whole(true);
   ++version_;
   for (Index r : rows) removed_log_.emplace_back(version_, m.ids()[r]);
   model_.remove(ids);
@@ -241,6 +269,7 @@ void EditSession::remove(const IdList& ids) {
   IdList still;
   std::set_difference(colliding_.begin(), colliding_.end(), gone.begin(), gone.end(), std::back_inserter(still));
   colliding_ = std::move(still);
+  record("remove", author, ids, std::move(before));
 }
 
 void EditSession::touch_rows(const IndexList& rows) {
@@ -275,6 +304,7 @@ SessionReport EditSession::report() const {
   if (rest_radius_.size() > 0) {
     rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});
   }
+  rep.structures.push_back({"history", history_.bytes()});
   for (const auto& s : rep.structures) rep.total_bytes += s.bytes;
   rep.bytes_per_surfel = rep.surfels ? static_cast<double>(rep.total_bytes) / rep.surfels : 0.0;
   return rep;

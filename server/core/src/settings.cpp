@@ -75,6 +75,8 @@ using H = HierarchyParams;
 using R = ResampleParams;
 using B = bvh::BvhParams;
 using P = SimplifyParams;
+using E = ResponseParams;
+using Y = HistoryParams;
 
 std::vector<SettingSpec> make_table() {
   return {
@@ -116,6 +118,15 @@ std::vector<SettingSpec> make_table() {
                                                             "sphere_* trees", within(0, 1)),
       row<&S::simplify, &P::member_margin>("member_margin", "approximate detection: members tested within this "
                                                             "many cluster radii of the zero region", at_least(0)),
+      row<&S::response, &E::mode>("response", "what a colliding step does: report it, cancel the step, or back "
+                                              "off until the regions only touch (docs/algorithms.md §7)"),
+      row<&S::history, &Y::history_mb>("history_mb", "memory bound of the undo history, MiB (oldest entries "
+                                                     "dropped first)", at_least(0)),
+      row<&S::response, &E::backoff_epsilon>("backoff_epsilon", "back-off stops below this largest depth, model "
+                                                                "units (0 = 1e-3 of the mean surfel radius)",
+                                             at_least(0)),
+      row<&S::response, &E::backoff_max_iterations>("backoff_max_iterations", "back-off stops after this many "
+                                                                              "re-tests", at_least(1)),
   };
 }
 
@@ -198,6 +209,12 @@ void validate_combination(const SessionSettings& s) {
   validate(s.resample);
   validate(s.hierarchy, s.collision);  // leaf sizes, deformable needs zero, extended needs robust, ...
   validate(s.simplify);
+  // Cancel and back-off restore the detector's state (history.hpp): only the row detectors save it.
+  if (s.response.mode != Response::Report && (s.hierarchy.any() || s.simplify.method != SimplifyMethod::None)) {
+    throw Error(ErrorCode::InvalidArgument, "response",
+                std::string("response=") + to_string(s.response.mode) +
+                    " needs a detector whose state can be restored: set zero_hierarchy and simplify to none");
+  }
   // Approximate detection runs the algorithm's own per-surfel test on clusters, without a broad phase.
   const CollisionAlgorithm algorithm = s.collision.algorithm;
   if (s.simplify.method == SimplifyMethod::None || algorithm == CollisionAlgorithm::None) return;

@@ -57,7 +57,10 @@ static_assert(static_cast<std::uint32_t>(Op::Deform) == surfeledit_proto_OP_DEFO
 static_assert(static_cast<std::uint32_t>(Op::GetState) == surfeledit_proto_OP_GET_STATE, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Configure) == surfeledit_proto_OP_CONFIGURE, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Remove) == surfeledit_proto_OP_REMOVE, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_REMOVE + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Undo) == surfeledit_proto_OP_UNDO, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Redo) == surfeledit_proto_OP_REDO, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::History) == surfeledit_proto_OP_HISTORY, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_HISTORY + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>
@@ -296,6 +299,11 @@ StepResult to_reply(const surfeledit::StepResult& result, std::uint64_t seq) {
   step.depths = result.depths;
   step.stats = to_reply(result.stats);
   step.inserted = result.inserted;
+  step.response = result.response;
+  step.backoff_iterations = static_cast<std::uint32_t>(result.backoff.iterations);
+  step.backoff_kept = result.backoff.kept;
+  step.backoff_depth = result.backoff.final_depth;
+  step.features = result.features;
   return step;
 }
 
@@ -375,8 +383,19 @@ ReplyView::ReplyView(const Reply& reply) {
                                                   cs.detect_ms,  cs.preprocess_ms, cs.nv,      cs.np,
                                                   cs.nu};
     step_.inserted = borrow<dds_sequence_unsigned_long_long>(reply.step->inserted);
+    step_.response = cstr(reply.step->response);
+    step_.backoff_iterations = reply.step->backoff_iterations;
+    step_.backoff_kept = reply.step->backoff_kept;
+    step_.backoff_depth = reply.step->backoff_depth;
+    step_.features = borrow<dds_sequence_unsigned_long_long>(reply.step->features);
   }
   msg_.step = borrow_one<dds_sequence_surfeledit_proto_StepResult>(&step_, reply.step.has_value());
+  history_.reserve(reply.history.size());
+  for (const HistoryInfo& h : reply.history) {
+    history_.push_back(surfeledit_proto_HistoryEntry{h.version, cstr(h.op), cstr(h.client_id),
+                                                     borrow<dds_sequence_unsigned_long_long>(h.touched), h.undone});
+  }
+  msg_.history = borrow<dds_sequence_surfeledit_proto_HistoryEntry>(history_);
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {

@@ -1,4 +1,5 @@
-// Handler functions of the edit ops: SET_REGIONS, DEFORM, CONFIGURE, REMOVE.
+// Handler functions of the edit ops: SET_REGIONS, DEFORM, CONFIGURE, REMOVE, UNDO, REDO, HISTORY.
+// Every change carries the client id as its author in the session's history.
 #include <algorithm>
 
 #include "handler_ops.hpp"
@@ -9,7 +10,7 @@ namespace surfeledit::service {
 void serve_set_regions(OpContext& c) {
   const auto& args = args_of<SetRegionsArgs>(c);
   EditSession& s = *c.entry->session;
-  prefixed("set_regions", [&] { s.set_regions(args.zero, args.one); });
+  prefixed("set_regions", [&] { s.set_regions(args.zero, args.one, c.command.client_id); });
   c.updates.push_back(make_update_event(c.command.session, s.version(), "regions"));
 }
 
@@ -17,7 +18,7 @@ void serve_deform(OpContext& c) {
   const auto& params = args_of<DeformParams>(c);
   SessionEntry& entry = *c.entry;
   const auto t0 = std::chrono::steady_clock::now();
-  surfeledit::StepResult result = prefixed("deform", [&] { return entry.session->deform(params); });
+  surfeledit::StepResult result = prefixed("deform", [&] { return entry.session->deform(params, c.command.client_id); });
   c.reply.timings.emplace_back("apply", ms_since(t0));
   if (result.detected) c.reply.timings.emplace_back("detect", result.stats.detect_ms);
   if (!result.inserted.empty()) c.reply.timings.emplace_back("resample", result.resample_ms);
@@ -41,18 +42,43 @@ void serve_deform(OpContext& c) {
 
 void serve_configure(OpContext& c) {
   // Errors keep the core's field: the setting's name (PROTOCOL.md).
-  c.entry->session->configure(args_of<ConfigureArgs>(c).settings);
+  c.entry->session->configure(args_of<ConfigureArgs>(c).settings, c.command.client_id);
 }
 
 void serve_remove(OpContext& c) {
   EditSession& s = *c.entry->session;
   const std::uint64_t before = s.version();
-  prefixed("remove", [&] { s.remove(args_of<RemoveArgs>(c).ids); });
+  prefixed("remove", [&] { s.remove(args_of<RemoveArgs>(c).ids, c.command.client_id); });
   if (s.version() != before) {
     UpdateEvent event = changes_event(s, c.command.session, before);
     event.cause = "remove";
     c.updates.push_back(std::move(event));
   }
+}
+
+namespace {
+
+// Undo or redo (`cause`): what changed since is published like any change, with the collision state.
+void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(), const char* cause) {
+  EditSession& s = *c.entry->session;
+  const std::uint64_t before = s.version();
+  (s.*swap)();
+  UpdateEvent event = changes_event(s, c.command.session, before);
+  event.cause = cause;
+  event.detected = true;
+  event.colliding = s.colliding();
+  c.updates.push_back(std::move(event));
+}
+
+}  // namespace
+
+void serve_undo(OpContext& c) { serve_swap(c, &EditSession::undo, "undo"); }
+
+void serve_redo(OpContext& c) { serve_swap(c, &EditSession::redo, "redo"); }
+
+void serve_history(OpContext& c) {
+  for (const HistoryItem& h : c.entry->session->history())
+    c.reply.history.push_back({h.version, h.op, h.author, h.touched, h.undone});
 }
 
 }  // namespace surfeledit::service

@@ -32,6 +32,9 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::GetState, {"OP_GET_STATE", serve_get_state, true, T::Version, false});
   row(Op::Configure, {"OP_CONFIGURE", serve_configure, true, T::VersionAndSessionInfo, true});
   row(Op::Remove, {"OP_REMOVE", serve_remove, true, T::VersionAndSessionInfo, true});
+  row(Op::Undo, {"OP_UNDO", serve_undo, true, T::VersionAndSessionInfo, true});
+  row(Op::Redo, {"OP_REDO", serve_redo, true, T::VersionAndSessionInfo, true});
+  row(Op::History, {"OP_HISTORY", serve_history, true, T::Version, false});
   return t;
 }
 

@@ -82,6 +82,9 @@ void serve_deform(OpContext& c);
 void serve_get_state(OpContext& c);
 void serve_configure(OpContext& c);
 void serve_remove(OpContext& c);
+void serve_undo(OpContext& c);
+void serve_redo(OpContext& c);
+void serve_history(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

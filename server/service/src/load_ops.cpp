@@ -17,7 +17,7 @@ Upload& upload_in_progress(OpContext& c, const char* field) {
 // Replaces the session's model and announces a full update.
 void replace_model(OpContext& c, SurfelModel model) {
   EditSession& s = *c.entry->session;
-  s.load(std::move(model));
+  s.load(std::move(model), c.command.client_id);
   UpdateEvent event = make_update_event(c.command.session, s.version(), "load");
   event.full = true;
   event.all_rows = true;

@@ -20,7 +20,7 @@ def scene():
 def test_report_lists_only_what_was_built(scene) -> None:
     s, es = scene
     before = es.report()
-    assert set(before["structures"]) == {"model", "versions"}
+    assert set(before["structures"]) == {"model", "versions", "history"}  # issue 9: the history is listed
     es.set_regions(zero=np.flatnonzero(s.part == 0), one=np.flatnonzero(s.part == 1))
     after = es.report()
     assert "deformation_fields" in after["structures"]

@@ -88,7 +88,7 @@ class RobustKernel {
     Values radii;                     // #O
     std::vector<std::uint8_t> zero;   // #O: 1 = zero surfel
     std::vector<std::uint8_t> alive;  // #O: 0 once a zero surfel was removed from the model
-    std::unique_ptr<KdTree> tree;     // over the alive rows of `positions`
+    std::shared_ptr<const KdTree> tree;  // over the alive rows of `positions`; immutable, shared by copies
   };
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change

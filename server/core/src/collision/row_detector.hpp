@@ -93,6 +93,54 @@ class RowDetector final : public NarrowDetector {
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override { rows_.on_inserted(scene, parents); }
   std::size_t memory_bytes() const override { return rows_.memory_bytes() + hit_.capacity(); }
 
+  // A step changes only the deformable rows' states and the sweep's tallies (hit_ is scratch); the
+  // kernel's references change at reset, removal and insertion only (clone() copies them; their
+  // trees are immutable and shared).
+  struct Image final : DetectorImage {
+    IndexList rows;                              // the rows saved; empty = rows_.deformable
+    std::vector<typename Kernel::State> states;  // one per saved row, in that order
+    Sweep sweep;
+    std::size_t bytes() const override { return states.capacity() * sizeof(typename Kernel::State) + sizeof(*this); }
+  };
+  std::shared_ptr<const DetectorImage> save_image(const IndexList* rows) const override {
+    auto image = std::make_shared<Image>();
+    if (rows) image->rows = *rows;
+    const IndexList& saved = rows ? *rows : rows_.deformable;
+    image->states.reserve(saved.size());
+    for (Index r : saved) image->states.push_back(rows_.states[r]);
+    image->sweep = sweep_;
+    return image;
+  }
+  void restore_image(const DetectorImage& image) override {
+    const auto* mine = dynamic_cast<const Image*>(&image);
+    const IndexList* saved = mine && !mine->rows.empty() ? &mine->rows : &rows_.deformable;
+    if (!mine || mine->states.size() != saved->size() || (!saved->empty() && saved->back() >= rows_.rows())) {
+      throw Error(ErrorCode::Internal, "history", "detector image does not fit this detector");
+    }
+    for (std::size_t q = 0; q < mine->states.size(); ++q) rows_.states[(*saved)[q]] = mine->states[q];
+    sweep_ = mine->sweep;
+  }
+  CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
+                              const std::vector<std::uint8_t>& candidate) override {
+    const auto start = std::chrono::steady_clock::now();
+    rows_.require_step(scene, previous);
+    IndexList rows;
+    for (Index r : rows_.deformable)
+      if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
+    hit_.resize(rows.size());
+    const Tally tally = sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, nullptr,
+                                   resolve_threads(params_.threads), hit_);
+    CollisionResult result;
+    result.stats.tested = tally.tested;
+    result.stats.queries = tally.queries;
+    collect_result(
+        result, rows, [&](std::size_t q, Index) { return hit_[q] != 0; },
+        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+        preprocess_ms_, start);
+    return result;
+  }
+  std::unique_ptr<CollisionDetector> clone() const override { return std::make_unique<RowDetector>(*this); }
+
  private:
   KernelRows<Kernel> rows_;
   Sweep sweep_;

@@ -94,6 +94,13 @@ struct HierarchyInfo {
 
 struct SessionSettings;
 
+// What one detect() changes in a detector (per-row states, the step's tallies), saved for undo
+// (history.hpp). Opaque; only the detector that saved it reads it.
+struct DetectorImage {
+  virtual ~DetectorImage() = default;
+  virtual std::size_t bytes() const = 0;  // memory held
+};
+
 class CollisionDetector {
  public:
   // A detector for `params.algorithm` (nullptr for None). Validates params (and `hierarchy`); with
@@ -111,6 +118,11 @@ class CollisionDetector {
   // Evaluates the model after a step. `previous`: positions before the step (#P by 3), for each
   // surfel's own displacement t. Zero surfels must not have moved since reset.
   virtual CollisionResult detect(const CollisionScene& scene, const Points& previous) = 0;
+  // detect() re-testing only rows with candidate[r] != 0 (one flag per row); the result lists only
+  // those rows, the others' states are not touched (row detectors). For back-off's re-tests of the
+  // surfels that collided (§7 c). The default ignores `candidate` and runs detect().
+  virtual CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
+                                      const std::vector<std::uint8_t>& candidate);
   // Rows removed from the model: `keep` has one flag per old row; state of kept rows is compacted.
   virtual void on_removed(const std::vector<bool>& keep) = 0;
   // Rows appended to the model (after the existing ones), each split from `parents[k]` (a row
@@ -128,6 +140,15 @@ class CollisionDetector {
   virtual bool start_rebuild(const CollisionScene& scene);
   // State of the hierarchies (all empty / zero without one).
   virtual HierarchyInfo hierarchy_info() const;
+
+  // Undo support. save_image(): what detect() may change, nullptr when this detector cannot save it
+  // (hierarchies, approximate detection). restore_image(): puts back an image this detector saved,
+  // with the rows it had then (Internal otherwise). clone(): an independent deep copy whose every
+  // later result equals this one's, nullptr when not supported.
+  // `rows` (ascending deformable rows): save only those (nullptr: every deformable row).
+  virtual std::shared_ptr<const DetectorImage> save_image(const IndexList* rows = nullptr) const;
+  virtual void restore_image(const DetectorImage& image);
+  virtual std::unique_ptr<CollisionDetector> clone() const;
 
  protected:
   explicit CollisionDetector(CollisionParams params) : params_(params) {}

@@ -12,6 +12,7 @@
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/history.hpp"
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
@@ -43,6 +44,13 @@ struct SessionReport {
   std::string hierarchy_status;  // "fresh" | "refit" | "rebuilding", "" without a hierarchy
 };
 
+// What a back-off response did (§7 c).
+struct BackoffInfo {
+  int iterations = 0;         // re-tests made
+  double kept = 1.0;          // fraction of the requested step that was kept, in [0, 1]
+  double final_depth = 0.0;   // largest penetration depth after the response, model units
+};
+
 // What one deformation step did.
 struct StepResult {
   std::uint64_t seq = 0;       // 1-based step number in this session
@@ -50,11 +58,18 @@ struct StepResult {
   IdList inserted;             // ids of surfels inserted by resampling (appended rows)
   Vec3 center = Vec3::Zero();  // rotation centre used
   bool detected = false;       // a collision detector ran
-  IdList colliding;            // colliding surfel ids after the step, ascending
+  IdList colliding;            // colliding surfel ids after the step and its response, ascending (response
+                               // "cancelled": those that would have collided; the session keeps its own)
   std::vector<double> depths;  // per colliding id: penetration depth estimate, model units
   CollisionStats stats;        // of the detector (zeros when none ran)
   double deform_ms = 0.0;      // time of the deformation itself
   double resample_ms = 0.0;    // time of resampling
+  std::string response = "none";  // "none" (nothing collided or no detector), "reported", "cancelled",
+                                  // "backed_off"; `colliding` is the state after the response
+  BackoffInfo backoff;            // response "backed_off" only
+  IdList features;                // feature surfels of a merge (always empty: merge is not offered yet)
+  double response_ms = 0.0;       // time of the response (cancel / back-off)
+  double history_ms = 0.0;        // time of recording the step's before-image in the history
 };
 
 // Region selection: explicit ids and/or selectors, merged.
@@ -77,20 +92,22 @@ class EditSession {
   const DeformationFields* fields() const { return fields_.get(); }
 
   // Replaces the model; regions are cleared. Bumps the version.
-  void load(SurfelModel model);
+  // Every mutating call takes the author of the change (a client id; "" in-process) for history().
+  void load(SurfelModel model, const std::string& author = "");
   // Resolves both specs, checks they are non-empty and disjoint, computes the deformation
   // fields. Surfels in neither region blend between them. Bumps the version.
-  void set_regions(const RegionSpec& zero, const RegionSpec& one);
+  void set_regions(const RegionSpec& zero, const RegionSpec& one, const std::string& author = "");
   // Ids matching a spec (ids validated, selectors applied to current positions), ascending.
   IdList resolve(const RegionSpec& spec, const std::string& field) const;
   // Applies one step, then resampling and collision detection as configured; requires regions.
-  // Bumps the version.
-  StepResult deform(const DeformParams& params);
+  // Bumps the version (not when the response cancelled the step). The response (settings "response")
+  // runs after detection.
+  StepResult deform(const DeformParams& params, const std::string& author = "");
 
   // Session settings (collision algorithm, heuristics, resampling); validated before anything
   // changes. Re-initialises the detector from the current model when regions are set (its
   // "original" model is the current one); the model and the version do not change.
-  void configure(const std::vector<NamedSetting>& changes);
+  void configure(const std::vector<NamedSetting>& changes, const std::string& author = "");
   const SessionSettings& settings() const { return settings_; }
   // Starts a background rebuild of the deformable tree from the model as it is now (rebuild on
   // idle, e.g. when a drag ends); the next step that finds it finished swaps it in. Never waits.
@@ -102,7 +119,16 @@ class EditSession {
   const IdList& colliding() const { return colliding_; }
   // Removes surfels (validated first: unknown ids, or leaving the zero or one region empty, throw
   // and change nothing); the detector keeps the state of the others. Bumps the version.
-  void remove(const IdList& ids);
+  void remove(const IdList& ids, const std::string& author = "");
+
+  // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
+  // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
+  // returns it. Conflict when there is nothing to undo / redo, or when the entry could not save its
+  // detector (hierarchies, approximate detection).
+  std::uint64_t undo();
+  std::uint64_t redo();
+  // The entries, oldest first (undone ones last, flagged).
+  std::vector<HistoryItem> history() const { return history_.items(); }
 
   // Changes since version `since` (since >= version() gives none).
   Changes changes_since(std::uint64_t since) const;
@@ -111,6 +137,22 @@ class EditSession {
 
  private:
   void touch_rows(const IndexList& rows);
+  // History (session_history.cpp). An image of the rows a step may move (the deformable rows), or of
+  // everything (`clone`: the detector is cloned, else the live object is shared).
+  // `subset`: the detector saves only `rows` too (else every deformable row).
+  SessionImage capture_rows(const IndexList& rows, bool subset = false) const;
+  SessionImage capture_whole(bool clone) const;
+  // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
+  void restore(const SessionImage& image, bool clone);
+  // Appends the entry of an op that just bumped the version; `before` is the image before it.
+  void record(const char* op, const std::string& author, IdList touched, SessionImage before);
+  std::uint64_t swap_entry(HistoryEntry& entry, const char* what);
+  std::size_t history_limit() const;
+  // Responses (session_response.cpp): the step is applied and detected; `before` is its image.
+  void respond(const DeformParams& params, const SessionImage& before, std::uint64_t version_before,
+               StepResult& out);
+  // Applies `params` (restored state) and detects; the core of deform() and of back-off.
+  void step_once(const DeformParams& params, StepResult& out);
 
   std::string name_;
   SessionParams params_;
@@ -121,10 +163,11 @@ class EditSession {
   std::vector<std::pair<std::uint64_t, SurfelId>> removed_log_;
   std::unique_ptr<DeformationFields> fields_;
   SessionSettings settings_;
-  std::unique_ptr<CollisionDetector> detector_;  // built when regions are set and algorithm != none
+  std::shared_ptr<CollisionDetector> detector_;  // built when regions are set and algorithm != none
   IdList colliding_;
   Values rest_radius_;  // per row, for resampling (built when resampling is enabled)
   std::uint64_t steps_ = 0;
+  History history_;
 };
 
 }  // namespace surfeledit

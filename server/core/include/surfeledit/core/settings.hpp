@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/edit_params.hpp"
 #include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/simplify/params.hpp"
@@ -26,6 +27,8 @@ struct SessionSettings {
   HierarchyParams hierarchy;
   SimplifyParams simplify = no_simplification();  // clustering (approximate detection when method != None;
                                                   // cluster_size / max_variation also shape sphere_* trees)
+  ResponseParams response;  // what a colliding step does (report, cancel, backoff)
+  HistoryParams history;    // the undo history's memory bound
 
   static SimplifyParams no_simplification() {
     SimplifyParams p;

@@ -31,8 +31,11 @@ enum class Op : std::uint32_t {
   GetState = 10,
   Configure = 11,
   Remove = 12,
+  Undo = 13,
+  Redo = 14,
+  History = 15,
 };
-constexpr std::size_t kOpCount = 13;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = 16;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {

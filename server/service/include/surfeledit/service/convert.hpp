@@ -75,6 +75,7 @@ class ReplyView {
   surfeledit_proto_ServerInfo server_info_{};
   std::vector<char*> session_names_;
   surfeledit_proto_StepResult step_{};
+  std::vector<surfeledit_proto_HistoryEntry> history_;
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's

@@ -87,6 +87,20 @@ struct StepResult {
   std::vector<double> depths;            // per colliding id: penetration depth estimate, model units
   CollisionStatsInfo stats;
   std::vector<std::uint64_t> inserted;   // ids inserted by dynamic resampling
+  std::string response = "none";         // "none" | "reported" | "cancelled" | "backed_off"
+  std::uint32_t backoff_iterations = 0;  // back-off: re-tests made
+  double backoff_kept = 1.0;             // back-off: fraction of the requested step kept
+  double backoff_depth = 0.0;            // back-off: largest depth after it, model units
+  std::vector<std::uint64_t> features;   // merge: feature surfel ids (empty: merge is not offered yet)
+};
+
+// One entry of a session's edit history (proto HistoryEntry).
+struct HistoryInfo {
+  std::uint64_t version = 0;  // session version after the change
+  std::string op;             // "load" | "set_regions" | "deform" | "configure" | "remove"
+  std::string client_id;      // who made it
+  std::vector<std::uint64_t> touched;  // ids changed, inserted or removed, ascending
+  bool undone = false;        // in the redo tail
 };
 
 struct Reply {
@@ -101,6 +115,7 @@ struct Reply {
   std::optional<SessionInfo> session_info;
   std::optional<ServerInfo> server_info;
   std::optional<StepResult> step;
+  std::vector<HistoryInfo> history;  // OP_HISTORY
 };
 
 }  // namespace surfeledit::service

@@ -21,7 +21,7 @@ namespace surfeledit::service {
 struct UpdateEvent {
   std::string session;
   std::uint64_t version = 0;     // session version after the change
-  std::string cause;             // "load" | "regions" | "deform" | "remove" | "close"
+  std::string cause;             // "load" | "regions" | "deform" | "remove" | "undo" | "redo" | "close"
   bool full = false;             // a new model (load)
   std::uint64_t step = 0;        // deform: step number
   IndexList rows;                // changed rows of the model (ascending); ignored when all_rows

@@ -1,0 +1,87 @@
+"""Collision responses and the edit history on the piercing scene (surfeledit.scenes.piercing), in-process,
+one thread (issue 9 §4):
+
+1. history overhead: wall time of a step beside the core's own apply + detect time (the difference is
+   the before-image the history records, plus the binding's call overhead, ~0.05 ms);
+2. per colliding step: response report / cancel / backoff (iterations, kept fraction, ms) beside the
+   step time; target: back-off <= 2 step times.
+
+    .venv/bin/python bench/core/bench_response.py [--scale 1] [--colliding 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
+from surfeledit import core  # noqa: E402
+from surfeledit import scenario as S  # noqa: E402
+
+
+def open_session(sc: "S.Scenario", **settings: object) -> "core.EditSession":
+    s = sc.scene
+    es = core.EditSession("bench", threads=1)
+    es.load_points(s.positions, s.normals, s.radii)
+    es.set_regions(zero=s.zero, one=s.one)
+    es.configure(threads=1, **settings)
+    return es
+
+
+def run(sc: "S.Scenario", response: str, colliding_steps: int) -> dict:
+    """Steps until `colliding_steps` steps collided; the core's own timings (the machine is shared, so
+    wall times of the whole call are noisier)."""
+    es = open_session(sc, response=response)
+    params = sc.step_params()
+    step_ms, history_ms, hit = [], [], []
+    for _ in range(sc.steps):
+        o = es.deform(**params)
+        history_ms.append(o.history_ms)
+        if o.response in ("none", "reported"):
+            step_ms.append(o.deform_ms + o.stats["detect_ms"])
+        if o.response != "none":
+            hit.append(o)
+        if len(hit) >= colliding_steps:
+            break
+    return dict(step_ms=step_ms, history_ms=history_ms, hit=hit, history=es.report()["structures"]["history"])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--colliding", type=int, default=5, help="colliding steps measured per response")
+    args = ap.parse_args()
+    sc = S.make_scenario("piercing", scale=args.scale)
+    s = sc.scene
+    print(benchlib.machine_line())
+    print(f"\nPiercing scene: {s.size} surfels, {len(s.deformable)} deformable, step "
+          f"{sc.step_params()['translation']}, one thread\n")
+    rows = []
+    step = 0.0  # the reference: median apply + detect of the report run's steps
+    for response in ("report", "cancel", "backoff"):
+        res = run(sc, response, args.colliding)
+        hit = res["hit"]
+        if response == "report":
+            step = statistics.median(res["step_ms"])
+            print(f"History: before-image recorded per step, median {statistics.median(res['history_ms']):.2f} ms "
+                  f"(max {max(res['history_ms']):.2f}) beside a step (apply + detect) of median {step:.2f} ms; "
+                  f"{res['history'] / 2**20:.1f} MiB held after {len(res['history_ms'])} steps + load, regions, "
+                  f"configure\n")
+        resp = statistics.median([o.response_ms for o in hit])
+        backoff = response == "backoff"
+        its = [o.backoff["iterations"] for o in hit]
+        kept = [o.backoff["kept"] for o in hit]
+        rows.append([response, len(hit), f"{statistics.median(res['step_ms'] or [0.0]):.2f}", f"{resp:.2f}", f"{(step + resp) / step:.2f}", f"{statistics.median(its):.0f}" if backoff else "-",
+                     f"{min(kept):.3f}..{max(kept):.3f}" if backoff else "-"])
+    print(benchlib.table(["response", "colliding steps", "step ms (report run, median)",
+                          "response ms (median; back-off: its re-steps)", "(step + response) / step",
+                          "back-off iterations (median)", "kept fraction"], rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,106 @@
+// A session's edit history (issue 9 §1): one entry per accepted change, enough to restore the state
+// before it bit for bit (undo) and after it (redo).
+//
+// An entry holds one image of the session: the state *before* its op while the op is applied, the
+// state *after* it once undone (undo and redo swap the live state with the stored image, so each
+// entry keeps one side at a time). Two kinds of image:
+//  - Rows: a step that neither inserted nor removed rows: the rows it moved (positions, normals,
+//    tangents, per-row versions) and the detector's per-row states (DetectorImage);
+//  - Whole: every other change (load, set_regions, configure, remove, a step with resampling): the
+//    whole model, regions and fields, settings, and the detector object itself (the live one after
+//    a change that replaced it, else an independent clone()).
+// Undo and redo are strictly last-in first-out, so a detector object an image refers to is in the
+// state the image needs whenever it is swapped back in.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/settings.hpp"
+#include "surfeledit/core/surfel_model.hpp"
+
+namespace surfeledit {
+
+// The rows one step moved, and what the step changes in them.
+struct RowsImage {
+  IndexList rows;                          // rows moved by the step, ascending
+  Points positions, normals;               // #rows by 3
+  Points tangent_u, tangent_v;             // #rows by 3, or empty when the model has no tangents
+  std::vector<std::uint64_t> row_version;  // #rows
+};
+
+// Everything a session holds, copied.
+struct WholeImage {
+  SurfelModel model;
+  std::uint64_t model_version = 0;
+  std::vector<std::uint64_t> row_version;              // #P
+  std::optional<DeformationFields> fields;             // none before set_regions
+  SessionSettings settings;
+  Values rest_radius;                                  // resampling's rest radii (empty when unused)
+  std::shared_ptr<CollisionDetector> detector;         // the detector object (may be null)
+};
+
+// One side (before or after) of an entry.
+struct SessionImage {
+  std::optional<RowsImage> rows;    // exactly one of rows / whole
+  std::optional<WholeImage> whole;
+  std::shared_ptr<const DetectorImage> detector;  // Rows: the detector's per-row states (null: no detector)
+  IdList colliding;                 // colliding ids
+  std::uint64_t steps = 0;          // step counter
+  bool complete = true;             // false when the detector could not be saved (hierarchies, approximate
+                                    // detection): the image cannot be restored
+
+  std::size_t bytes() const;
+};
+
+// What history() lists of an entry.
+struct HistoryItem {
+  std::uint64_t version = 0;  // the session's version after the op
+  std::string op;             // "load", "set_regions", "deform", "configure", "remove"
+  std::string author;         // client id ("" in-process)
+  IdList touched;             // ids of the surfels it changed, inserted or removed, ascending
+  bool undone = false;        // in the redo tail
+};
+
+struct HistoryEntry {
+  HistoryItem item;
+  SessionImage image;  // before the op while applied, after it once undone
+  std::size_t bytes = 0;  // image.bytes(), kept by History
+};
+
+// The entries of one session, oldest first, with the undo cursor and the memory bound.
+class History {
+ public:
+  // Appends an applied entry: drops the redo tail, then the oldest entries beyond `limit_bytes`.
+  void push(HistoryEntry entry, std::size_t limit_bytes);
+  // Drops oldest entries until at most `limit_bytes` are held.
+  void trim(std::size_t limit_bytes);
+  // The entry undo() acts on / redo() acts on; nullptr when there is none.
+  HistoryEntry* undo_target();
+  HistoryEntry* redo_target();
+  // Moves the cursor after a successful undo / redo.
+  void undone() { --applied_; }
+  void redone() { ++applied_; }
+  void clear();
+
+  std::vector<HistoryItem> items() const;
+  std::size_t bytes() const { return bytes_; }
+  // Replaces an entry's image (undo / redo swap), keeping the byte count.
+  void replace_image(HistoryEntry& entry, SessionImage image);
+
+ private:
+  // Sums the entries' bytes (after entries were dropped).
+  void recount();
+
+  std::deque<HistoryEntry> entries_;
+  std::size_t applied_ = 0;  // entries_[0, applied_) are applied; the rest is the redo tail
+  std::size_t bytes_ = 0;
+};
+
+}  // namespace surfeledit

@@ -1,0 +1,169 @@
+// EditSession's response to a colliding step (docs/algorithms.md §7, thesis ch. 11): report, cancel
+// (§7 b) or back-off (§7 c). Every re-application starts from the step's before-image, so the result
+// is the state a single step of the kept fraction would have produced, deterministically.
+#include <algorithm>
+#include <chrono>
+
+#include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/util.hpp"
+
+namespace surfeledit {
+
+namespace {
+
+double largest(const std::vector<double>& depths) {
+  return depths.empty() ? 0.0 : *std::max_element(depths.begin(), depths.end());
+}
+
+// Largest displacement of a deformable row between `before` and `now` (#P by 3 each over `rows`).
+double largest_move(const RowsImage& before, const Points& now) {
+  double d2 = 0.0;
+  for (std::size_t k = 0; k < before.rows.size(); ++k)
+    d2 = std::max(d2, (now.row(before.rows[k]) - before.positions.row(static_cast<Eigen::Index>(k))).squaredNorm());
+  return std::sqrt(d2);
+}
+
+}  // namespace
+
+void EditSession::respond(const DeformParams& params, const SessionImage& before, std::uint64_t version_before,
+                          StepResult& out) {
+  if (!out.detected || out.colliding.empty()) return;  // response "none"
+  const ResponseParams& rp = settings_.response;
+  if (rp.mode == Response::Report) {
+    out.response = "reported";
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  // Back to the state before the step (a fresh clone of a whole image's detector: the image is reused).
+  auto take_back = [&] {
+    restore(before, true);
+    version_ = version_before;
+  };
+  if (rp.mode == Response::Cancel) {
+    // The reply keeps the ids that would have collided; the session is exactly as before the step.
+    take_back();
+    out.response = "cancelled";
+    out.response_ms = ms_since(start);
+    return;
+  }
+  // Back-off (§7 c). Translation alone: the thesis's iteration -- the deepest surfel (scale factor s
+  // = beta(lambda)) retreats by its real translation length depth / s along -t. With rotation:
+  // bisection of the step fraction until the bracket is narrower than epsilon in displacement.
+  const double eps = rp.backoff_epsilon > 0.0 ? rp.backoff_epsilon : 1e-3 * model_.radii().mean();
+  const bool rotation = params.angle != 0.0;
+  const double t_len = params.translation.norm();
+  // Largest displacement of the full step (rotation: the bracket's width in model units).
+  const double full_move = before.rows ? largest_move(*before.rows, model_.positions()) : t_len;
+  DeformParams p = params;
+  p.center = out.center;  // the centre of the full step, for every fraction
+  // Iterations re-test only the surfels that collided after the full step (or before it); one full
+  // detection of the kept fraction ends the response, so the result is exactly a step of that fraction.
+  std::vector<std::uint8_t> candidate(static_cast<std::size_t>(model_.size()), 0);
+  const IdList& collided = out.colliding;
+  for (const IdList* ids : {&collided, &before.colliding})  // those colliding before keep that state otherwise
+    for (SurfelId id : *ids) candidate[static_cast<std::size_t>(model_.row_of(id))] = 1;
+  const bool partial = before.rows.has_value();  // resampling (whole images) may add rows: full re-tests
+  double depth = largest(out.depths);
+  double kept = 1.0, lo = 0.0, hi = 1.0;  // rotation: lo never collided, hi collides
+  int iterations = 0;
+  double applied = 1.0;  // the fraction the whole state holds now
+  // A full step of fraction f from the state before the step.
+  auto apply = [&](double f) {
+    take_back();
+    applied = f;
+    p.translation = params.translation * f;
+    p.angle = params.angle * f;
+    step_once(p, out);
+    depth = largest(out.depths);
+  };
+  // Re-tests of the candidates alone: their rows and detector states before the step (`small`), the
+  // positions before it (`previous`); only they move (fraction f) and are tested.
+  IndexList rows;
+  SessionImage small;
+  Points previous;
+  auto prepare = [&] {
+    take_back();
+    applied = 0.0;
+    rows.clear();
+    for (Index r : fields_->deformable)
+      if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
+    small = capture_rows(rows, true);
+    previous = model_.positions();
+  };
+  auto retest = [&](double f) {
+    if (!partial) return apply(f);
+    restore(small, false);
+    p.translation = params.translation * f;
+    p.angle = params.angle * f;
+    SurfelArrays& a = model_.arrays();
+    const bool tangents = model_.has_tangents();
+    std::swap(fields_->deformable, rows);  // apply_step moves fields.deformable only
+    struct SwapBack {
+      IndexList& x;
+      IndexList& y;
+      ~SwapBack() { std::swap(x, y); }
+    } swap_back{fields_->deformable, rows};
+    apply_step(*fields_, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+               tangents ? &a.tangent_v : nullptr, 1);
+  };
+  auto detect_candidates = [&] {
+    if (!partial) return;
+    const CollisionResult c = detector_->detect_only(
+        CollisionScene{model_.positions(), model_.normals(), model_.radii(), fields_->regions}, previous, candidate);
+    out.colliding.clear();
+    for (Index r : c.colliding) out.colliding.push_back(model_.ids()[r]);
+    out.depths = c.depths;
+    depth = largest(out.depths);
+  };
+  // One round of re-tests from the current result (`out`, at fraction `kept`).
+  auto round = [&] {
+    while (iterations < rp.backoff_max_iterations) {
+      if (!rotation) {
+        if (depth < eps || out.colliding.empty()) return;
+        const auto deepest = std::max_element(out.depths.begin(), out.depths.end()) - out.depths.begin();
+        const Index row = model_.row_of(out.colliding[static_cast<std::size_t>(deepest)]);
+        const double s = blend_value(params.blend, fields_->lambda[row]);
+        if (s <= 0.0 || t_len <= 0.0) return;
+        kept = std::max(0.0, kept - depth / (s * t_len));
+      } else {
+        if (out.colliding.empty()) lo = kept;
+        else if (depth < eps) return;
+        else hi = kept;
+        if ((hi - lo) * full_move < eps) break;
+        kept = 0.5 * (lo + hi);
+      }
+      retest(kept);
+      detect_candidates();
+      ++iterations;
+    }
+    // Bisection ends on the last fraction that did not collide when the last one tried still did.
+    if (rotation && !out.colliding.empty() && depth >= eps) kept = lo;
+  };
+  // Re-testing only the candidates can miss a surfel that did not collide after the whole step but
+  // does after part of it (e.g. one that crossed a thin zero part): the full detection of the kept
+  // fraction then finds it, and it joins the candidates for another round.
+  for (;;) {
+    if (partial) prepare();
+    round();
+    if (iterations == 0 && partial) {  // nothing re-tested: back to the whole step as it was
+      apply(1.0);
+      break;
+    }
+    if (iterations == 0 || (!partial && applied == kept)) break;
+    apply(kept);
+    bool grew = false;
+    for (SurfelId id : out.colliding) {
+      std::uint8_t& c = candidate[static_cast<std::size_t>(model_.row_of(id))];
+      grew |= c == 0;
+      c = 1;
+    }
+    const bool settled = out.colliding.empty() || depth < eps;
+    if (!partial || settled || !grew || iterations >= rp.backoff_max_iterations) break;
+    if (rotation) lo = 0.0;  // `kept` collides after all: only the state before the step is known clear
+  }
+  out.response = "backed_off";
+  out.backoff = {iterations, kept, depth};
+  out.response_ms = ms_since(start);
+}
+
+}  // namespace surfeledit
