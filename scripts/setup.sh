@@ -10,6 +10,8 @@ BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 JOBS="${SURFELEDIT_JOBS:-$(nproc)}"
 VENV="$ROOT/.venv"
 log() { printf '[setup] %s\n' "$*"; }
+# ccache keys on paths relative to the checkout, so another clone of the same sources hits the cache.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
 
 # 1. Debian packages.
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev

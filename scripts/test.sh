@@ -4,6 +4,7 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh"
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
 BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
@@ -16,6 +17,7 @@ TSAN_BUILD="${SURFELEDIT_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
 export TSAN_OPTIONS="suppressions=$ROOT/tests/tsan_suppressions.txt halt_on_error=1"
 if [ ! -f "$TSAN_BUILD/CMakeCache.txt" ]; then
   cmake -S "$ROOT" -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSURFELEDIT_TSAN=ON \
+    -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache \
     -DSURFELEDIT_BUILD_PYTHON=OFF -DSURFELEDIT_BUILD_BENCH=OFF >"$BUILD/setup-tsan-configure.log" 2>&1 \
     || { tail -n 40 "$BUILD/setup-tsan-configure.log"; exit 1; }
 fi
