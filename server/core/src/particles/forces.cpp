@@ -23,7 +23,9 @@ namespace {
 
 // On x86-64 the two block loops are also compiled for AVX2 and picked at run time. Without contraction
 // (see above) every lane computes the same IEEE operations at any vector width, so the bits do not change.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// Not in sanitizer builds: the clones' ifunc resolvers run before the sanitizer runtime is up and crash.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_THREAD__) && \
+    !defined(__SANITIZE_ADDRESS__)
 #define SURFELEDIT_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define SURFELEDIT_SIMD_CLONES
