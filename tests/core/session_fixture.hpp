@@ -1,5 +1,10 @@
-// The default scene (slab = part 0, sphere = part 1) loaded into an EditSession, for session tests.
+// The default scene (slab = part 0, sphere = part 1) loaded into an EditSession, and bitwise snapshots
+// of what a user observes, for session tests.
 #pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
 
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
@@ -19,5 +24,38 @@ struct SessionFixture {
     for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
   }
 };
+
+// An independent copy of what a user can observe.
+struct Snapshot {
+  IdList ids;
+  Points positions, normals;
+  Values radii;
+  IdList colliding;
+  Points clip_points, clip_dirs;
+  std::uint64_t hash = 0;
+
+  explicit Snapshot(const EditSession& s)
+      : ids(s.model().ids()),
+        positions(s.model().positions()),
+        normals(s.model().normals()),
+        radii(s.model().radii()),
+        colliding(s.colliding()),
+        clip_points(s.model().clip_points()),
+        clip_dirs(s.model().clip_dirs()),
+        hash(s.state_hash()) {}
+};
+
+inline void expect_same(const Snapshot& a, const Snapshot& b, const std::string& where) {
+  SCOPED_TRACE(where);
+  EXPECT_EQ(a.ids, b.ids);
+  // Bitwise: Eigen's == compares exactly.
+  EXPECT_TRUE(a.positions.rows() == b.positions.rows() && a.positions == b.positions);
+  EXPECT_TRUE(a.normals.rows() == b.normals.rows() && a.normals == b.normals);
+  EXPECT_TRUE(a.radii.size() == b.radii.size() && a.radii == b.radii);
+  EXPECT_EQ(a.colliding, b.colliding);
+  EXPECT_TRUE(a.clip_points.rows() == b.clip_points.rows() && a.clip_points == b.clip_points);
+  EXPECT_TRUE(a.clip_dirs.rows() == b.clip_dirs.rows() && a.clip_dirs == b.clip_dirs);
+  EXPECT_EQ(a.hash, b.hash);
+}
 
 }  // namespace surfeledit

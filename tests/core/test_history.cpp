@@ -10,34 +10,6 @@
 namespace surfeledit {
 namespace {
 
-// An independent copy of what a user can observe.
-struct Snapshot {
-  IdList ids;
-  Points positions, normals;
-  Values radii;
-  IdList colliding;
-  std::uint64_t hash = 0;
-
-  explicit Snapshot(const EditSession& s)
-      : ids(s.model().ids()),
-        positions(s.model().positions()),
-        normals(s.model().normals()),
-        radii(s.model().radii()),
-        colliding(s.colliding()),
-        hash(s.state_hash()) {}
-};
-
-void expect_same(const Snapshot& a, const Snapshot& b, const std::string& where) {
-  SCOPED_TRACE(where);
-  EXPECT_EQ(a.ids, b.ids);
-  // Bitwise: Eigen's == compares exactly.
-  EXPECT_TRUE(a.positions.rows() == b.positions.rows() && a.positions == b.positions);
-  EXPECT_TRUE(a.normals.rows() == b.normals.rows() && a.normals == b.normals);
-  EXPECT_TRUE(a.radii.size() == b.radii.size() && a.radii == b.radii);
-  EXPECT_EQ(a.colliding, b.colliding);
-  EXPECT_EQ(a.hash, b.hash);
-}
-
 // The default scene (slab + sphere 0.35 above it) with its regions set, sphere deformable.
 struct Fixture : SessionFixture {
   Fixture() : SessionFixture("alice") { session.set_regions({zero, {}}, {one, {}}); }
@@ -202,7 +174,7 @@ TEST(Response, CancelNeedsARowDetector) {
   Fixture f;
   EXPECT_THROW(f.session.configure({{"response", std::string("cancel")}, {"zero_hierarchy", std::string("aabb")}}),
                Error);
-  EXPECT_THROW(f.session.configure({{"response", std::string("merge")}}), Error);
+  EXPECT_THROW(f.session.configure({{"response", std::string("melt")}}), Error);
   EXPECT_THROW(f.session.configure({{"backoff_epsilon", -1.0}}), Error);
 }
 
