@@ -33,6 +33,8 @@ struct StatePage {
   std::vector<double> normals;       // n*3, row-major
   std::vector<double> radii;         // n
   std::vector<std::uint64_t> removed;  // removed ids (first page only)
+  std::vector<double> clip_points;   // n*3 clip line points, or empty when the model has no clip lines
+  std::vector<double> clip_dirs;     // n*3 unit directions (zero: unclipped), or empty likewise
 };
 
 // One named session setting (proto Setting); the value is in the member its kind names.
@@ -103,6 +105,19 @@ struct HistoryInfo {
   bool undone = false;        // in the redo tail
 };
 
+// An intersection curve (proto Curve).
+struct CurveInfo {
+  std::vector<double> points;  // k*3, in curve order
+  bool closed = false;         // the last point connects back to the first
+};
+
+// What OP_MERGE did (proto MergeResult).
+struct MergeInfo {
+  std::vector<std::uint64_t> removed, features, moved, inserted;  // ids (see EditSession::merge)
+  std::vector<CurveInfo> curves;
+  double merge_ms = 0.0, crease_ms = 0.0, curves_ms = 0.0;
+};
+
 struct Reply {
   std::string client_id;
   std::uint64_t request_id = 0;
@@ -116,6 +131,8 @@ struct Reply {
   std::optional<ServerInfo> server_info;
   std::optional<StepResult> step;
   std::vector<HistoryInfo> history;  // OP_HISTORY
+  std::optional<MergeInfo> merge;    // OP_MERGE
+  std::vector<CurveInfo> curves;     // OP_CURVES
 };
 
 }  // namespace surfeledit::service
