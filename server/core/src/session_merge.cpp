@@ -94,7 +94,7 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   for (std::size_t k = 0; k < moved_rows.size(); ++k)
     merge_.crease_radii[static_cast<Eigen::Index>(k)] = model_.radii()[moved_rows[k]];
   t = std::chrono::steady_clock::now();
-  if (crease_on) out.curves = intersection_curves();
+  if (merge_.crease_positions.rows() > 0) out.curves = intersection_curves();
   out.curves_ms = ms_since(t);
   out.total_ms = ms_since(start);
   return out;

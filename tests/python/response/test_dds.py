@@ -29,7 +29,7 @@ def load(session, a: SceneSetup) -> None:
     session.set_regions(zero=a.zero, one=a.one)
 
 
-@pytest.mark.parametrize("response", ["report", "cancel", "backoff"])
+@pytest.mark.parametrize("response", ["report", "cancel", "backoff", "merge"])
 def test_responses_equal_in_process(client: surfeledit.Client, response: str) -> None:
     a = approach(spacing=0.05)
     local = LocalSession("local")
@@ -44,7 +44,7 @@ def test_responses_equal_in_process(client: surfeledit.Client, response: str) ->
             assert np.array_equal(got.colliding, want.colliding)
             assert np.array_equal(got.depths, want.depths)
             assert got.backoff == want.backoff
-            assert got.features.size == 0
+            assert np.array_equal(got.features, want.features)
             assert got.version == want.version
         assert np.array_equal(sess.state().positions, local.state().positions)
         assert sess.info().state_hash == local.core.state_hash
@@ -104,7 +104,7 @@ def test_bad_arguments_are_typed_and_change_nothing(client: surfeledit.Client) -
             sess.undo()
         load(sess, a)
         info, version = sess.info(), sess.version
-        for bad in ({"response": "unknown"}, {"response": "merge"}, {"backoff_epsilon": -1e-3}):
+        for bad in ({"response": "unknown"}, {"response": "melt"}, {"backoff_epsilon": -1e-3}):
             with pytest.raises(InvalidArgumentError) as e:
                 sess.configure(**bad)
             assert e.value.field == next(iter(bad))
