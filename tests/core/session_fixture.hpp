@@ -58,4 +58,35 @@ inline void expect_same(const Snapshot& a, const Snapshot& b, const std::string&
   EXPECT_EQ(a.hash, b.hash);
 }
 
+// The undo stack of a random sequence: snapshots before each applied op and after each undone one;
+// undo() / redo() act on the session and check it against them (false when there is nothing to do).
+struct UndoChecker {
+  std::vector<Snapshot> before;  // before each applied op (a stack, as the history)
+  std::vector<Snapshot> undone;  // after each undone op (the redo tail)
+
+  // An op was applied; `b` is the snapshot from before it.
+  void applied(Snapshot b) {
+    before.push_back(std::move(b));
+    undone.clear();
+  }
+  bool undo(EditSession& s, const std::string& where) {
+    return swap(s, &EditSession::undo, before, undone, "undo at " + where);
+  }
+  bool redo(EditSession& s, const std::string& where) {
+    return swap(s, &EditSession::redo, undone, before, "redo at " + where);
+  }
+
+ private:
+  static bool swap(EditSession& s, std::uint64_t (EditSession::*op)(), std::vector<Snapshot>& from,
+                   std::vector<Snapshot>& to, const std::string& where) {
+    if (from.empty()) return false;
+    Snapshot now(s);
+    (s.*op)();
+    expect_same(Snapshot(s), from.back(), where);
+    from.pop_back();
+    to.push_back(std::move(now));
+    return true;
+  }
+};
+
 }  // namespace surfeledit

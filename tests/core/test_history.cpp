@@ -85,8 +85,7 @@ TEST(History, RandomSequencesAgainstSnapshots) {
   Fixture f;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<Snapshot> before;  // before each applied op (a stack, as the history)
-  std::vector<Snapshot> undone;  // after each undone op (the redo tail)
+  UndoChecker stack;
   const char* responses[] = {"report", "cancel", "report"};
   for (int it = 0; it < 60; ++it) {
     const int what = static_cast<int>(rng() % 10);
@@ -100,31 +99,22 @@ TEST(History, RandomSequencesAgainstSnapshots) {
         expect_same(Snapshot(f.session), b, "cancel");
         continue;
       }
-      before.push_back(std::move(b));
-      undone.clear();
+      stack.applied(std::move(b));
     } else if (what < 5) {
       const IdList& ids = f.session.model().ids();
       const SurfelId id = ids[rng() % ids.size()];
       if (id == f.zero.front() || id == f.one.front()) continue;  // keep both regions non-empty
-      before.emplace_back(f.session);
+      Snapshot b(f.session);
       f.session.remove({id});
-      undone.clear();
+      stack.applied(std::move(b));
     } else if (what < 6) {
-      before.emplace_back(f.session);
+      Snapshot b(f.session);
       f.session.configure({{"response", std::string(responses[rng() % 3])}});
-      undone.clear();
-    } else if (what < 9 && !before.empty()) {
-      Snapshot now(f.session);
-      f.session.undo();
-      expect_same(Snapshot(f.session), before.back(), "undo at " + std::to_string(it));
-      before.pop_back();
-      undone.push_back(std::move(now));
-    } else if (!undone.empty()) {
-      Snapshot now(f.session);
-      f.session.redo();
-      expect_same(Snapshot(f.session), undone.back(), "redo at " + std::to_string(it));
-      undone.pop_back();
-      before.push_back(std::move(now));
+      stack.applied(std::move(b));
+    } else if (what < 9 && !stack.before.empty()) {
+      stack.undo(f.session, std::to_string(it));
+    } else {
+      stack.redo(f.session, std::to_string(it));
     }
   }
 }

@@ -16,7 +16,7 @@ from surfeledit import ConflictError, InvalidArgumentError, LocalSession, State
 from surfeledit.results import Changes, merge
 
 from .conftest import approach
-from .test_dds import load, steps
+from .test_dds import load, load_and_watch, steps
 
 
 def same_state(a: State, b: State) -> None:
@@ -96,15 +96,7 @@ def test_response_merge_over_dds_and_later_steps(client: surfeledit.Client) -> N
 def test_watcher_applies_clips(client: surfeledit.Client) -> None:
     a = approach(spacing=0.05)
     with client.open_session("w") as sess:
-        load(sess, a)
-        w = sess.watch()
-        for _ in range(20):  # volatile updates: wait until the watcher hears one
-            sess.configure(history_mb=256.0)
-            sess.set_regions(zero=a.zero, one=a.one)
-            if w.get(timeout=0.5) is not None:
-                break
-        while w.get(timeout=0.2) is not None:
-            pass
+        w = load_and_watch(sess, a)
         cache = sess.state()
         for st in steps(a.spacing):
             sess.deform(**st)
