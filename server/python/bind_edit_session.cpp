@@ -148,7 +148,7 @@ void bind_edit_session(pyb::module_& m) {
       .def_readonly("deform_ms", &StepResult::deform_ms)
       .def_readonly("resample_ms", &StepResult::resample_ms)
       .def_readonly("response", &StepResult::response,
-                    "'none', 'reported', 'cancelled' (colliding: what would have collided) or 'backed_off'")
+                    "'none', 'reported', 'cancelled' (colliding: what would have collided), 'backed_off' or 'merged'")
       .def_property_readonly("backoff", [](const StepResult& o) {
         pyb::dict d;
         d["iterations"] = o.backoff.iterations;

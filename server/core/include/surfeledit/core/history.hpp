@@ -72,7 +72,7 @@ struct SessionImage {
 // What history() lists of an entry.
 struct HistoryItem {
   std::uint64_t version = 0;  // the session's version after the op
-  std::string op;             // "load", "set_regions", "deform", "configure", "remove"
+  std::string op;             // "load", "set_regions", "deform", "configure", "remove", "merge"
   std::string author;         // client id ("" in-process)
   IdList touched;             // ids of the surfels it changed, inserted or removed, ascending
   bool undone = false;        // in the redo tail

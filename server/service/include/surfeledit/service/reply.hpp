@@ -99,7 +99,7 @@ struct StepResult {
 // One entry of a session's edit history (proto HistoryEntry).
 struct HistoryInfo {
   std::uint64_t version = 0;  // session version after the change
-  std::string op;             // "load" | "set_regions" | "deform" | "configure" | "remove"
+  std::string op;             // "load" | "set_regions" | "deform" | "configure" | "remove" | "merge"
   std::string client_id;      // who made it
   std::vector<std::uint64_t> touched;  // ids changed, inserted or removed, ascending
   bool undone = false;        // in the redo tail
