@@ -3,8 +3,10 @@ one thread (issue 9 §4):
 
 1. history overhead: wall time of a step beside the core's own apply + detect time (the difference is
    the before-image the history records, plus the binding's call overhead, ~0.05 ms);
-2. per colliding step: response report / cancel / backoff (iterations, kept fraction, ms) beside the
-   step time; target: back-off <= 2 step times.
+2. per colliding step: response report / cancel / backoff / merge (iterations, kept fraction, ms) beside
+   the step time; target: back-off <= 2 step times;
+3. merge (§7 d) at the first colliding step: merge_regions + crease + intersection curves, and the whole
+   session merge (model changes, detector reset, history), median of repeats (undo, merge again).
 
     .venv/bin/python bench/core/bench_response.py [--scale 1] [--colliding 5]
 """
@@ -51,6 +53,26 @@ def run(sc: "S.Scenario", response: str, colliding_steps: int) -> dict:
     return dict(step_ms=step_ms, history_ms=history_ms, hit=hit, history=es.report()["structures"]["history"])
 
 
+def merge_times(sc: "S.Scenario", repeats: int = 5) -> dict:
+    """The session's merge at the first colliding step of a report run, `repeats` times (undone between)."""
+    es = open_session(sc, response="report")
+    params = sc.step_params()
+    for _ in range(sc.steps):
+        if es.deform(**params).colliding.size:
+            break
+    runs = []
+    for k in range(repeats):
+        m = es.merge(crease=True)
+        runs.append(m)
+        if k + 1 < repeats:
+            es.undo()
+    med = {key: statistics.median([m[key] for m in runs]) for key in ("merge_ms", "crease_ms", "curves_ms", "total_ms")}
+    last = runs[-1]
+    med.update(removed=len(last["removed"]), features=len(last["features"]), moved=len(last["moved"]),
+               inserted=len(last["inserted"]), curves=len(last["curves"]))
+    return med
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scale", type=float, default=1.0)
@@ -63,7 +85,7 @@ def main() -> None:
           f"{sc.step_params()['translation']}, one thread\n")
     rows = []
     step = 0.0  # the reference: median apply + detect of the report run's steps
-    for response in ("report", "cancel", "backoff"):
+    for response in ("report", "cancel", "backoff", "merge"):
         res = run(sc, response, args.colliding)
         hit = res["hit"]
         if response == "report":
@@ -81,6 +103,12 @@ def main() -> None:
     print(benchlib.table(["response", "colliding steps", "step ms (report run, median)",
                           "response ms (median; back-off: its re-steps)", "(step + response) / step",
                           "back-off iterations (median)", "kept fraction"], rows))
+    m = merge_times(sc)
+    print(f"\nMerge at the first colliding step (median of 5, undone between): merge_regions {m['merge_ms']:.2f} ms "
+          f"+ crease {m['crease_ms']:.2f} ms + curves {m['curves_ms']:.2f} ms; whole session merge "
+          f"{m['total_ms']:.2f} ms = {m['total_ms'] / step:.1f} step times. Removed {m['removed']}, "
+          f"features {m['features']}, moved onto the curve {m['moved']}, gap copies {m['inserted']}, "
+          f"{m['curves']} curve(s).")
 
 
 if __name__ == "__main__":

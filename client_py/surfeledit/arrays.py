@@ -16,7 +16,7 @@ from . import errors
 from ._protocol import proto
 
 __all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
-           "readonly", "NO_IDS"]
+           "join_clips", "readonly", "NO_IDS"]
 
 ArrayLike = Union[np.ndarray, Sequence[Any]]
 Vec3Like = Union[Sequence[float], np.ndarray]
@@ -92,6 +92,15 @@ def join_surfels(parts: Sequence[Any]) -> Tuple[np.ndarray, np.ndarray, np.ndarr
     carry surfels in pieces (state pages, update parts), in the order given."""
     return (concat(parts, "ids", np.uint64), concat(parts, "positions", np.float64).reshape(-1, 3),
             concat(parts, "normals", np.float64).reshape(-1, 3), concat(parts, "radii", np.float64))
+
+
+def join_clips(parts: Sequence[Any]) -> Optional[np.ndarray]:
+    """(N, 6) clip lines (point, direction) of wire samples that carry ``clip_points`` / ``clip_dirs``
+    with their surfels, in the order given; None when they carry none (the model has no clip lines)."""
+    points = concat(parts, "clip_points", np.float64)
+    if points.size == 0:
+        return None
+    return np.hstack([points.reshape(-1, 3), concat(parts, "clip_dirs", np.float64).reshape(-1, 3)])
 
 
 def readonly(arrays: Iterable[np.ndarray]) -> None:

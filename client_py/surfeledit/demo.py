@@ -1,4 +1,9 @@
-"""Scripted demo: load the default scene, pin the slab, move the sphere down in ten steps.
+"""Scripted demo: load the default scene, pin the slab, push the sphere down until it collides.
+
+Runs twice: once with the back-off response (the sphere stops where it touches the slab) and once
+with the merge response (the sphere is merged into the slab with a sharp crease). Each step line
+prints the colliding count and what the response did (back-off: fraction kept; merge: feature surfels
+and the length of the intersection curves).
 
 Run with ``python -m surfeledit.demo [--domain D] [--steps N]``. Connects with ``spawn=True`` (a
 local ``surfeledit-server`` is started if none answers) and prints one line per step to stdout.
@@ -14,6 +19,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from .connection import connect
+from .results import Curve, StepResult
 
 
 def default_scene(spacing: float = 0.05) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -26,12 +32,57 @@ def default_scene(spacing: float = 0.05) -> Tuple[np.ndarray, np.ndarray, np.nda
             np.asarray(s.radii, np.float64), np.asarray(s.part))
 
 
+def curve_length(curves: Sequence[Curve]) -> float:
+    """Total length of intersection curves, model units (closed ones include the closing edge)."""
+    total = 0.0
+    for c in curves:
+        pts = np.vstack([c.points, c.points[:1]]) if c.closed else c.points
+        total += float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+    return total
+
+
+def response_text(r: StepResult, session: object) -> str:
+    """What the response of one step did, in a few words."""
+    if r.response == "backed_off":
+        return f"backed off: kept {r.backoff.kept:.2f} of the step, depth {r.backoff.final_depth:.4f}"
+    if r.response == "merged":
+        curves = session.intersection_curves()  # type: ignore[attr-defined]
+        return (f"merged: {r.features.size} feature surfels, {len(curves)} curve(s) "
+                f"{curve_length(curves):.3f} long")
+    return r.response
+
+
+def run(client: object, response: str, pos: np.ndarray, nrm: np.ndarray, rad: np.ndarray, part: np.ndarray,
+        steps: int, drop: float) -> None:
+    """One session with ``response``: the sphere pushed ``steps`` x ``drop`` down, one line per step."""
+    with client.open_session(f"demo-{response}-{client.client_id}") as session:  # type: ignore[attr-defined]
+        t0 = time.perf_counter()
+        session.load_points(pos, nrm, rad)
+        ids = session.ids()  # ascending ids, assigned in upload order
+        session.set_regions(zero=ids[part == 0], one=ids[part == 1])
+        session.configure(response=response)
+        print(f"\nresponse={response} (loaded in {(time.perf_counter() - t0) * 1e3:.1f} ms)")
+        print(f"{'seq':>4} {'version':>8} {'moved':>8} {'colliding':>9} {'step ms':>9} {'rt ms':>9}  response")
+        for _ in range(steps):
+            r = session.deform(translation=(0.0, 0.0, -drop))
+            print(f"{r.seq:>4} {r.version:>8} {r.moved:>8} {r.colliding.size:>9} "
+                  f"{r.timings.get('total', float('nan')):>9.2f} {r.round_trip_ms:>9.2f}  {response_text(r, session)}")
+        st = session.state()
+        sphere = np.isin(st.ids, ids[part == 1])
+        clipped = 0 if st.clips is None else int(np.any(st.clips[:, 3:] != 0, axis=1).sum())
+        print(f"sphere lowest z: {st.positions[sphere, 2].min():.3f}; {len(st)} surfels, {clipped} clipped")
+        held = session.info()
+        parts = ", ".join(f"{s.name} {s.bytes / 1024:.0f} KiB" for s in held.structures)
+        print(f"session holds {held.surfels} surfels, {held.bytes_per_surfel:.1f} bytes/surfel ({parts})")
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m surfeledit.demo", description=__doc__.split("\n\n")[0])
     ap.add_argument("--domain", type=int, default=None, help="DDS domain (default: $SURFELEDIT_DOMAIN or 0)")
-    ap.add_argument("--steps", type=int, default=10)
+    ap.add_argument("--steps", type=int, default=16)
     ap.add_argument("--spacing", type=float, default=0.05, help="sample spacing, model units")
     ap.add_argument("--drop", type=float, default=0.03, help="downward translation per step, model units")
+    ap.add_argument("--responses", default="backoff,merge", help="comma-separated responses, one run each")
     args = ap.parse_args(argv)
 
     pos, nrm, rad, part = default_scene(args.spacing)
@@ -39,22 +90,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     with connect(domain=args.domain, spawn=True) as client:
         info = client.info()
         print(f"server {info.version} on domain {client.domain}, max_chunk_surfels={info.max_chunk_surfels}")
-        with client.open_session(f"demo-{client.client_id}") as session:
-            t0 = time.perf_counter()
-            session.load_points(pos, nrm, rad)
-            print(f"loaded in {(time.perf_counter() - t0) * 1e3:.1f} ms")
-            ids = session.ids()  # ascending ids, assigned in upload order
-            session.set_regions(zero=ids[part == 0], one=ids[part == 1])
-            print(f"{'seq':>4} {'version':>8} {'moved':>8} {'step ms':>9} {'rt ms':>9}")
-            for _ in range(args.steps):
-                r = session.deform(translation=(0.0, 0.0, -args.drop))
-                print(f"{r.seq:>4} {r.version:>8} {r.moved:>8} {r.timings.get('total', float('nan')):>9.2f} "
-                      f"{r.round_trip_ms:>9.2f}")
-            final = session.positions()
-            print(f"sphere lowest z: {final[part == 1, 2].min():.3f}")
-            held = session.info()
-            parts = ", ".join(f"{s.name} {s.bytes / 1024:.0f} KiB" for s in held.structures)
-            print(f"session holds {held.surfels} surfels, {held.bytes_per_surfel:.1f} bytes/surfel ({parts})")
+        for response in args.responses.split(","):
+            run(client, response.strip(), pos, nrm, rad, part, args.steps, args.drop)
     return 0
 
 

@@ -15,7 +15,8 @@ from typing import Any, Dict, List, Optional
 import numpy as np
 
 from .arrays import ArrayLike, Vec3Like, readonly
-from .results import Backoff, Changes, CollisionStats, HistoryEntry, SettingValue, State, StepResult
+from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
+                      StepResult, clips_or_none)
 from .session_api import StateArrays, settings_doc
 
 __all__ = ["LocalSession"]
@@ -42,6 +43,16 @@ def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
                       center=np.asarray(o.center, np.float64).reshape(3), timings=timings, round_trip_ms=call_ms,
                       detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted,
                       response=str(o.response), backoff=Backoff(**o.backoff), features=features)
+
+
+def _curves(raw: Any) -> List[Curve]:
+    """:class:`Curve` objects of the core's ``[{points, closed}]``."""
+    out = []
+    for c in raw:
+        points = np.asarray(c["points"], np.float64).reshape(-1, 3)
+        readonly((points,))
+        out.append(Curve(points=points, closed=bool(c["closed"])))
+    return out
 
 
 class LocalSession(StateArrays):
@@ -124,6 +135,19 @@ class LocalSession(StateArrays):
                              touched=np.asarray(h["touched"], np.uint64), undone=bool(h["undone"]))
                 for h in self.core.history()]
 
+    def merge(self, crease: bool = True) -> MergeResult:
+        """Merges the regions now (see :meth:`surfeledit.session_api.EditingSession.merge`)."""
+        m = self.core.merge(crease=bool(crease))
+        ids = [np.asarray(m[k], np.uint64) for k in ("removed", "features", "moved", "inserted")]
+        readonly(ids)
+        return MergeResult(*ids, curves=_curves(m["curves"]), version=self.version,
+                           timings={"merge": float(m["merge_ms"]), "crease": float(m["crease_ms"]),
+                                    "curves": float(m["curves_ms"])})
+
+    def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
+        """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""
+        return _curves(self.core.intersection_curves(refine_angle=float(refine_angle)))
+
     def report(self) -> Dict[str, Any]:
         """``surfels``, ``structures`` {name: bytes}, ``total_bytes``, ``bytes_per_surfel`` and
         ``hierarchy_status`` (``'fresh'`` | ``'refit'`` | ``'rebuilding'``, ``''`` without a hierarchy)."""
@@ -135,11 +159,15 @@ class LocalSession(StateArrays):
         ids = np.asarray(c.ids(), np.uint64)
         arrays = [np.asarray(c.positions(), np.float64), np.asarray(c.normals(), np.float64),
                   np.asarray(c.radii(), np.float64)]
+        raw = c.clips()
+        clips = None if raw is None else np.hstack([np.asarray(raw[0], np.float64), np.asarray(raw[1], np.float64)])
         if ids.size > 1 and not bool(np.all(ids[1:] > ids[:-1])):
             order = np.argsort(ids, kind="stable")
             ids, arrays = ids[order], [a[order] for a in arrays]
-        readonly([ids] + arrays)
-        return State(self.version, ids, *arrays)
+            clips = None if clips is None else clips[order]
+        clips = clips_or_none(clips)
+        readonly([ids] + arrays + ([clips] if clips is not None else []))
+        return State(self.version, ids, *arrays, clips=clips)
 
     def changes_since(self, version: int) -> Changes:
         """Nothing when ``version`` is the current one; otherwise the whole model (``full``: the
@@ -148,7 +176,7 @@ class LocalSession(StateArrays):
         if int(version) == st.version:
             none = np.zeros((0, 3))
             return Changes(st.version, False, st.ids[:0], none, none, st.radii[:0], st.ids[:0])
-        return Changes(st.version, True, st.ids, st.positions, st.normals, st.radii, st.ids[:0])
+        return Changes(st.version, True, st.ids, st.positions, st.normals, st.radii, st.ids[:0], st.clips)
 
     # -- in-process only ---------------------------------------------------------------------
     def colliding(self) -> np.ndarray:

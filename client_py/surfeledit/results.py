@@ -8,13 +8,14 @@ Conventions: ids ``(P,) uint64`` ascending; positions / normals ``(P, 3) float64
 from __future__ import annotations
 
 import dataclasses
-from typing import Dict, Union
+from typing import Dict, List, Optional, Union
 
 import numpy as np
 
 from .arrays import NO_IDS
 
-__all__ = ["CollisionStats", "Backoff", "StepResult", "HistoryEntry", "State", "Changes", "UpdateEvent", "SettingValue", "merge"]
+__all__ = ["CollisionStats", "Backoff", "StepResult", "HistoryEntry", "Curve", "MergeResult", "State", "Changes",
+           "UpdateEvent", "SettingValue", "merge", "clips_or_none"]
 
 #: A session setting's value: a flag, an integer, a number or a text.
 SettingValue = Union[bool, int, float, str]
@@ -81,7 +82,7 @@ class HistoryEntry:
 
     Attributes:
         version: session version after the change. op: ``"load"``, ``"set_regions"``, ``"deform"``,
-        ``"configure"`` or ``"remove"``. client: who made it (``""`` in-process).
+        ``"configure"``, ``"remove"`` or ``"merge"``. client: who made it (``""`` in-process).
         touched: (K,) uint64 ids changed, inserted or removed, ascending. undone: in the redo tail.
     """
 
@@ -110,9 +111,10 @@ class StepResult:
         stats: the detector's :class:`CollisionStats` for this step.
         inserted: (I,) uint64 ids of surfels inserted by dynamic resampling in this step.
         response: the session's response: ``"none"`` (nothing collided), ``"reported"``, ``"cancelled"``
-            (the step was taken back; ``colliding`` lists what would have collided) or ``"backed_off"``.
+            (the step was taken back; ``colliding`` lists what would have collided), ``"backed_off"`` or
+            ``"merged"`` (the step was kept and the regions merged; ``colliding`` lists what collided, now removed).
         backoff: :class:`Backoff` of a back-off response.
-        features: (F,) uint64 feature surfel ids of a merge (empty: merge is not offered yet).
+        features: (F,) uint64 feature surfel ids of a merge (response ``"merged"``), ascending.
     """
 
     seq: int
@@ -132,6 +134,50 @@ class StepResult:
 
 
 @dataclasses.dataclass(frozen=True)
+class Curve:
+    """An intersection curve of a merge.
+
+    Attributes:
+        points: (K, 3) float64, model units, in curve order.
+        closed: the last point connects back to the first.
+    """
+
+    points: np.ndarray
+    closed: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class MergeResult:
+    """What a merge did (``session.merge()``).
+
+    Attributes:
+        removed: (R,) uint64 ids removed (the colliding deformable surfels, the zero surfels inside), ascending.
+        features: (F,) uint64 feature surfel ids of both sides (kept), ascending.
+        moved: (M,) uint64 ids the crease moved onto the intersection (now clipped), ascending.
+        inserted: (I,) uint64 ids of the gap-covering copies.
+        curves: the intersection curves (default refinement) as :class:`Curve`.
+        version: session version after the merge (unchanged when nothing collided).
+        timings: ``merge``, ``crease``, ``curves`` in ms.
+    """
+
+    removed: np.ndarray
+    features: np.ndarray
+    moved: np.ndarray
+    inserted: np.ndarray
+    curves: List[Curve]
+    version: int
+    timings: Dict[str, float] = dataclasses.field(default_factory=dict)
+
+
+def clips_or_none(clips: Optional[np.ndarray]) -> Optional[np.ndarray]:
+    """``clips`` (P, 6), or None when no surfel is clipped (every direction zero) -- the one form of
+    "no clip lines" both sessions report."""
+    if clips is None or not bool(np.any(clips[:, 3:])):
+        return None
+    return clips
+
+
+@dataclasses.dataclass(frozen=True)
 class State:
     """The whole model at ``version``; arrays are read-only (copy to edit).
 
@@ -141,6 +187,10 @@ class State:
         positions: (P, 3) float64, model units.
         normals: (P, 3) float64, unit length.
         radii: (P,) float64, model units.
+        clips: (P, 6) float64 clip lines of a merge's crease, or None when no surfel is clipped: columns
+            0:3 a point of the line (model units, in the surfel's tangent plane), 3:6 its unit direction
+            (zero: that surfel is unclipped). A clipped disc keeps the half
+            ``{y : (y - point) . (normal x direction) >= 0}``; a renderer draws the crease along the lines.
     """
 
     version: int
@@ -148,6 +198,7 @@ class State:
     positions: np.ndarray
     normals: np.ndarray
     radii: np.ndarray
+    clips: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return int(self.ids.shape[0])
@@ -163,6 +214,8 @@ class Changes:
             cannot tell what changed); apply them as a new model.
         ids: (C,) uint64 changed or inserted ids, ascending; positions (C, 3), normals (C, 3), radii (C,).
         removed: (R,) uint64 ids removed since then.
+        clips: (C, 6) clip lines of the changed surfels (as :attr:`State.clips`), or None when the
+            model has none (the changed surfels are unclipped).
     """
 
     version: int
@@ -172,6 +225,7 @@ class Changes:
     normals: np.ndarray
     radii: np.ndarray
     removed: np.ndarray
+    clips: Optional[np.ndarray] = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -186,6 +240,9 @@ class UpdateEvent:
         (for a deform: moved surfels and those inserted by resampling); removed (R,) uint64.
         detected: deform: a collision detector ran, and ``colliding`` (K,) uint64 holds every id
         colliding after the step, ascending (empty otherwise).
+        clips: (N, 6) clip lines of the changed surfels (as :attr:`State.clips`), or None when the model
+        has none (then the changed surfels are unclipped); cause ``"merge"`` (or a step with response
+        ``"merge"``) is when they appear.
 
     When the server's update queue backs up, it merges a session's queued updates into one (the
     newest version, cause and step, with everything changed since the oldest merged one), so versions
@@ -204,27 +261,34 @@ class UpdateEvent:
     removed: np.ndarray
     detected: bool = False
     colliding: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
+    clips: Optional[np.ndarray] = None
 
 
 def merge(cache: State, ch: Changes) -> State:
     """``cache`` with incremental changes ``ch`` applied (ids stay ascending; ``cache`` is not modified)."""
     ids, pos, nrm, rad = cache.ids, cache.positions, cache.normals, cache.radii
+    # Clip lines: zeros (unclipped) wherever neither side has any.
+    with_clips = cache.clips is not None or ch.clips is not None
+    clp = cache.clips if cache.clips is not None else np.zeros((ids.size, 6))
+    ch_clp = ch.clips if ch.clips is not None else np.zeros((ch.ids.size, 6))
     if ch.removed.size:
         keep = ~np.isin(ids, ch.removed)
-        ids, pos, nrm, rad = ids[keep], pos[keep], nrm[keep], rad[keep]
-    ids, pos, nrm, rad = ids.copy(), pos.copy(), nrm.copy(), rad.copy()
+        ids, pos, nrm, rad, clp = ids[keep], pos[keep], nrm[keep], rad[keep], clp[keep]
+    ids, pos, nrm, rad, clp = ids.copy(), pos.copy(), nrm.copy(), rad.copy(), clp.copy()
     if ch.ids.size:
         idx = np.searchsorted(ids, ch.ids)
         found = idx < ids.size
         found[found] = ids[idx[found]] == ch.ids[found]
         rows = idx[found]
         pos[rows], nrm[rows], rad[rows] = ch.positions[found], ch.normals[found], ch.radii[found]
+        clp[rows] = ch_clp[found]
         if not found.all():
             new = ~found
             ids = np.concatenate([ids, ch.ids[new]])
             pos = np.concatenate([pos, ch.positions[new]])
             nrm = np.concatenate([nrm, ch.normals[new]])
             rad = np.concatenate([rad, ch.radii[new]])
+            clp = np.concatenate([clp, ch_clp[new]])
             order = np.argsort(ids, kind="stable")
-            ids, pos, nrm, rad = ids[order], pos[order], nrm[order], rad[order]
-    return State(ch.version, ids, pos, nrm, rad)
+            ids, pos, nrm, rad, clp = ids[order], pos[order], nrm[order], rad[order], clp[order]
+    return State(ch.version, ids, pos, nrm, rad, clips_or_none(clp) if with_clips else None)

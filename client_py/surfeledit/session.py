@@ -16,8 +16,10 @@ import numpy as np
 
 from . import errors
 from ._protocol import proto
-from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_surfels, readonly, vec3
-from .results import Backoff, Changes, CollisionStats, HistoryEntry, SettingValue, State, StepResult, merge
+from .arrays import (ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, join_clips, join_surfels, readonly,
+                     vec3)
+from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
+                      StepResult, clips_or_none, merge)
 from .session_api import StateArrays, settings_doc
 from .watcher import Watcher
 
@@ -80,6 +82,16 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
                       backoff=Backoff(iterations=int(step.backoff_iterations), kept=float(step.backoff_kept),
                                       final_depth=float(step.backoff_depth)),
                       features=features)
+
+
+def _curves(wire: Any) -> List[Curve]:
+    """:class:`Curve` objects of wire ``Curve`` samples (points read-only)."""
+    out = []
+    for c in wire:
+        points = np.asarray(c.points, np.float64).reshape(-1, 3)
+        readonly((points,))
+        out.append(Curve(points=points, closed=bool(c.closed)))
+    return out
 
 
 class Session(StateArrays):
@@ -291,6 +303,25 @@ class Session(StateArrays):
                              touched=np.asarray(h.touched, np.uint64), undone=bool(h.undone))
                 for h in reply.history]
 
+    # -- merge -------------------------------------------------------------------------------
+    def merge(self, crease: bool = True) -> MergeResult:
+        """Merges the regions now (see :meth:`surfeledit.session_api.EditingSession.merge`); watchers
+        get cause ``"merge"`` with the clip lines."""
+        reply = self._request(proto.Op.OP_MERGE, merge=proto.Merge(crease=bool(crease)))
+        if not reply.merge:
+            raise errors.InternalServerError("MERGE reply without a merge result", "merge")
+        m = reply.merge[0]
+        ids = [np.asarray(a, np.uint64) for a in (m.removed, m.features, m.moved, m.inserted)]
+        readonly(ids)
+        return MergeResult(*ids, curves=_curves(m.curves), version=int(reply.version),
+                           timings={"merge": float(m.merge_ms), "crease": float(m.crease_ms),
+                                    "curves": float(m.curves_ms)})
+
+    def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
+        """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""
+        reply = self._request(proto.Op.OP_CURVES, curves=proto.Curves(refine_angle=float(refine_angle)))
+        return _curves(reply.curves)
+
     # -- state -------------------------------------------------------------------------------
     def _fetch_pages(self, changes_only: bool, since: int) -> Optional[Tuple[int, List["proto.StatePage"]]]:
         """(version, all pages) of one GET_STATE answer at one version; None if the version moved in between."""
@@ -324,7 +355,8 @@ class Session(StateArrays):
             version, pages = answer
             ids, pos, nrm, rad = join_surfels(pages)
             return Changes(version=version, full=bool(pages[0].full), ids=ids, positions=pos,
-                           normals=nrm, radii=rad, removed=np.asarray(pages[0].removed, dtype=np.uint64))
+                           normals=nrm, radii=rad, removed=np.asarray(pages[0].removed, dtype=np.uint64),
+                           clips=join_clips(pages))
         raise errors.ConflictError(f"session {self.name!r} kept changing while its state was fetched", "version")
 
     def changes_since(self, version: int) -> Changes:
@@ -339,13 +371,14 @@ class Session(StateArrays):
         cache = self._cache
         if cache is None:
             ch = self._fetch(False, 0)
-            new = State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii)
+            new = State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii, clips_or_none(ch.clips))
         else:
             ch = self._fetch(True, cache.version)
             if ch.version == cache.version and ch.ids.size == 0 and ch.removed.size == 0:
                 return cache
-            new = State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii) if ch.full else merge(cache, ch)
-        readonly((new.ids, new.positions, new.normals, new.radii))
+            new = (State(ch.version, ch.ids, ch.positions, ch.normals, ch.radii, clips_or_none(ch.clips)) if ch.full
+                   else merge(cache, ch))
+        readonly((new.ids, new.positions, new.normals, new.radii) + ((new.clips,) if new.clips is not None else ()))
         self._cache = new
         self.version = new.version
         return new

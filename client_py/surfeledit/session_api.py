@@ -17,7 +17,7 @@ from typing import Any, Dict, List, Optional, Protocol, runtime_checkable
 import numpy as np
 
 from .arrays import ArrayLike, Vec3Like
-from .results import Changes, HistoryEntry, SettingValue, State, StepResult
+from .results import Changes, Curve, HistoryEntry, MergeResult, SettingValue, State, StepResult
 
 __all__ = ["EditingSession", "StateArrays", "settings_doc"]
 
@@ -78,6 +78,20 @@ class EditingSession(Protocol):
 
     def history(self) -> List[HistoryEntry]:
         """The session's history, oldest first (undone entries last, flagged)."""
+        ...
+
+    def merge(self, crease: bool = True) -> MergeResult:
+        """Merges the deformed region with the zero region now (docs/algorithms.md §7 d): removes the
+        surfels that collided in the last step and the zero surfels inside the deformed region;
+        ``crease``: moves the feature surfels onto the intersection and clips them (``State.clips``).
+        One history entry (undo restores everything). Nothing colliding: an empty result, no change.
+        ConflictError without regions (nothing changes). The setting ``response="merge"`` does this
+        after every colliding step (``StepResult.response == "merged"``)."""
+        ...
+
+    def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
+        """The intersection curves of the last merge with a crease, refined where an edge bends more
+        than ``refine_angle`` radians (> 0; InvalidArgumentError otherwise); ConflictError before one."""
         ...
 
     def report(self) -> Dict[str, Any]:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Dict, Iterator, List, Optional
 import numpy as np
 
 from ._protocol import proto
-from .arrays import concat, join_surfels
+from .arrays import concat, join_clips, join_surfels
 from .results import UpdateEvent
 
 if TYPE_CHECKING:
@@ -80,7 +80,7 @@ class Watcher:
             session=first.session, version=int(first.version), cause=first.cause, full=bool(first.full),
             step=int(first.step), ids=ids, positions=positions, normals=normals, radii=radii,
             removed=concat(ordered, "removed", np.uint64), detected=bool(first.detected),
-            colliding=np.asarray(first.colliding, dtype=np.uint64)))
+            colliding=np.asarray(first.colliding, dtype=np.uint64), clips=join_clips(ordered)))
         self._ready.sort(key=lambda e: e.version)
 
     def poll(self) -> List[UpdateEvent]:

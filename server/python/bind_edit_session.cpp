@@ -53,6 +53,18 @@ std::vector<NamedSetting> to_settings(const pyb::kwargs& kwargs) {
   return out;
 }
 
+// Curves as a list of {"points": #K by 3, "closed": bool}.
+pyb::list curves_list(const std::vector<Curve>& curves) {
+  pyb::list out;
+  for (const Curve& c : curves) {
+    pyb::dict d;
+    d["points"] = c.points;
+    d["closed"] = c.closed;
+    out.append(d);
+  }
+  return out;
+}
+
 // A setting value as Python bool, int, float or str.
 pyb::object py_value(const SettingValue& v) {
   return std::visit([](const auto& x) -> pyb::object { return pyb::cast(x); }, v);
@@ -136,7 +148,7 @@ void bind_edit_session(pyb::module_& m) {
       .def_readonly("deform_ms", &StepResult::deform_ms)
       .def_readonly("resample_ms", &StepResult::resample_ms)
       .def_readonly("response", &StepResult::response,
-                    "'none', 'reported', 'cancelled' (colliding: what would have collided) or 'backed_off'")
+                    "'none', 'reported', 'cancelled' (colliding: what would have collided), 'backed_off' or 'merged'")
       .def_property_readonly("backoff", [](const StepResult& o) {
         pyb::dict d;
         d["iterations"] = o.backoff.iterations;
@@ -226,6 +238,44 @@ void bind_edit_session(pyb::module_& m) {
             s.remove(list);
           },
           pyb::arg("ids"))
+      .def(
+          "merge",
+          [](EditSession& s, bool crease) {
+            MergeOutcome m;
+            {
+              pyb::gil_scoped_release release;
+              m = s.merge(crease);
+            }
+            pyb::dict d;
+            d["removed"] = ids_array(m.removed);
+            d["features"] = ids_array(m.features);
+            d["moved"] = ids_array(m.moved);
+            d["inserted"] = ids_array(m.inserted);
+            d["curves"] = curves_list(m.curves);
+            d["merge_ms"] = m.merge_ms;
+            d["crease_ms"] = m.crease_ms;
+            d["curves_ms"] = m.curves_ms;
+            d["total_ms"] = m.total_ms;
+            return d;
+          },
+          pyb::arg("crease") = true,
+          "Merges the regions (§7 d): removed, features, moved, inserted (ids), curves, merge/crease/curves/total_ms")
+      .def(
+          "intersection_curves",
+          [](const EditSession& s, double refine_angle) {
+            CurveParams p;
+            p.refine_angle = refine_angle;
+            return curves_list(s.intersection_curves(p));
+          },
+          pyb::kw_only(), pyb::arg("refine_angle") = CurveParams{}.refine_angle,
+          "Curves through the last merge's crease: [{points: #K by 3, closed}]")
+      .def(
+          "clips",
+          [](const EditSession& s) -> pyb::object {
+            if (!s.model().has_clips()) return pyb::none();
+            return pyb::make_tuple(s.model().clip_points(), s.model().clip_dirs());
+          },
+          "Clip lines (points #P by 3, unit directions #P by 3; zero: unclipped), or None without clips")
       .def("undo", [](EditSession& s) { return s.undo(); }, "Undoes the last change; returns the new version")
       .def("redo", [](EditSession& s) { return s.redo(); }, "Redoes the last undone change; returns the new version")
       .def("history", [](const EditSession& s) {

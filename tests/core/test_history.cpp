@@ -10,34 +10,6 @@
 namespace surfeledit {
 namespace {
 
-// An independent copy of what a user can observe.
-struct Snapshot {
-  IdList ids;
-  Points positions, normals;
-  Values radii;
-  IdList colliding;
-  std::uint64_t hash = 0;
-
-  explicit Snapshot(const EditSession& s)
-      : ids(s.model().ids()),
-        positions(s.model().positions()),
-        normals(s.model().normals()),
-        radii(s.model().radii()),
-        colliding(s.colliding()),
-        hash(s.state_hash()) {}
-};
-
-void expect_same(const Snapshot& a, const Snapshot& b, const std::string& where) {
-  SCOPED_TRACE(where);
-  EXPECT_EQ(a.ids, b.ids);
-  // Bitwise: Eigen's == compares exactly.
-  EXPECT_TRUE(a.positions.rows() == b.positions.rows() && a.positions == b.positions);
-  EXPECT_TRUE(a.normals.rows() == b.normals.rows() && a.normals == b.normals);
-  EXPECT_TRUE(a.radii.size() == b.radii.size() && a.radii == b.radii);
-  EXPECT_EQ(a.colliding, b.colliding);
-  EXPECT_EQ(a.hash, b.hash);
-}
-
 // The default scene (slab + sphere 0.35 above it) with its regions set, sphere deformable.
 struct Fixture : SessionFixture {
   Fixture() : SessionFixture("alice") { session.set_regions({zero, {}}, {one, {}}); }
@@ -113,8 +85,7 @@ TEST(History, RandomSequencesAgainstSnapshots) {
   Fixture f;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<Snapshot> before;  // before each applied op (a stack, as the history)
-  std::vector<Snapshot> undone;  // after each undone op (the redo tail)
+  UndoChecker stack;
   const char* responses[] = {"report", "cancel", "report"};
   for (int it = 0; it < 60; ++it) {
     const int what = static_cast<int>(rng() % 10);
@@ -128,31 +99,22 @@ TEST(History, RandomSequencesAgainstSnapshots) {
         expect_same(Snapshot(f.session), b, "cancel");
         continue;
       }
-      before.push_back(std::move(b));
-      undone.clear();
+      stack.applied(std::move(b));
     } else if (what < 5) {
       const IdList& ids = f.session.model().ids();
       const SurfelId id = ids[rng() % ids.size()];
       if (id == f.zero.front() || id == f.one.front()) continue;  // keep both regions non-empty
-      before.emplace_back(f.session);
+      Snapshot b(f.session);
       f.session.remove({id});
-      undone.clear();
+      stack.applied(std::move(b));
     } else if (what < 6) {
-      before.emplace_back(f.session);
+      Snapshot b(f.session);
       f.session.configure({{"response", std::string(responses[rng() % 3])}});
-      undone.clear();
-    } else if (what < 9 && !before.empty()) {
-      Snapshot now(f.session);
-      f.session.undo();
-      expect_same(Snapshot(f.session), before.back(), "undo at " + std::to_string(it));
-      before.pop_back();
-      undone.push_back(std::move(now));
-    } else if (!undone.empty()) {
-      Snapshot now(f.session);
-      f.session.redo();
-      expect_same(Snapshot(f.session), undone.back(), "redo at " + std::to_string(it));
-      undone.pop_back();
-      before.push_back(std::move(now));
+      stack.applied(std::move(b));
+    } else if (what < 9 && !stack.before.empty()) {
+      stack.undo(f.session, std::to_string(it));
+    } else {
+      stack.redo(f.session, std::to_string(it));
     }
   }
 }
@@ -202,7 +164,7 @@ TEST(Response, CancelNeedsARowDetector) {
   Fixture f;
   EXPECT_THROW(f.session.configure({{"response", std::string("cancel")}, {"zero_hierarchy", std::string("aabb")}}),
                Error);
-  EXPECT_THROW(f.session.configure({{"response", std::string("merge")}}), Error);
+  EXPECT_THROW(f.session.configure({{"response", std::string("melt")}}), Error);
   EXPECT_THROW(f.session.configure({{"backoff_epsilon", -1.0}}), Error);
 }
 

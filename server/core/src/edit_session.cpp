@@ -16,14 +16,6 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
 }
 
-// The detector for `settings` (make_detector), reset from the model as it is now.
-std::shared_ptr<CollisionDetector> reset_detector(const SessionSettings& settings, const SurfelModel& m,
-                                                  const DeformationFields& f) {
-  std::unique_ptr<CollisionDetector> d = make_detector(settings);
-  if (d) d->reset(scene_of(m, f));
-  return d;
-}
-
 template <typename T>
 void keep_entries(std::vector<T>& v, const std::vector<bool>& keep) {
   std::size_t j = 0;
@@ -58,6 +50,7 @@ void EditSession::load(SurfelModel model, const std::string& author) {
   detector_.reset();
   colliding_.clear();
   rest_radius_ = Values();
+  merge_ = MergeMemo();
   record("load", author, std::move(touched), std::move(before));
 }
 
@@ -94,11 +87,12 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
     r = Region::One;
   }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
-  std::shared_ptr<CollisionDetector> detector = reset_detector(settings_, model_, *fields);
+  std::shared_ptr<CollisionDetector> detector = fresh_detector(settings_, *fields);
   SessionImage before = capture_whole(false);
   fields_ = std::move(fields);
   detector_ = std::move(detector);
   colliding_.clear();
+  take_origins();
   ++version_;
   record("set_regions", author, {}, std::move(before));
 }
@@ -110,7 +104,9 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   const std::uint64_t version_before = version_;
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image.
   const auto t_capture = std::chrono::steady_clock::now();
-  SessionImage before = settings_.resample.enabled ? capture_whole(true) : capture_rows(fields_->deformable);
+  // So may a merge (response "merge"), which also removes rows.
+  const bool whole = settings_.resample.enabled || settings_.response.mode == Response::Merge;
+  SessionImage before = whole ? capture_whole(true) : capture_rows(fields_->deformable);
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   step_once(params, out);
@@ -120,6 +116,10 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
     IdList touched;
     touched.reserve(out.moved.size());
     for (Index r : out.moved) touched.push_back(model_.ids()[r]);
+    if (out.response == "merged") {
+      const IdList removed = changes_since(version_before).removed;
+      touched.insert(touched.end(), removed.begin(), removed.end());
+    }
     record("deform", author, std::move(touched), std::move(before));
   }
   out.history_ms = capture_ms + ms_since(t_record);
@@ -202,11 +202,12 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
 void EditSession::configure(const std::vector<NamedSetting>& changes, const std::string& author) {
   const SessionSettings next = apply_settings(settings_, changes);
   std::shared_ptr<CollisionDetector> detector;
-  if (fields_ && !model_.empty()) detector = reset_detector(next, model_, *fields_);
+  if (fields_ && !model_.empty()) detector = fresh_detector(next, *fields_);
   SessionImage before = capture_whole(false);
   settings_ = next;
   detector_ = std::move(detector);
   colliding_.clear();
+  if (fields_) take_origins();
   record("configure", author, {}, std::move(before));
 }
 
@@ -226,19 +227,22 @@ void EditSession::remove(const IdList& ids, const std::string& author) {
   }
   std::vector<bool> keep(static_cast<std::size_t>(m.size()), true);
   for (Index r : rows) keep[r] = false;
-  if (fields_) {
-    std::size_t zero_left = 0, one_left = 0;
-    for (std::size_t r = 0; r < keep.size(); ++r) {
-      if (!keep[r]) continue;
-      zero_left += fields_->regions[r] == Region::Zero;
-      one_left += fields_->regions[r] == Region::One;
-    }
-    if (zero_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the zero region empty");
-    if (one_left == 0) throw Error(ErrorCode::Conflict, "ids", "the removal would leave the one region empty");
-  }
+  check_regions_kept(keep, "ids");
   SessionImage before = capture_whole(true);
   ++version_;
-  for (Index r : rows) removed_log_.emplace_back(version_, m.ids()[r]);
+  remove_rows(ids, keep);
+  if (detector_) detector_->on_removed(keep);
+  IdList gone = ids;
+  std::sort(gone.begin(), gone.end());
+  IdList still;
+  std::set_difference(colliding_.begin(), colliding_.end(), gone.begin(), gone.end(), std::back_inserter(still));
+  colliding_ = std::move(still);
+  record("remove", author, ids, std::move(before));
+}
+
+void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) {
+  for (std::size_t r = 0; r < keep.size(); ++r)
+    if (!keep[r]) removed_log_.emplace_back(version_, model_.ids()[r]);
   model_.remove(ids);
   keep_entries(row_version_, keep);
   if (rest_radius_.size() > 0) {
@@ -263,13 +267,25 @@ void EditSession::remove(const IdList& ids, const std::string& author) {
     for (std::size_t r = 0; r < f.regions.size(); ++r)
       if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
   }
-  if (detector_) detector_->on_removed(keep);
-  IdList gone = ids;
-  std::sort(gone.begin(), gone.end());
-  IdList still;
-  std::set_difference(colliding_.begin(), colliding_.end(), gone.begin(), gone.end(), std::back_inserter(still));
-  colliding_ = std::move(still);
-  record("remove", author, ids, std::move(before));
+}
+
+std::shared_ptr<CollisionDetector> EditSession::fresh_detector(const SessionSettings& settings,
+                                                               const DeformationFields& fields) const {
+  std::unique_ptr<CollisionDetector> d = make_detector(settings);
+  if (d) d->reset(scene_of(model_, fields));
+  return d;
+}
+
+void EditSession::check_regions_kept(const std::vector<bool>& keep, const char* field) const {
+  if (!fields_) return;
+  std::size_t zero_left = 0, one_left = 0;
+  for (std::size_t r = 0; r < keep.size(); ++r) {
+    if (!keep[r]) continue;
+    zero_left += fields_->regions[r] == Region::Zero;
+    one_left += fields_->regions[r] == Region::One;
+  }
+  if (zero_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the zero region empty");
+  if (one_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the one region empty");
 }
 
 void EditSession::touch_rows(const IndexList& rows) {

@@ -160,6 +160,10 @@ Points estimate_normals(const Points& p, int k, const std::string& path) {
   return n;
 }
 
+// Extra vertex properties of the clip lines (float64, exact round trip).
+const std::vector<std::string> kClipPointFields = {"clip_px", "clip_py", "clip_pz"};
+const std::vector<std::string> kClipDirFields = {"clip_dx", "clip_dy", "clip_dz"};
+
 SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, const LoadParams& params) {
   SurfelArrays a;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
@@ -174,6 +178,12 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
   }
   if (read_fields(c, {"radius"}, m)) a.radii = m.col(0);
   a.colors = read_colors(c);
+  // Clip lines of a merge's crease (extra vertex properties written by save_surfels).
+  if (read_fields(c, kClipPointFields, m)) {
+    a.clip_points = m;
+    if (!read_fields(c, kClipDirFields, m)) throw io_error(path, "clip line points without directions");
+    a.clip_dirs = m;
+  }
   return a;
 }
 
@@ -278,7 +288,9 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
   const Eigen::Index n = a.positions.rows();
   const bool radii = a.radii.size() == n;
   const bool colors = a.colors.rows() == n;
-  // Layout: x y z (float64, full precision), normal_x..z (float32), radius (float32), rgb.
+  const bool clips = a.clip_dirs.rows() == n && n > 0;
+  // Layout: x y z (float64, full precision), normal_x..z (float32), radius (float32), rgb, clip lines
+  // clip_px..pz, clip_dx..dz (float64) when the model has them.
   pcl::PCLPointCloud2 c;
   std::uint32_t offset = 0;
   auto add = [&](const std::string& name, std::uint8_t type, std::uint32_t size) {
@@ -294,6 +306,9 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
   for (const char* f : {"normal_x", "normal_y", "normal_z"}) add(f, pcl::PCLPointField::FLOAT32, 4);
   if (radii) add("radius", pcl::PCLPointField::FLOAT32, 4);
   if (colors) add("rgb", pcl::PCLPointField::UINT32, 4);
+  if (clips)
+    for (const auto* names : {&kClipPointFields, &kClipDirFields})
+      for (const std::string& f : *names) add(f, pcl::PCLPointField::FLOAT64, 8);
   c.width = static_cast<std::uint32_t>(n);
   c.height = 1;
   c.point_step = offset;
@@ -319,6 +334,11 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
     if (colors) {
       const std::uint32_t v = (std::uint32_t(a.colors(i, 0)) << 16) | (std::uint32_t(a.colors(i, 1)) << 8) | a.colors(i, 2);
       std::memcpy(p + o, &v, 4);
+      o += 4;
+    }
+    if (clips) {
+      for (int k = 0; k < 3; ++k) std::memcpy(p + o + 8 * k, &a.clip_points(i, k), 8);
+      for (int k = 0; k < 3; ++k) std::memcpy(p + o + 24 + 8 * k, &a.clip_dirs(i, k), 8);
     }
   }
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);

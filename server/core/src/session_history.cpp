@@ -62,6 +62,7 @@ SessionImage EditSession::capture_whole(bool clone) const {
   if (fields_) w.fields = *fields_;
   w.settings = settings_;
   w.rest_radius = rest_radius_;
+  w.merge = merge_;
   if (detector_) {
     w.detector = clone ? std::shared_ptr<CollisionDetector>(detector_->clone()) : detector_;
     image.complete = w.detector != nullptr;
@@ -92,6 +93,7 @@ void EditSession::restore(const SessionImage& image, bool clone) {
     else fields_.reset();
     settings_ = w.settings;
     rest_radius_ = w.rest_radius;
+    merge_ = w.merge;
     detector_ = clone && w.detector ? std::shared_ptr<CollisionDetector>(w.detector->clone()) : w.detector;
   }
   colliding_ = image.colliding;

@@ -1,5 +1,5 @@
 // EditSession's response to a colliding step (docs/algorithms.md §7, thesis ch. 11): report, cancel
-// (§7 b) or back-off (§7 c). Every re-application starts from the step's before-image, so the result
+// (§7 b), back-off (§7 c) or merge (§7 d, session_merge.cpp). Every re-application starts from the step's before-image, so the result
 // is the state a single step of the kept fraction would have produced, deterministically.
 #include <algorithm>
 #include <chrono>
@@ -39,6 +39,17 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
     restore(before, true);
     version_ = version_before;
   };
+  if (rp.mode == Response::Merge) {
+    // The step is kept; `colliding` keeps the ids that collided (the merge removed them). The rows
+    // moved are renumbered: `moved` becomes every row changed by the step or the merge.
+    const MergeOutcome m = merge_now(true);
+    out.features = m.features;
+    out.inserted.insert(out.inserted.end(), m.inserted.begin(), m.inserted.end());
+    out.moved = model_.rows_of(changes_since(version_before).changed, "changed");
+    out.response = "merged";
+    out.response_ms = ms_since(start);
+    return;
+  }
   if (rp.mode == Response::Cancel) {
     // The reply keeps the ids that would have collided; the session is exactly as before the step.
     take_back();

@@ -118,8 +118,9 @@ std::vector<SettingSpec> make_table() {
                                                             "sphere_* trees", within(0, 1)),
       row<&S::simplify, &P::member_margin>("member_margin", "approximate detection: members tested within this "
                                                             "many cluster radii of the zero region", at_least(0)),
-      row<&S::response, &E::mode>("response", "what a colliding step does: report it, cancel the step, or back "
-                                              "off until the regions only touch (docs/algorithms.md §7)"),
+      row<&S::response, &E::mode>("response", "what a colliding step does: report it, cancel the step, back off "
+                                              "until the regions only touch, or merge the regions "
+                                              "(docs/algorithms.md §7)"),
       row<&S::history, &Y::history_mb>("history_mb", "memory bound of the undo history, MiB (oldest entries "
                                                      "dropped first)", at_least(0)),
       row<&S::response, &E::backoff_epsilon>("backoff_epsilon", "back-off stops below this largest depth, model "

@@ -60,7 +60,9 @@ static_assert(static_cast<std::uint32_t>(Op::Remove) == surfeledit_proto_OP_REMO
 static_assert(static_cast<std::uint32_t>(Op::Undo) == surfeledit_proto_OP_UNDO, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Redo) == surfeledit_proto_OP_REDO, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::History) == surfeledit_proto_OP_HISTORY, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_HISTORY + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Merge) == surfeledit_proto_OP_MERGE, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Curves) == surfeledit_proto_OP_CURVES, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_CURVES + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>
@@ -266,6 +268,15 @@ Command decode(const surfeledit_proto_Request& r) {
         return args;
       });
       break;
+    case Op::Merge:
+      decode_argument(c, r.merge, "merge", [](const surfeledit_proto_Merge& a) {
+        return MergeArgs{static_cast<bool>(a.crease)};
+      });
+      break;
+    case Op::Curves:
+      decode_argument(c, r.curves, "curves",
+                      [](const surfeledit_proto_Curves& a) { return CurvesArgs{a.refine_angle}; });
+      break;
     default: break;  // no argument (or an op outside the list, rejected by the handler)
   }
   return c;
@@ -329,6 +340,8 @@ ReplyView::ReplyView(const Reply& reply) {
     page_.normals = borrow<dds_sequence_double>(p.normals);
     page_.radii = borrow<dds_sequence_double>(p.radii);
     page_.removed = borrow<dds_sequence_unsigned_long_long>(p.removed);
+    page_.clip_points = borrow<dds_sequence_double>(p.clip_points);
+    page_.clip_dirs = borrow<dds_sequence_double>(p.clip_dirs);
   }
   msg_.state = borrow_one<dds_sequence_surfeledit_proto_StatePage>(&page_, reply.state.has_value());
 
@@ -396,6 +409,28 @@ ReplyView::ReplyView(const Reply& reply) {
                                                      borrow<dds_sequence_unsigned_long_long>(h.touched), h.undone});
   }
   msg_.history = borrow<dds_sequence_surfeledit_proto_HistoryEntry>(history_);
+  // Curves: OP_CURVES's first, then the merge's (each view refers to its CurveInfo).
+  auto curve_views = [this](const std::vector<CurveInfo>& curves) {
+    for (const CurveInfo& c : curves)
+      curves_.push_back(surfeledit_proto_Curve{borrow<dds_sequence_double>(c.points), c.closed});
+  };
+  const std::size_t merge_curves = reply.merge ? reply.merge->curves.size() : 0;
+  curves_.reserve(reply.curves.size() + merge_curves);
+  curve_views(reply.curves);
+  msg_.curves = borrow_range<dds_sequence_surfeledit_proto_Curve>(curves_.data(), reply.curves.size());
+  if (reply.merge) {
+    const MergeInfo& m = *reply.merge;
+    curve_views(m.curves);
+    merge_.removed = borrow<dds_sequence_unsigned_long_long>(m.removed);
+    merge_.features = borrow<dds_sequence_unsigned_long_long>(m.features);
+    merge_.moved = borrow<dds_sequence_unsigned_long_long>(m.moved);
+    merge_.inserted = borrow<dds_sequence_unsigned_long_long>(m.inserted);
+    merge_.curves = borrow_range<dds_sequence_surfeledit_proto_Curve>(curves_.data() + reply.curves.size(), merge_curves);
+    merge_.merge_ms = m.merge_ms;
+    merge_.crease_ms = m.crease_ms;
+    merge_.curves_ms = m.curves_ms;
+  }
+  msg_.merge = borrow_one<dds_sequence_surfeledit_proto_MergeResult>(&merge_, reply.merge.has_value());
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {
@@ -417,6 +452,10 @@ UpdateView::UpdateView(const UpdateChunk& c) {
   msg_.removed = first ? borrow<dds_sequence_unsigned_long_long>(u.removed) : dds_sequence_unsigned_long_long{};
   msg_.detected = first && u.detected;
   msg_.colliding = first ? borrow<dds_sequence_unsigned_long_long>(u.colliding) : dds_sequence_unsigned_long_long{};
+  if (!u.clip_points.empty()) {
+    msg_.clip_points = borrow_range<dds_sequence_double>(u.clip_points.data() + 3 * c.begin, 3 * c.count);
+    msg_.clip_dirs = borrow_range<dds_sequence_double>(u.clip_dirs.data() + 3 * c.begin, 3 * c.count);
+  }
 }
 
 }  // namespace surfeledit::service

@@ -35,6 +35,8 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::Undo, {"OP_UNDO", serve_undo, true, T::VersionAndSessionInfo, true});
   row(Op::Redo, {"OP_REDO", serve_redo, true, T::VersionAndSessionInfo, true});
   row(Op::History, {"OP_HISTORY", serve_history, true, T::Version, false});
+  row(Op::Merge, {"OP_MERGE", serve_merge, true, T::VersionAndSessionInfo, true});
+  row(Op::Curves, {"OP_CURVES", serve_curves, true, T::Version, false});
   return t;
 }
 

@@ -85,6 +85,8 @@ void serve_remove(OpContext& c);
 void serve_undo(OpContext& c);
 void serve_redo(OpContext& c);
 void serve_history(OpContext& c);
+void serve_merge(OpContext& c);
+void serve_curves(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

@@ -43,12 +43,21 @@ StatePage state_page(const EditSession& session, const GetStateArgs& args, std::
   page.positions.resize(3 * n);
   page.normals.resize(3 * n);
   page.radii.resize(n);
+  const bool clips = model.has_clips();
+  if (clips) {
+    page.clip_points.resize(3 * n);
+    page.clip_dirs.resize(3 * n);
+  }
   for (std::size_t k = 0; k < n; ++k) {
     const Index row = changes.full ? static_cast<Index>(args.offset + k) : model.row_of(page.ids[k]);
     if (row < 0) throw std::logic_error("changed id " + std::to_string(page.ids[k]) + " has no row");
     for (int c = 0; c < 3; ++c) {
       page.positions[3 * k + c] = model.positions()(row, c);
       page.normals[3 * k + c] = model.normals()(row, c);
+      if (clips) {
+        page.clip_points[3 * k + c] = model.clip_points()(row, c);
+        page.clip_dirs[3 * k + c] = model.clip_dirs()(row, c);
+      }
     }
     page.radii[k] = model.radii()(row);
   }

@@ -8,7 +8,8 @@ namespace surfeledit::service {
 std::size_t PreparedUpdate::bytes() const {
   return sizeof(*this) + session.size() + cause.size() + ids.size() * sizeof(ids[0]) +
          (positions.size() + normals.size() + radii.size()) * sizeof(double) +
-         (removed.size() + colliding.size()) * sizeof(std::uint64_t);
+         (removed.size() + colliding.size()) * sizeof(std::uint64_t) +
+         (clip_points.size() + clip_dirs.size()) * sizeof(double);
 }
 
 UpdateEvent make_update_event(const std::string& session, std::uint64_t version, const std::string& cause) {
@@ -62,6 +63,11 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   p.positions.resize(3 * n);
   p.normals.resize(3 * n);
   p.radii.resize(n);
+  const bool clips = model->has_clips();
+  if (clips) {
+    p.clip_points.resize(3 * n);
+    p.clip_dirs.resize(3 * n);
+  }
   const Points& pos = model->positions();
   const Points& nrm = model->normals();
   const Values& rad = model->radii();
@@ -74,6 +80,10 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
     std::copy_n(pos.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.positions.data() + 3 * k);
     std::copy_n(nrm.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.normals.data() + 3 * k);
     p.radii[k] = rad(row);
+    if (clips) {
+      std::copy_n(model->clip_points().data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.clip_points.data() + 3 * k);
+      std::copy_n(model->clip_dirs().data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.clip_dirs.data() + 3 * k);
+    }
   }
   return p;
 }

@@ -29,7 +29,7 @@ def load(session, a: SceneSetup) -> None:
     session.set_regions(zero=a.zero, one=a.one)
 
 
-@pytest.mark.parametrize("response", ["report", "cancel", "backoff"])
+@pytest.mark.parametrize("response", ["report", "cancel", "backoff", "merge"])
 def test_responses_equal_in_process(client: surfeledit.Client, response: str) -> None:
     a = approach(spacing=0.05)
     local = LocalSession("local")
@@ -44,24 +44,30 @@ def test_responses_equal_in_process(client: surfeledit.Client, response: str) ->
             assert np.array_equal(got.colliding, want.colliding)
             assert np.array_equal(got.depths, want.depths)
             assert got.backoff == want.backoff
-            assert got.features.size == 0
+            assert np.array_equal(got.features, want.features)
             assert got.version == want.version
         assert np.array_equal(sess.state().positions, local.state().positions)
         assert sess.info().state_hash == local.core.state_hash
 
 
+def load_and_watch(sess: surfeledit.Session, a: SceneSetup) -> surfeledit.Watcher:
+    """Loads `a` and returns a watcher that has heard the session: updates are volatile, so the regions
+    are re-set until one arrives (see test_collision_dds); what it heard is drained."""
+    load(sess, a)
+    w = sess.watch()
+    for _ in range(20):
+        sess.set_regions(zero=a.zero, one=a.one)
+        if w.get(timeout=0.5) is not None:
+            break
+    while w.get(timeout=0.2) is not None:
+        pass
+    return w
+
+
 def test_undo_redo_history_and_watcher(client: surfeledit.Client) -> None:
     a = approach(spacing=0.05)
     with client.open_session("h") as sess:
-        load(sess, a)
-        w = sess.watch()
-        # Volatile updates: re-set the regions until the watcher hears one (see test_collision_dds).
-        for _ in range(20):
-            sess.set_regions(zero=a.zero, one=a.one)
-            if w.get(timeout=0.5) is not None:
-                break
-        while w.get(timeout=0.2) is not None:
-            pass
+        w = load_and_watch(sess, a)
         base = sess.state()
         known: Dict[int, np.ndarray] = {int(i): p for i, p in zip(base.ids, base.positions)}
         before = sess.state().positions.copy()
@@ -104,7 +110,7 @@ def test_bad_arguments_are_typed_and_change_nothing(client: surfeledit.Client) -
             sess.undo()
         load(sess, a)
         info, version = sess.info(), sess.version
-        for bad in ({"response": "unknown"}, {"response": "merge"}, {"backoff_epsilon": -1e-3}):
+        for bad in ({"response": "unknown"}, {"response": "melt"}, {"backoff_epsilon": -1e-3}):
             with pytest.raises(InvalidArgumentError) as e:
                 sess.configure(**bad)
             assert e.value.field == next(iter(bad))

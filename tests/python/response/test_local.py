@@ -69,7 +69,7 @@ def test_backoff_touches_without_penetrating(offset: float, scale: float, angle:
 def test_bad_response_arguments_change_nothing(plate_and_ball: SceneSetup) -> None:
     s = open_session(plate_and_ball)
     settings, before = s.settings(), snapshot(s)
-    for bad in ({"response": "merge"}, {"response": "nope"}, {"backoff_epsilon": -1.0},
+    for bad in ({"response": "melt"}, {"response": "nope"}, {"backoff_epsilon": -1.0},
                 {"backoff_max_iterations": 0}, {"history_mb": -1.0}):
         with pytest.raises(InvalidArgumentError) as e:
             s.configure(**bad)

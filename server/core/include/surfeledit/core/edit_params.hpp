@@ -9,15 +9,19 @@
 
 namespace surfeledit {
 
-// What a session does with a step that ends with colliding surfels ("merge", §7 d, is not offered yet).
+// What a session does with a step that ends with colliding surfels.
 enum class Response : std::uint8_t {
   Report = 0,   // keep the step, report the colliding surfels (the default)
   Cancel = 1,   // take the step back (§7 b); the reply still reports what would have collided
   Backoff = 2,  // move the deformable region back until it only touches the zero region (§7 c)
+  Merge = 3,    // keep the step and merge the regions with a sharp crease (§7 d; EditSession::merge)
 };
 
-constexpr EnumNames<Response, 3> names_of(Response) {
-  return {{{Response::Report, "report"}, {Response::Cancel, "cancel"}, {Response::Backoff, "backoff"}}};
+constexpr EnumNames<Response, 4> names_of(Response) {
+  return {{{Response::Report, "report"},
+           {Response::Cancel, "cancel"},
+           {Response::Backoff, "backoff"},
+           {Response::Merge, "merge"}}};
 }
 inline const char* to_string(Response r) { return enum_name(r); }
 

@@ -13,6 +13,7 @@
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/history.hpp"
+#include "surfeledit/core/response/curves.hpp"
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
@@ -65,11 +66,25 @@ struct StepResult {
   double deform_ms = 0.0;      // time of the deformation itself
   double resample_ms = 0.0;    // time of resampling
   std::string response = "none";  // "none" (nothing collided or no detector), "reported", "cancelled",
-                                  // "backed_off"; `colliding` is the state after the response
+                                  // "backed_off", "merged"; `colliding` is the state after the response
+                                  // (cancelled, merged: the ids that collided; merged removed them)
   BackoffInfo backoff;            // response "backed_off" only
-  IdList features;                // feature surfels of a merge (always empty: merge is not offered yet)
-  double response_ms = 0.0;       // time of the response (cancel / back-off)
+  IdList features;                // response "merged": feature surfel ids (both sides), ascending
+  double response_ms = 0.0;       // time of the response (cancel / back-off / merge)
   double history_ms = 0.0;        // time of recording the step's before-image in the history
+};
+
+// What EditSession::merge did (§7 d).
+struct MergeOutcome {
+  IdList removed;            // ids removed (colliding deformable surfels, zero surfels inside), ascending
+  IdList features;           // feature surfel ids of both sides (kept), ascending
+  IdList moved;              // ids the crease moved onto the intersection (clipped), ascending
+  IdList inserted;           // ids of the crease's gap-covering copies
+  std::vector<Curve> curves; // intersection curves through the moved surfels (default CurveParams)
+  double merge_ms = 0.0;     // time of merge_regions
+  double crease_ms = 0.0;    // time of the crease (computing and applying it)
+  double curves_ms = 0.0;    // time of the intersection curves
+  double total_ms = 0.0;     // the whole merge, model changes and detector reset included
 };
 
 // Region selection: explicit ids and/or selectors, merged.
@@ -121,6 +136,17 @@ class EditSession {
   // and change nothing); the detector keeps the state of the others. Bumps the version.
   void remove(const IdList& ids, const std::string& author = "");
 
+  // Merge (union) of the deformed region with the zero region (§7 d): removes the colliding deformable
+  // surfels and the zero surfels inside the deformed region; `crease`: moves the feature surfels onto
+  // the intersection, clips them and covers gaps (response/crease.hpp). The detector re-initialises from
+  // the merged model. One history entry ("merge"). Conflict without regions, or when the removal would
+  // leave the zero or one region empty; nothing colliding: an empty outcome, nothing changes. Bumps
+  // the version when it changed something.
+  MergeOutcome merge(bool crease = true, const std::string& author = "");
+  // Curves through the surfels the last merge moved onto the intersection; Conflict before any merge
+  // with a crease. Validates `params` (InvalidArgument naming the field).
+  std::vector<Curve> intersection_curves(const CurveParams& params = {}) const;
+
   // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
   // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
   // returns it. Conflict when there is nothing to undo / redo, or when the entry could not save its
@@ -153,6 +179,20 @@ class EditSession {
                StepResult& out);
   // Applies `params` (restored state) and detects; the core of deform() and of back-off.
   void step_once(const DeformParams& params, StepResult& out);
+  // Merge without the history entry (session_merge.cpp); the core of merge() and of response "merge".
+  MergeOutcome merge_now(bool crease);
+  // The detector for `settings` (make_detector), reset from the model as it is now (null for none).
+  std::shared_ptr<CollisionDetector> fresh_detector(const SessionSettings& settings,
+                                                    const DeformationFields& fields) const;
+  // The merge origins from the model as it is now (whenever the detector is reset).
+  void take_origins();
+  // Removes the rows with keep[r] false from the model and every per-row array (validated by the caller).
+  void remove_rows(const IdList& ids, const std::vector<bool>& keep);
+  // Conflict (naming `field`) when keeping only the rows with keep[r] leaves the zero or one region empty.
+  void check_regions_kept(const std::vector<bool>& keep, const char* field) const;
+  // Rows appended to the model (the last parents.size() rows), each inheriting its parent row's
+  // region, fields and rest radius; their row versions are the current version.
+  void extend_rows(const IndexList& parents);
 
   std::string name_;
   SessionParams params_;
@@ -167,6 +207,7 @@ class EditSession {
   IdList colliding_;
   Values rest_radius_;  // per row, for resampling (built when resampling is enabled)
   std::uint64_t steps_ = 0;
+  MergeMemo merge_;  // origins and last crease (session_merge.cpp)
   History history_;
 };
 

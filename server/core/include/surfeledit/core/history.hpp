@@ -35,6 +35,15 @@ struct RowsImage {
   std::vector<std::uint64_t> row_version;  // #rows
 };
 
+// What the session keeps for merges: the deformable surfels when the detector was last reset (the
+// "original" surfaces of merge_regions), and the crease points of the last merge (intersection_curves).
+struct MergeMemo {
+  Points origin_positions;  // #D by 3: deformable surfels at the last reset (set_regions, configure, merge)
+  Points origin_normals;    // #D by 3, unit
+  Points crease_positions;  // #K by 3: surfels the last merge's crease moved, on the intersection
+  Values crease_radii;      // #K: their radii
+};
+
 // Everything a session holds, copied.
 struct WholeImage {
   SurfelModel model;
@@ -44,6 +53,7 @@ struct WholeImage {
   SessionSettings settings;
   Values rest_radius;                                  // resampling's rest radii (empty when unused)
   std::shared_ptr<CollisionDetector> detector;         // the detector object (may be null)
+  MergeMemo merge;                                     // merge origins and last crease
 };
 
 // One side (before or after) of an entry.
@@ -62,7 +72,7 @@ struct SessionImage {
 // What history() lists of an entry.
 struct HistoryItem {
   std::uint64_t version = 0;  // the session's version after the op
-  std::string op;             // "load", "set_regions", "deform", "configure", "remove"
+  std::string op;             // "load", "set_regions", "deform", "configure", "remove", "merge"
   std::string author;         // client id ("" in-process)
   IdList touched;             // ids of the surfels it changed, inserted or removed, ascending
   bool undone = false;        // in the redo tail

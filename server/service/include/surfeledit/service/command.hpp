@@ -34,8 +34,10 @@ enum class Op : std::uint32_t {
   Undo = 13,
   Redo = 14,
   History = 15,
+  Merge = 16,
+  Curves = 17,
 };
-constexpr std::size_t kOpCount = 16;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = 18;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {
@@ -72,11 +74,21 @@ struct RemoveArgs {
   IdList ids;
 };
 
+// OP_MERGE: merge the regions now.
+struct MergeArgs {
+  bool crease = true;  // move the feature surfels onto the intersection and clip them
+};
+
+// OP_CURVES: intersection curves of the last merge.
+struct CurvesArgs {
+  double refine_angle = 0.5;  // radians: an edge bending more than this is split (validated by the core)
+};
+
 // The op's argument: none (std::monostate), or the struct of that op. OP_LOAD_CHUNK's is a
 // ChunkData pointing into the received sample, which must outlive the Command; OP_DEFORM's is
 // the validated DeformParams.
 using OpArguments = std::variant<std::monostate, LoadBeginArgs, ChunkData, LoadFileArgs, SetRegionsArgs,
-                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs>;
+                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs, MergeArgs, CurvesArgs>;
 
 struct Command {
   std::string client_id;       // empty: rejected by the handler (field "client_id")

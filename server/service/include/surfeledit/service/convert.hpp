@@ -76,6 +76,8 @@ class ReplyView {
   std::vector<char*> session_names_;
   surfeledit_proto_StepResult step_{};
   std::vector<surfeledit_proto_HistoryEntry> history_;
+  std::vector<surfeledit_proto_Curve> curves_;  // OP_CURVES's, then the merge's
+  surfeledit_proto_MergeResult merge_{};
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's

@@ -33,6 +33,8 @@ struct StatePage {
   std::vector<double> normals;       // n*3, row-major
   std::vector<double> radii;         // n
   std::vector<std::uint64_t> removed;  // removed ids (first page only)
+  std::vector<double> clip_points;   // n*3 clip line points, or empty when the model has no clip lines
+  std::vector<double> clip_dirs;     // n*3 unit directions (zero: unclipped), or empty likewise
 };
 
 // One named session setting (proto Setting); the value is in the member its kind names.
@@ -97,10 +99,23 @@ struct StepResult {
 // One entry of a session's edit history (proto HistoryEntry).
 struct HistoryInfo {
   std::uint64_t version = 0;  // session version after the change
-  std::string op;             // "load" | "set_regions" | "deform" | "configure" | "remove"
+  std::string op;             // "load" | "set_regions" | "deform" | "configure" | "remove" | "merge"
   std::string client_id;      // who made it
   std::vector<std::uint64_t> touched;  // ids changed, inserted or removed, ascending
   bool undone = false;        // in the redo tail
+};
+
+// An intersection curve (proto Curve).
+struct CurveInfo {
+  std::vector<double> points;  // k*3, in curve order
+  bool closed = false;         // the last point connects back to the first
+};
+
+// What OP_MERGE did (proto MergeResult).
+struct MergeInfo {
+  std::vector<std::uint64_t> removed, features, moved, inserted;  // ids (see EditSession::merge)
+  std::vector<CurveInfo> curves;
+  double merge_ms = 0.0, crease_ms = 0.0, curves_ms = 0.0;
 };
 
 struct Reply {
@@ -116,6 +131,8 @@ struct Reply {
   std::optional<ServerInfo> server_info;
   std::optional<StepResult> step;
   std::vector<HistoryInfo> history;  // OP_HISTORY
+  std::optional<MergeInfo> merge;    // OP_MERGE
+  std::vector<CurveInfo> curves;     // OP_CURVES
 };
 
 }  // namespace surfeledit::service

@@ -21,7 +21,7 @@ namespace surfeledit::service {
 struct UpdateEvent {
   std::string session;
   std::uint64_t version = 0;     // session version after the change
-  std::string cause;             // "load" | "regions" | "deform" | "remove" | "undo" | "redo" | "close"
+  std::string cause;             // "load" | "regions" | "deform" | "remove" | "undo" | "redo" | "merge" | "close"
   bool full = false;             // a new model (load)
   std::uint64_t step = 0;        // deform: step number
   IndexList rows;                // changed rows of the model (ascending); ignored when all_rows
@@ -56,6 +56,8 @@ struct PreparedUpdate {
   std::vector<std::uint64_t> removed;  // sent in part 0
   bool detected = false;               // sent in part 0
   std::vector<std::uint64_t> colliding;  // sent in part 0
+  std::vector<double> clip_points;     // n*3, or empty when the model has no clip lines
+  std::vector<double> clip_dirs;       // n*3, or empty likewise
 
   std::size_t surfels() const { return ids.size(); }
   // Payload bytes held (for the publisher's queue bound).

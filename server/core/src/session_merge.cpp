@@ -1,0 +1,110 @@
+// EditSession's merge response (docs/algorithms.md §7 d, thesis §11.3): merge_regions, then the sharp
+// crease, on the session's model; the detector re-initialises from the merged model.
+#include <algorithm>
+#include <chrono>
+
+#include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/response/crease.hpp"
+#include "surfeledit/core/response/merge.hpp"
+#include "surfeledit/core/util.hpp"
+
+namespace surfeledit {
+
+namespace {
+
+// Rows `rows` of `a`, #rows by 3.
+Points gather(const Points& a, const IndexList& rows) {
+  Points out(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = a.row(rows[k]);
+  return out;
+}
+
+}  // namespace
+
+void EditSession::take_origins() {
+  merge_.origin_positions = gather(model_.positions(), fields_->deformable);
+  merge_.origin_normals = gather(model_.normals(), fields_->deformable);
+}
+
+void EditSession::extend_rows(const IndexList& parents) {
+  const Index rows = model_.size();
+  const Index first = rows - static_cast<Index>(parents.size());
+  DeformationFields& f = *fields_;
+  f.lambda.conservativeResize(rows);
+  f.grad_lambda.conservativeResize(rows, 3);
+  if (rest_radius_.size() > 0) rest_radius_.conservativeResize(rows);
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index parent = parents[k], child = first + static_cast<Index>(k);
+    f.regions.push_back(f.regions[parent]);
+    f.lambda[child] = f.lambda[parent];
+    f.grad_lambda.row(child) = f.grad_lambda.row(parent);
+    if (f.regions[parent] != Region::Zero) f.deformable.push_back(child);
+    if (rest_radius_.size() > 0) rest_radius_[child] = rest_radius_[parent];
+    row_version_.push_back(version_);
+  }
+}
+
+MergeOutcome EditSession::merge(bool crease, const std::string& author) {
+  model();  // throws without a model
+  if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before merging");
+  const std::uint64_t version_before = version_;
+  // The detector is replaced (reset from the merged model): the live one can be the image's.
+  SessionImage before = capture_whole(false);
+  MergeOutcome out = merge_now(crease);
+  if (version_ == version_before) return out;  // nothing collided: no change
+  IdList touched = out.removed;
+  touched.insert(touched.end(), out.moved.begin(), out.moved.end());
+  touched.insert(touched.end(), out.inserted.begin(), out.inserted.end());
+  record("merge", author, std::move(touched), std::move(before));
+  return out;
+}
+
+MergeOutcome EditSession::merge_now(bool crease_on) {
+  const auto start = std::chrono::steady_clock::now();
+  MergeOutcome out;
+  if (colliding_.empty()) return out;
+  // Everything is computed and validated on the model as it is; only then does the session change.
+  auto t = std::chrono::steady_clock::now();
+  const MergeResult m = merge_regions(model_, fields_->regions, merge_.origin_positions, merge_.origin_normals,
+                                      colliding_);
+  out.merge_ms = ms_since(t);
+  std::vector<bool> keep(static_cast<std::size_t>(model_.size()), true);
+  for (Index r : model_.rows_of(m.removed, "removed")) keep[r] = false;
+  check_regions_kept(keep, "merge");
+  t = std::chrono::steady_clock::now();
+  CreaseResult c;
+  if (crease_on) c = crease(model_, m.features_deformable, m.features_zero);
+  out.removed = m.removed;
+  std::set_union(m.features_deformable.begin(), m.features_deformable.end(), m.features_zero.begin(),
+                 m.features_zero.end(), std::back_inserter(out.features));
+  ++version_;
+  remove_rows(m.removed, keep);
+  out.inserted = apply_crease(model_, c);  // kept surfels only: valid after the removal
+  out.moved = c.moved;
+  IndexList parents = model_.rows_of(c.inserted_parents, "inserted_parents");
+  extend_rows(parents);
+  touch_rows(model_.rows_of(c.moved, "moved"));
+  out.crease_ms = ms_since(t);
+  detector_ = fresh_detector(settings_, *fields_);
+  take_origins();
+  colliding_.clear();
+  merge_.crease_positions = c.positions;
+  merge_.crease_radii.resize(static_cast<Eigen::Index>(c.moved.size()));
+  const IndexList moved_rows = model_.rows_of(c.moved, "moved");
+  for (std::size_t k = 0; k < moved_rows.size(); ++k)
+    merge_.crease_radii[static_cast<Eigen::Index>(k)] = model_.radii()[moved_rows[k]];
+  t = std::chrono::steady_clock::now();
+  if (merge_.crease_positions.rows() > 0) out.curves = intersection_curves();
+  out.curves_ms = ms_since(t);
+  out.total_ms = ms_since(start);
+  return out;
+}
+
+std::vector<Curve> EditSession::intersection_curves(const CurveParams& params) const {
+  validate(params);
+  if (merge_.crease_positions.rows() == 0)
+    throw Error(ErrorCode::Conflict, "merge", "no merge with a crease in session '" + name_ + "' yet");
+  return surfeledit::intersection_curves(merge_.crease_positions, merge_.crease_radii, params);
+}
+
+}  // namespace surfeledit
