@@ -16,14 +16,6 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
 }
 
-template <typename T>
-void keep_entries(std::vector<T>& v, const std::vector<bool>& keep) {
-  std::size_t j = 0;
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (keep[i]) v[j++] = v[i];
-  v.resize(j);
-}
-
 }  // namespace
 
 EditSession::EditSession(std::string name, SessionParams params)
@@ -244,7 +236,7 @@ void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) 
   for (std::size_t r = 0; r < keep.size(); ++r)
     if (!keep[r]) removed_log_.emplace_back(version_, model_.ids()[r]);
   model_.remove(ids);
-  keep_entries(row_version_, keep);
+  compact(row_version_, keep);
   if (rest_radius_.size() > 0) {
     Eigen::Index j = 0;
     for (Eigen::Index i = 0; i < rest_radius_.size(); ++i)
@@ -262,7 +254,7 @@ void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) 
     }
     f.lambda.conservativeResize(j);
     f.grad_lambda.conservativeResize(j, 3);
-    keep_entries(f.regions, keep);
+    compact(f.regions, keep);
     f.deformable.clear();
     for (std::size_t r = 0; r < f.regions.size(); ++r)
       if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
