@@ -104,8 +104,10 @@ def generate(spec: Spec, source_name: str = "") -> str:
     for d in spec.definitions:
         out.append("")
         if isinstance(d, Enum):
-            out.append(f"class {d.name}(_IdlEnum, typename={_typename(d.scoped)!r}):")
-            out.append(f'    """IDL enum {d.scoped} (line {d.line})."""')
+            # An int as well as an IdlEnum: the protocol carries some enum values in `long` fields
+            # (Request.op, Selector.kind, Setting.kind), where a member is written as its number.
+            out.append(f"class {d.name}(int, _IdlEnum, typename={_typename(d.scoped)!r}):")
+            out.append(f'    """IDL enum {d.scoped} (line {d.line}); members are ints."""')
             for i, e in enumerate(d.enumerators):
                 out.append(f"    {e} = {i}")
         else:

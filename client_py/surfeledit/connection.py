@@ -16,7 +16,7 @@ import threading
 import time
 import uuid
 from pathlib import Path
-from typing import Any, Iterable, List, Optional
+from typing import Any, Iterable, List, Optional, Union
 
 from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.domain import DomainParticipant
@@ -57,6 +57,14 @@ def _matched(entity: Any) -> int:
     if isinstance(entity, DataWriter):
         return int(entity.get_publication_matched_status().current_count)
     return int(entity.get_subscription_matched_status().current_count)
+
+
+def _op_label(op: int) -> str:
+    """The name of an op number for messages ("OP_DEFORM"), or "op 99" for a number outside proto.Op."""
+    try:
+        return proto.Op(int(op)).name
+    except ValueError:
+        return f"op {int(op)}"
 
 
 def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeout: float) -> bool:
@@ -224,10 +232,10 @@ class Client:
                 if reply is not None:
                     break
                 _log.warning("no reply to request %d (%s) within %.1f s%s", request.request_id,
-                             request.op.name, timeout, "; retrying" if attempt < retries else "")
+                             _op_label(request.op), timeout, "; retrying" if attempt < retries else "")
             else:
                 raise errors.RequestTimeoutError(
-                    f"no reply to request {request.request_id} ({request.op.name}) on domain {self.domain} "
+                    f"no reply to request {request.request_id} ({_op_label(request.op)}) on domain {self.domain} "
                     f"within {timeout:.1f} s (tried {retries + 1} times)")
         if check and reply.status != proto.Status.STATUS_OK:
             raise errors.error_for_status(int(reply.status.value), reply.message, reply.field)
@@ -289,7 +297,8 @@ class Client:
         return True
 
 
-def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0) -> Client:
+def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0,
+            data_root: Optional[Union[str, "os.PathLike[str]"]] = None) -> Client:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
@@ -299,6 +308,8 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             wait until it answers, and stop it when the client closes.
         timeout: seconds to wait for each reply (a request is retried once) and for a spawned
             server to come up.
+        data_root: for a spawned server: the directory ``Session.load_file`` may read below
+            (``--data-root``); None: file loading is off on that server.
 
     Raises:
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
@@ -311,7 +322,7 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             return client
         if not spawn:
             raise errors.ServerStartError(f"no surfeledit server answers on DDS domain {domain}")
-        proc, log = spawn_server(domain)
+        proc, log = spawn_server(domain, data_root)
         client._server, client._server_log = proc, log
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:

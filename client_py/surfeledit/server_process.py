@@ -9,12 +9,12 @@ import signal
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Optional, Tuple
+from typing import List, Optional, Tuple, Union
 
 from . import errors
 from ._protocol import REPO_ROOT
 
-__all__ = ["find_server_executable", "spawn_server", "exit_message", "stop_process"]
+__all__ = ["find_server_executable", "server_args", "spawn_server", "exit_message", "stop_process"]
 
 _log = logging.getLogger("surfeledit")
 
@@ -31,8 +31,18 @@ def find_server_executable() -> Optional[str]:
     return str(local) if local.is_file() else None
 
 
-def spawn_server(domain: int) -> Tuple[subprocess.Popen, Path]:
-    """Starts ``surfeledit-server --domain D`` in its own session, output to a temporary log file.
+def server_args(domain: int, data_root: Optional[Union[str, Path]] = None) -> List[str]:
+    """The server's arguments: ``--domain D``, and ``--data-root DIR`` when given (file loading is off
+    without it: ``Session.load_file`` reads only below that directory)."""
+    args = ["--domain", str(domain)]
+    if data_root is not None:
+        args += ["--data-root", str(data_root)]
+    return args
+
+
+def spawn_server(domain: int, data_root: Optional[Union[str, Path]] = None) -> Tuple[subprocess.Popen, Path]:
+    """Starts ``surfeledit-server --domain D [--data-root DIR]`` in its own session, output to a temporary
+    log file.
 
     Returns the process and its log's path. Raises :class:`~surfeledit.errors.ServerStartError` when
     no executable is found (see :func:`find_server_executable`) or it cannot be started.
@@ -43,9 +53,10 @@ def spawn_server(domain: int) -> Tuple[subprocess.Popen, Path]:
             "no surfeledit server answers on DDS domain %d and surfeledit-server was not found "
             "(set SURFELEDIT_SERVER, put it on PATH, or build it into build/server/app)" % domain)
     log = tempfile.NamedTemporaryFile(prefix=f"surfeledit-server-{domain}-", suffix=".log", delete=False)
-    _log.info("starting %s --domain %d (log: %s)", exe, domain, log.name)
+    argv = [exe] + server_args(domain, data_root)
+    _log.info("starting %s (log: %s)", " ".join(argv), log.name)
     try:
-        proc = subprocess.Popen([exe, "--domain", str(domain)], stdin=subprocess.DEVNULL, stdout=log,
+        proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=log,
                                 stderr=subprocess.STDOUT, start_new_session=True)
     except OSError as e:
         raise errors.ServerStartError(f"cannot start {exe}: {e}") from e

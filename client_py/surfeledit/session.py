@@ -196,7 +196,9 @@ class Session(StateArrays):
         return self._info
 
     def load_file(self, path: Union[str, Path]) -> "proto.SessionInfo":
-        """Loads a file on the server's file system (.ply, .pcd, .obj) as the new model."""
+        """Loads a file on the server (.ply, .pcd, .obj) as the new model: a path below the server's
+        ``--data-root`` (relative paths are taken from there; file loading is off without it). The file is
+        read off the server's request thread: other clients are served meanwhile."""
         self._request(proto.Op.OP_LOAD_FILE, load_file=proto.LoadFile(path=str(path)))
         self._cache = None
         return self._info

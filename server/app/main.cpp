@@ -6,6 +6,7 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <string>
@@ -45,9 +46,18 @@ int main(int argc, char** argv) {
   app.add_option("--max-model-surfels", config.max_model_surfels, "Surfels per model")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(INT32_MAX)));
+  const int hardware_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   app.add_option("--threads", config.threads, "Worker threads per session for batch work (0: all cores)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, hardware_threads));
+  app.add_option("--data-root", config.data_root,
+                 "Directory below which OP_LOAD_FILE may read model files (symlinks and .. are resolved; "
+                 "nothing outside it is read); without it, file loading is off")
+      ->check(CLI::ExistingDirectory);
+  std::uint64_t max_file_mb = config.max_file_bytes >> 20;
+  app.add_option("--max-file-mb", max_file_mb, "Largest model file OP_LOAD_FILE reads, in MiB")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 20));
   std::uint64_t update_queue_mb = config.max_update_queue_bytes >> 20;
   app.add_option("--max-update-queue-mb", update_queue_mb,
                  "Update samples waiting for the publisher thread, in MiB; beyond it a session's queued updates "
@@ -65,6 +75,7 @@ int main(int argc, char** argv) {
                          : update_thread == "off" ? surfeledit::service::UpdateThread::Off
                                                   : surfeledit::service::UpdateThread::Auto;
   config.max_update_queue_bytes = update_queue_mb << 20;
+  config.max_file_bytes = max_file_mb << 20;
 
   auto log = spdlog::stderr_color_mt("surfeledit");
   log->set_level(spdlog::level::from_str(log_level));
@@ -81,6 +92,8 @@ int main(int argc, char** argv) {
       }
       service.stop();
     });
+    if (config.data_root.empty()) log->info("file loading is off (no --data-root)");
+    else log->info("file loading reads below '{}' (files up to {} MiB)", config.data_root, max_file_mb);
     log->info("surfeledit-server ready on domain {}", config.domain);
     try {
       service.run();

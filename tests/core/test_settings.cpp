@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "surfeledit/core/settings.hpp"
 
@@ -136,11 +137,11 @@ TEST(Settings, UniformMessages) {
   const SessionSettings s;
   EXPECT_EQ(expect_error(s, {{"boundary_n", 2.5}}, "boundary_n"), "boundary_n: expects an integer >= 1, got 2.5");
   EXPECT_EQ(expect_error(s, {{"boundary_n", std::string("ten")}}, "boundary_n"),
-            "boundary_n: expects an integer >= 1, got 'ten'");
+            "boundary_n: expects an integer in [1, 256], got 'ten'");
   EXPECT_EQ(expect_error(s, {{"max_level", std::int64_t{65}}}, "max_level"),
             "max_level: expects an integer in [0, 64], got 65");
   EXPECT_EQ(expect_error(s, {{"split_threshold", 1.0}}, "split_threshold"),
-            "split_threshold: expects a finite number > 1, got 1");
+            "split_threshold: expects a finite number in (1, 1e+06], got 1");
   EXPECT_EQ(expect_error(s, {{"threshold", std::numeric_limits<double>::infinity()}}, "threshold"),
             "threshold: expects a finite number, got inf");
   EXPECT_EQ(expect_error(s, {{"boundary", 1.0}}, "boundary"), "boundary: expects a bool, got 1");
@@ -203,8 +204,29 @@ TEST(Settings, TableDescribesEverySetting) {
   ASSERT_NE(threads, specs.end());
   EXPECT_EQ(threads->kind, SettingType::Integer);
   EXPECT_EQ(threads->min, 0.0);
-  EXPECT_TRUE(std::isinf(threads->max));
+  EXPECT_EQ(threads->max, static_cast<double>(std::max(1u, std::thread::hardware_concurrency())));
   EXPECT_STREQ(enum_name(SettingType::Integer), "integer");
+}
+
+// Every integer setting has a finite upper bound (they size allocations, thread teams and loops), and
+// threads stops at the hardware threads: 2147483647 once made libgomp abort the whole server.
+TEST(Settings, IntegerSettingsAreBoundedAbove) {
+  for (const SettingSpec& spec : setting_specs()) {
+    if (spec.kind != SettingType::Integer) continue;
+    EXPECT_TRUE(std::isfinite(spec.max)) << spec.name;
+    EXPECT_LE(spec.max, 1 << 20) << spec.name;
+    const SessionSettings s;
+    const std::string message = expect_error(s, {{spec.name, static_cast<std::int64_t>(spec.max) + 1}}, spec.name);
+    EXPECT_NE(message.find("expects an integer in"), std::string::npos) << message;
+  }
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const SessionSettings s;
+  EXPECT_EQ(apply_settings(s, {{"threads", std::int64_t{hw}}}).collision.threads, hw);
+  expect_error(s, {{"threads", std::int64_t{2147483647}}}, "threads");
+  expect_error(s, {{"threads", 2147483647.0}}, "threads");
+  expect_error(s, {{"history_mb", 1e30}}, "history_mb");
+  expect_error(s, {{"split_threshold", 1e300}}, "split_threshold");
+  expect_error(s, {{"backoff_max_iterations", std::int64_t{1} << 30}}, "backoff_max_iterations");
 }
 
 }  // namespace

@@ -115,9 +115,21 @@ void validate(const DeformParams& params) {
   if (!params.axis.allFinite()) {
     throw Error(ErrorCode::InvalidArgument, "axis", "must be finite, got " + fmt(params.axis));
   }
-  if (params.angle != 0.0 && !(params.axis.norm() > 0.0)) {
-    throw Error(ErrorCode::InvalidArgument, "axis",
-                "must be non-zero when angle != 0 (angle " + fmt(params.angle) + "), got " + fmt(params.axis));
+  if (!(std::abs(params.angle) <= kMaxStepAngle)) {
+    throw Error(ErrorCode::InvalidArgument, "angle",
+                "must be within [-" + fmt(kMaxStepAngle) + ", " + fmt(kMaxStepAngle) + "] radians, got " +
+                    fmt(params.angle));
+  }
+  if (params.angle != 0.0) {
+    // The axis apply_step uses is axis / |axis|: it must come out of length 1 (a zero axis, or one whose
+    // norm overflows or underflows, would make the rotation non-rigid).
+    const double norm = params.axis.norm();
+    const double unit = norm > 0.0 && std::isfinite(norm) ? (params.axis / norm).norm() : 0.0;
+    if (!(std::abs(unit - 1.0) <= 1e-9)) {
+      throw Error(ErrorCode::InvalidArgument, "axis",
+                  "must normalise to a unit vector when angle != 0 (angle " + fmt(params.angle) + "), got " +
+                      fmt(params.axis) + " (normalised length " + fmt(unit) + ")");
+    }
   }
   if (params.center && !params.center->allFinite()) {
     throw Error(ErrorCode::InvalidArgument, "center", "must be finite, got " + fmt(*params.center));
@@ -125,6 +137,23 @@ void validate(const DeformParams& params) {
   if (!valid_blend(params.blend)) {
     throw Error(ErrorCode::InvalidArgument, "blend",
                 "unknown blend value " + std::to_string(static_cast<int>(params.blend)));
+  }
+}
+
+void validate(const DeformParams& params, const DeformationFields& fields) {
+  validate(params);
+  if (!std::isfinite(fields.box_extent)) return;
+  const double reach = kStepReach * fields.box_extent;
+  if (!(params.translation.norm() <= reach)) {
+    throw Error(ErrorCode::InvalidArgument, "translation",
+                "length " + fmt(params.translation.norm()) + " exceeds " + fmt(kStepReach) +
+                    " times the model's extent (" + fmt(fields.box_extent) + "), got " + fmt(params.translation));
+  }
+  if (params.center && !((*params.center - fields.box_centre).norm() <= reach)) {
+    throw Error(ErrorCode::InvalidArgument, "center",
+                "lies " + fmt((*params.center - fields.box_centre).norm()) + " from the model, more than " +
+                    fmt(kStepReach) + " times its extent (" + fmt(fields.box_extent) + "), got " +
+                    fmt(*params.center));
   }
 }
 
@@ -145,6 +174,11 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   IndexList f0, f1;
   DeformationFields fields;
   fields.regions = regions;
+  if (n > 0) {  // the reference of the step bounds (validate(params, fields))
+    const Eigen::RowVector3d lo = positions.colwise().minCoeff(), hi = positions.colwise().maxCoeff();
+    fields.box_centre = (0.5 * (lo + hi)).transpose();
+    fields.box_extent = (hi - lo).norm();
+  }
   for (Eigen::Index i = 0; i < n; ++i) {
     switch (regions[static_cast<std::size_t>(i)]) {
       case Region::Zero: f0.push_back(static_cast<Index>(i)); break;
@@ -206,7 +240,7 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
 DeformResult apply_step(const DeformationFields& fields, const DeformParams& params, Points& positions,
                         Points& normals, Points* tangent_u, Points* tangent_v, int threads) {
   // ---- validation: nothing below this block may throw after an array was written ----
-  validate(params);
+  validate(params, fields);
   const int nthreads = checked_threads(threads, "threads");
   const Eigen::Index n = positions.rows();
   auto require_rows = [n](Eigen::Index rows, const char* field) {

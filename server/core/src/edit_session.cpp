@@ -92,7 +92,7 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
 StepResult EditSession::deform(const DeformParams& params, const std::string& author) {
   model();  // throws without a model
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
-  validate(params);
+  validate(params, *fields_);
   const std::uint64_t version_before = version_;
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image.
   const auto t_capture = std::chrono::steady_clock::now();
@@ -101,8 +101,15 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   SessionImage before = whole ? capture_whole(true) : capture_rows(fields_->deformable);
   const double capture_ms = ms_since(t_capture);
   StepResult out;
-  step_once(params, out);
-  respond(params, before, version_before, out);
+  try {
+    step_once(params, out);
+    respond(params, before, version_before, out);
+  } catch (...) {
+    // All or nothing: a step that fails part-way (a detector or allocation failure) leaves the session
+    // exactly as before it, version included.
+    roll_back(before, version_before);
+    throw;
+  }
   const auto t_record = std::chrono::steady_clock::now();
   if (out.response != "cancelled") {
     IdList touched;
@@ -116,6 +123,16 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   }
   out.history_ms = capture_ms + ms_since(t_record);
   return out;
+}
+
+void EditSession::roll_back(SessionImage& before, std::uint64_t version_before) {
+  const bool detector_saved = before.complete;
+  before.complete = true;  // restore() puts back what the image holds; an unsaved detector is rebuilt below
+  restore(before, true);
+  before.complete = detector_saved;
+  if (!detector_saved && fields_ && !model_.empty()) detector_ = fresh_detector(settings_, *fields_);
+  while (!removed_log_.empty() && removed_log_.back().first > version_before) removed_log_.pop_back();
+  version_ = version_before;
 }
 
 void EditSession::step_once(const DeformParams& params, StepResult& out) {
@@ -134,6 +151,14 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                     tangents ? &a.tangent_v : nullptr, params_.threads);
   out.deform_ms = ms_since(t_deform);
+  // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
+  // else is refused here, before the detector sees it (deform() then rolls the rows back).
+  for (const Index row : r.moved) {
+    if (!a.positions.row(row).allFinite() || !a.normals.row(row).allFinite()) {
+      throw Error(ErrorCode::InvalidArgument, "translation",
+                  "the step would move surfel " + std::to_string(model_.ids()[row]) + " to a non-finite position");
+    }
+  }
   ++version_;
   touch_rows(r.moved);
   out.seq = ++steps_;

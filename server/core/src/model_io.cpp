@@ -15,6 +15,7 @@
 #include <queue>
 #include <sstream>
 
+#include "model_headers.hpp"
 #include "surfeledit/core/kdtree.hpp"
 
 namespace surfeledit {
@@ -234,7 +235,13 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(ErrorCode::NotFound, "path", "'" + path + "': no such file");
   if (fs::is_directory(path, ec)) throw io_error(path, "is a directory");
+  if (!fs::is_regular_file(path, ec)) throw io_error(path, "not a regular file");  // a FIFO would block
   const std::string ext = extension_of(path);
+  if (ext != ".obj" && ext != ".ply" && ext != ".pcd") {
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply, .pcd or .obj)");
+  }
+  // Counts the header announces against the file's size and the point limit, before any reader allocates.
+  model_headers::check(path, ext, params.max_points);
   SurfelArrays a;
   // PCL reports problems on its console; we report them as exceptions instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);

@@ -2,10 +2,12 @@
 // kind and range, a validated copy, and the listing.
 #include "surfeledit/core/settings.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <sstream>
+#include <thread>
 #include <type_traits>
 #include <utility>
 
@@ -22,8 +24,18 @@ struct Range {
   bool min_open = false;  // min itself refused
 };
 Range at_least(double lo) { return {lo, kInf, false}; }
-Range above(double lo) { return {lo, kInf, true}; }
 Range within(double lo, double hi) { return {lo, hi, false}; }
+
+// Upper bounds of the settings that size allocations, thread teams or loops (docs/hardening.md), so that
+// no client number becomes an unbounded one.
+constexpr double kMaxNeighbours = 256;          // boundary_n, boundary_i: kNN columns per surfel
+constexpr double kMaxLeafSurfels = 1 << 20;     // leaf sizes and cluster_size
+constexpr double kMaxFactor = 1e6;              // dimensionless multipliers (margins, split ratio, knn_eps)
+constexpr double kMaxHistoryMb = 1 << 20;       // 1 TiB: beyond any machine, far below overflow
+constexpr double kMaxBackoffIterations = 1000;  // back-off re-tests per step
+
+// threads: 0 (all) up to the hardware threads (more only oversubscribes; 2^31 made libgomp abort).
+double hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
 
 // The member of SessionSettings reached through the data-member pointers `Path`.
 template <auto... Path>
@@ -83,15 +95,16 @@ std::vector<SettingSpec> make_table() {
       row<&S::collision, &C::algorithm>("algorithm", "collision detector (docs/algorithms.md §4)"),
       row<&S::collision, &C::threshold>("threshold", "W of the inside test (p1 - p2) . n2 < W, model units"),
       row<&S::collision, &C::boundary>("boundary", "boundary-surfel heuristic (simple/improved/temporal)"),
-      row<&S::collision, &C::boundary_n>("boundary_n", "neighbours looked at for boundary marks", at_least(1)),
+      row<&S::collision, &C::boundary_n>("boundary_n", "neighbours looked at for boundary marks", within(1, kMaxNeighbours)),
       row<&S::collision, &C::boundary_i>("boundary_i", "of those, the nearest zero surfels marked boundary "
-                                                       "(<= boundary_n)", at_least(1)),
+                                                       "(<= boundary_n)", within(1, kMaxNeighbours)),
       row<&S::collision, &C::step_bound>("step_bound", "per-surfel step bound (simple/improved/temporal)"),
       row<&S::collision, &C::sphere_margin>("sphere_margin", "temporal/robust spheres shrink by this many radii "
-                                                             "of the nearest surfel", at_least(0)),
-      row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all)", at_least(0)),
+                                                             "of the nearest surfel", within(0, kMaxFactor)),
+      row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all, at most the hardware threads)",
+                                      within(0, hardware_threads())),
       row<&S::resample, &R::enabled>("resample", "dynamic resampling of stretched surfels"),
-      row<&S::resample, &R::split_threshold>("split_threshold", "stretch ratio that splits a surfel", above(1)),
+      row<&S::resample, &R::split_threshold>("split_threshold", "stretch ratio that splits a surfel", Range{1, kMaxFactor, true}),
       row<&S::hierarchy, &H::zero>("zero_hierarchy", "tree over the zero region (sphere_* = sphere cluster trees)"),
       row<&S::hierarchy, &H::deformable>("deformable_hierarchy", "tree over the deformable region "
                                                                  "(needs zero_hierarchy)"),
@@ -101,33 +114,33 @@ std::vector<SettingSpec> make_table() {
       row<&S::hierarchy, &H::sat>("sat", "OBB/AABB overlap test"),
       row<&S::hierarchy, &H::extended>("extended", "narrow phase against the original model (needs robust)"),
       row<&S::hierarchy, &H::tree, &B::leaf_max_surfels>("leaf_max_surfels", "a tree node with at most this many "
-                                                         "surfels is a leaf (>= leaf_min_surfels)", at_least(1)),
+                                                         "surfels is a leaf (>= leaf_min_surfels)", within(1, kMaxLeafSurfels)),
       row<&S::hierarchy, &H::tree, &B::leaf_min_surfels>("leaf_min_surfels", "no split leaves a child with fewer "
-                                                         "surfels", at_least(1)),
+                                                         "surfels", within(1, kMaxLeafSurfels)),
       row<&S::hierarchy, &H::tree, &B::max_level>("max_level", "deepest tree level (root = 0)", within(0, 64)),
       row<&S::hierarchy, &H::tree, &B::min_leaf_extent>("min_leaf_extent", "leaf boxes at least this wide per "
                                                         "axis, model units", at_least(0)),
       row<&S::hierarchy, &H::tree, &B::inflation>("inflation", "margin added to a box when a refit recomputes "
                                                   "it, model units", at_least(0)),
-      row<&S::collision, &C::knn_eps>("knn_eps", "approximate nearest-surfel search (0 = exact)", at_least(0)),
+      row<&S::collision, &C::knn_eps>("knn_eps", "approximate nearest-surfel search (0 = exact)", within(0, kMaxFactor)),
       row<&S::simplify, &P::method>("simplify", "approximate detection on clusters of the deformable region "
                                                 "(simple/temporal/robust, no hierarchy)"),
       row<&S::simplify, &P::cluster_size>("cluster_size", "surfels per cluster (1 = the exact result); also the "
-                                                          "leaves of sphere_* trees", at_least(1)),
+                                                          "leaves of sphere_* trees", within(1, kMaxLeafSurfels)),
       row<&S::simplify, &P::max_variation>("max_variation", "largest surface variation of a cluster; also for "
                                                             "sphere_* trees", within(0, 1)),
       row<&S::simplify, &P::member_margin>("member_margin", "approximate detection: members tested within this "
-                                                            "many cluster radii of the zero region", at_least(0)),
+                                                            "many cluster radii of the zero region", within(0, kMaxFactor)),
       row<&S::response, &E::mode>("response", "what a colliding step does: report it, cancel the step, back off "
                                               "until the regions only touch, or merge the regions "
                                               "(docs/algorithms.md §7)"),
       row<&S::history, &Y::history_mb>("history_mb", "memory bound of the undo history, MiB (oldest entries "
-                                                     "dropped first)", at_least(0)),
+                                                     "dropped first)", within(0, kMaxHistoryMb)),
       row<&S::response, &E::backoff_epsilon>("backoff_epsilon", "back-off stops below this largest depth, model "
                                                                 "units (0 = 1e-3 of the mean surfel radius)",
                                              at_least(0)),
       row<&S::response, &E::backoff_max_iterations>("backoff_max_iterations", "back-off stops after this many "
-                                                                              "re-tests", at_least(1)),
+                                                                              "re-tests", within(1, kMaxBackoffIterations)),
   };
 }
 

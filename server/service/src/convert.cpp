@@ -360,7 +360,7 @@ ReplyView::ReplyView(const Reply& reply) {
     for (const Setting& st : s.settings) {
       surfeledit_proto_Setting m{};
       m.name = cstr(st.name);
-      m.kind = static_cast<surfeledit_proto_SettingKind>(st.kind);
+      m.kind = static_cast<std::int32_t>(st.kind);  // a SettingKind value (a long on the wire)
       m.number = st.number;
       m.flag = st.flag;
       m.text = cstr(st.text);

@@ -1,5 +1,6 @@
 #include "surfeledit/service/handler.hpp"
 
+#include <cctype>
 #include <new>
 #include <stdexcept>
 
@@ -40,8 +41,9 @@ std::array<OpEntry, kOpCount> make_op_table() {
   return t;
 }
 
-// Serves a command whose client id is set: the op's row, its argument, the session, the op.
-void dispatch(HandlerState& state, const Command& command, Reply& reply, std::vector<UpdateEvent>& updates) {
+// Serves a command whose client id is set: the op's row, its argument, the session, the op. True when
+// the op replies later (OpContext::deferred).
+bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::vector<UpdateEvent>& updates) {
   const OpEntry* op = find_op(command.op);
   if (!op) {
     throw Error(ErrorCode::InvalidArgument, "op",
@@ -52,7 +54,52 @@ void dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   if (command.invalid) std::rethrow_exception(command.invalid);
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
+  if (context.deferred) return true;
   if (context.entry) fill_reply_tail(reply, *context.entry, op->tail);
+  return false;
+}
+
+// The argument an op's failure is charged to when nothing more precise is known (out of memory):
+// "OP_LOAD_CHUNK" -> "load_chunk"; "op" for a number outside the table.
+std::string argument_of(const std::string& op) {
+  if (op.rfind("OP_", 0) != 0 || (op.size() > 3 && std::isdigit(static_cast<unsigned char>(op[3])))) return "op";
+  std::string out = op.substr(3);
+  for (char& ch : out) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return out;
+}
+
+// Runs `body`; whatever it throws becomes the reply's error (status, field, message), nothing is
+// published, and the reply's version is the session's (unchanged) current version.
+template <typename F>
+void run_guarded(HandlerState& state, const std::string& op, const std::string& session, Reply& reply,
+                 std::vector<UpdateEvent>& updates, F&& body) {
+  const std::size_t updates_before = updates.size();
+  auto fail = [&](Status status, std::string field, std::string message) {
+    updates.resize(updates_before);  // nothing was changed, so nothing is published
+    reply.status = status;
+    reply.field = std::move(field);
+    reply.message = std::move(message);
+    reply.state.reset();
+    reply.session_info.reset();
+    reply.server_info.reset();
+    reply.step.reset();
+  };
+  try {
+    body();
+  } catch (const Error& e) {
+    fail(status_of(e.code()), e.field(), message_of(e));
+  } catch (const std::bad_alloc&) {
+    fail(Status::TooLarge, argument_of(op), "out of memory while serving " + op);
+  } catch (const std::exception& e) {
+    fail(Status::Internal, "", std::string("internal error: ") + e.what());
+  }
+  if (reply.status != Status::Ok) {
+    SessionEntry* entry = state.sessions.find(session);
+    reply.version = entry ? entry->session->version() : 0;
+    const auto level = reply.status == Status::Internal ? spdlog::level::warn : spdlog::level::info;
+    logger()->log(level, "request {}#{} {} session '{}' failed: status {} field '{}': {}", reply.client_id,
+                  reply.request_id, op, session, static_cast<unsigned>(reply.status), reply.field, reply.message);
+  }
 }
 
 }  // namespace
@@ -75,7 +122,8 @@ HandlerState::HandlerState(const HandlerConfig& c)
     : config(c),
       sessions(SessionParams{c.threads}),
       uploads(UploadLimits{c.max_chunk_surfels, c.max_model_surfels}),
-      started(Clock::now()) {}
+      started(Clock::now()),
+      data_root(c.data_root, c.max_file_bytes) {}
 
 Handler::Handler(HandlerConfig config) : state_(std::make_unique<HandlerState>(config)) {
   if (config.max_chunk_surfels == 0) throw std::invalid_argument("max_chunk_surfels must be positive");
@@ -109,42 +157,23 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
   log->debug("request {}#{} {} session '{}'", reply->client_id, reply->request_id, op, session);
 
   if (!reply->client_id.empty()) {
+    if (state_->loads.pending(reply->client_id, reply->request_id)) {
+      log->debug("request {}#{} is a repeat of a load in progress: its reply comes when it finishes",
+                 reply->client_id, reply->request_id);
+      return nullptr;
+    }
     if (auto stored = state_->cache.find(reply->client_id, reply->request_id)) {
       log->debug("request {}#{} is a repeat: answered with the stored reply", reply->client_id, reply->request_id);
       return stored;
     }
   }
 
-  const std::size_t updates_before = updates.size();
-  auto fail = [&](Status status, std::string field, std::string message) {
-    updates.resize(updates_before);  // nothing was changed, so nothing is published
-    reply->status = status;
-    reply->field = std::move(field);
-    reply->message = std::move(message);
-    reply->state.reset();
-    reply->session_info.reset();
-    reply->server_info.reset();
-    reply->step.reset();
-  };
-  try {
+  bool deferred = false;
+  run_guarded(*state_, op, session, *reply, updates, [&] {
     if (reply->client_id.empty()) throw Error(ErrorCode::InvalidArgument, "client_id", "a client id is required");
-    dispatch(*state_, command, *reply, updates);
-  } catch (const Error& e) {
-    fail(status_of(e.code()), e.field(), message_of(e));
-  } catch (const std::bad_alloc&) {
-    fail(Status::TooLarge, "", "out of memory while serving " + op);
-  } catch (const std::exception& e) {
-    fail(Status::Internal, "", std::string("internal error: ") + e.what());
-  }
-
-  if (reply->status != Status::Ok) {
-    // The reply's version is the session's (unchanged) current version.
-    SessionEntry* entry = state_->sessions.find(session);
-    reply->version = entry ? entry->session->version() : 0;
-    const auto level = reply->status == Status::Internal ? spdlog::level::warn : spdlog::level::info;
-    log->log(level, "request {}#{} {} session '{}' failed: status {} field '{}': {}", reply->client_id,
-             reply->request_id, op, session, static_cast<unsigned>(reply->status), reply->field, reply->message);
-  }
+    deferred = dispatch(*state_, command, *reply, updates);
+  });
+  if (deferred) return nullptr;
   reply->timings.emplace_back("total", ms_since(t0));
 
   // Ops whose row says so (GET_STATE pages, up to max_chunk_surfels surfels each) are not stored:
@@ -153,6 +182,23 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
   if (!reply->client_id.empty() && (!row || row->cached)) state_->cache.put(reply);
   return reply;
 }
+
+std::vector<std::shared_ptr<const Reply>> Handler::finish_loads(std::vector<UpdateEvent>& updates) {
+  std::vector<std::shared_ptr<const Reply>> replies;
+  for (FileLoad& load : state_->loads.take_finished()) {
+    auto reply = std::make_shared<Reply>();
+    reply->client_id = load.client_id;
+    reply->request_id = load.request_id;
+    run_guarded(*state_, "OP_LOAD_FILE", load.session, *reply, updates,
+                [&] { finish_load_file(*state_, load, *reply, updates); });
+    reply->timings.emplace_back("total", ms_since(load.started));
+    state_->cache.put(reply);
+    replies.push_back(std::move(reply));
+  }
+  return replies;
+}
+
+void Handler::set_on_load_done(std::function<void()> on_done) { state_->loads.set_on_done(std::move(on_done)); }
 
 void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail) {
   reply.version = entry.session->version();

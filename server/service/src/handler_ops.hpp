@@ -18,6 +18,8 @@
 #include "surfeledit/service/session_registry.hpp"
 #include "surfeledit/service/update.hpp"
 #include "surfeledit/service/upload.hpp"
+#include "data_root.hpp"
+#include "file_loads.hpp"
 
 namespace surfeledit::service {
 
@@ -30,6 +32,8 @@ struct HandlerState {
   UploadTable uploads;        // uploads in progress
   RequestCache cache;         // replies for repeated request ids
   std::chrono::steady_clock::time_point started;  // for the uptime
+  DataRoot data_root;         // where OP_LOAD_FILE may read
+  FileLoads loads;            // OP_LOAD_FILE loads running off the request thread
 };
 
 // One request being served.
@@ -40,6 +44,7 @@ struct OpContext {
                                       // for ops that attach the client themselves, cleared when it is dropped)
   Reply& reply;
   std::vector<UpdateEvent>& updates;  // appended: the changes to publish
+  bool deferred = false;              // set by an op that replies later (OP_LOAD_FILE: Handler::finish_loads)
 };
 
 using OpHandler = void (*)(OpContext&);
@@ -87,6 +92,9 @@ void serve_redo(OpContext& c);
 void serve_history(OpContext& c);
 void serve_merge(OpContext& c);
 void serve_curves(OpContext& c);
+// The second half of OP_LOAD_FILE, on the request thread once the file was read (load_ops.cpp): commits
+// the model into the session (the client must still be attached) and fills the reply.
+void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::vector<UpdateEvent>& updates);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

@@ -28,6 +28,7 @@ constexpr const char* kUpdateTopic = "surfeledit_update";
 // Waitset tags.
 constexpr dds_attach_t kRequestsTag = 1;
 constexpr dds_attach_t kStopTag = 2;
+constexpr dds_attach_t kLoadsTag = 3;
 
 // Topic types matched by name only (see dds::without_type_info); static: topics refer to them.
 const dds_topic_descriptor_t kRequestType = dds::without_type_info(surfeledit_proto_Request_desc);
@@ -49,7 +50,8 @@ HandlerConfig handler_config(const ServiceConfig& c) {
   }
   if (c.threads < 0) throw std::invalid_argument("threads must be >= 0");
   if (c.max_update_queue_bytes == 0) throw std::invalid_argument("max_update_queue_bytes must be positive");
-  return HandlerConfig{c.max_chunk_surfels, c.max_model_surfels, c.threads};
+  if (c.max_file_bytes == 0) throw std::invalid_argument("max_file_bytes must be positive");
+  return HandlerConfig{c.max_chunk_surfels, c.max_model_surfels, c.threads, c.data_root, c.max_file_bytes};
 }
 
 }  // namespace
@@ -68,11 +70,21 @@ struct Service::Impl {
         update_writer(dds::make_writer(participant, update_topic, qos)),
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
+        loads_guard(participant),
         waitset(participant),
         publisher(make_publisher(c)) {
     waitset.attach(requests, kRequestsTag);
     waitset.attach(stop_guard.entity(), kStopTag);
+    waitset.attach(loads_guard.entity(), kLoadsTag);
+    handler.set_on_load_done([this] { loads_guard.trigger(); });
   }
+
+  ~Impl() { handler.set_on_load_done({}); }  // loads finishing later must not touch the deleted guard
+
+  // Sends the replies (and publishes the updates) of the file loads that finished off-thread.
+  void finish_loads();
+  // Writes one reply; a failure is logged (the client's retry gets the stored reply).
+  void send(const Reply& reply);
 
   void serve_available();
   void serve(const surfeledit_proto_Request& request);
@@ -98,6 +110,7 @@ struct Service::Impl {
   dds::Entity update_writer;
   dds::Entity requests;  // read condition: the reader holds samples
   dds::GuardCondition stop_guard;
+  dds::GuardCondition loads_guard;  // a file load finished (FileLoads, on its thread)
   dds::WaitSet waitset;
   // Last: destroyed (drained and joined) first, while the update writer still exists.
   // nullptr: updates are written on the request thread (UpdateThread::Off, or Auto without a spare core).
@@ -150,12 +163,30 @@ void Service::Impl::serve(const surfeledit_proto_Request& request) {
     reply = std::move(fallback);
     events.clear();
   }
+  if (reply) send(*reply);  // nullptr: a file load replies when it finished (finish_loads)
+  for (const UpdateEvent& event : events) publish(event);
+}
+
+void Service::Impl::send(const Reply& reply) {
   try {
-    const ReplyView view(*reply);
+    const ReplyView view(reply);
     dds::write(reply_writer, view.get(), "dds_write(reply)");
   } catch (const std::exception& e) {
-    logger()->error("reply to {}#{} not sent: {}", reply->client_id, reply->request_id, e.what());
+    logger()->error("reply to {}#{} not sent: {}", reply.client_id, reply.request_id, e.what());
   }
+}
+
+void Service::Impl::finish_loads() {
+  loads_guard.clear();  // before taking: a load finishing meanwhile triggers it again
+  std::vector<UpdateEvent> events;
+  std::vector<std::shared_ptr<const Reply>> replies;
+  try {
+    replies = handler.finish_loads(events);
+  } catch (const std::exception& e) {
+    logger()->error("finished file loads could not be committed: {}", e.what());
+    return;
+  }
+  for (const auto& reply : replies) send(*reply);
   for (const UpdateEvent& event : events) publish(event);
 }
 
@@ -240,6 +271,7 @@ void Service::run() {
   while (!s.stopping.load()) {
     s.waitset.wait(DDS_INFINITY);
     if (s.stopping.load()) break;
+    s.finish_loads();
     s.serve_available();
   }
   s.stop_publisher();

@@ -25,6 +25,7 @@ from cyclonedds.topic import Topic
 import surfeledit
 from surfeledit._protocol import TOPIC_REQUEST, proto, request_qos
 from surfeledit.demo import default_scene
+from surfeledit.server_process import server_args
 
 REPO = Path(__file__).resolve().parents[3]
 _counter = itertools.count()
@@ -120,17 +121,28 @@ class ManagedProcess:
 
 
 class ServerProcess(ManagedProcess):
-    def __init__(self, exe: str, domain: int, log: Path) -> None:
+    def __init__(self, exe: str, domain: int, log: Path, data_root: Optional[Path] = None,
+                 extra: Tuple[str, ...] = ()) -> None:
         self.domain = domain
-        super().__init__([exe, "--domain", str(domain)], log)
+        self.data_root = data_root
+        super().__init__([exe] + server_args(domain, data_root) + list(extra), log)
 
 
 @pytest.fixture
-def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ServerProcess]:
-    """A running surfeledit-server on a fresh domain; killed at teardown whatever happens."""
+def data_root(tmp_path: Path) -> Path:
+    """The directory the ``server`` fixture's server may load files from (``--data-root``)."""
+    root = tmp_path / "data-root"
+    root.mkdir(exist_ok=True)
+    return root
+
+
+@pytest.fixture
+def server(request: pytest.FixtureRequest, tmp_path: Path, data_root: Path) -> Iterator[ServerProcess]:
+    """A running surfeledit-server on a fresh domain, reading files below ``data_root``; killed at teardown
+    whatever happens."""
     exe = server_executable()
     domain = free_domain()
-    srv = ServerProcess(exe, domain, tmp_path / f"server-{domain}.log")
+    srv = ServerProcess(exe, domain, tmp_path / f"server-{domain}.log", data_root)
     request.addfinalizer(srv.stop)
     yield srv
     assert srv.alive, f"surfeledit-server died during the test:\n{srv.log_tail()}"

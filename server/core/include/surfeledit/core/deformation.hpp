@@ -5,6 +5,7 @@
 // Normals and tangent axes follow the Jacobian J = dF/dp.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -43,7 +44,14 @@ struct DeformParams {
   Blend blend = Blend::Smooth;      // beta
 };
 
-// Throws InvalidArgument (naming the field) on non-finite values or a zero axis with angle != 0.
+// Bounds of one step (docs/hardening.md): the angle's magnitude, and the translation and the centre's
+// distance from the model against the model's extent (bounding-box diagonal when the regions were set).
+constexpr double kMaxStepAngle = 1000.0;  // radians (about 159 turns)
+constexpr double kStepReach = 1e6;        // |t| and |c - box centre| at most this many extents
+
+// Throws InvalidArgument (naming the field) on non-finite values, |angle| > kMaxStepAngle, or, when
+// angle != 0, an axis whose normalised length is not 1 (zero, or so large that its norm overflows,
+// e.g. (1e200, 1e200, 0): a rotation about it would collapse the region to a point).
 void validate(const DeformParams& params);
 
 // Per-surfel blend fields, computed once when regions are set (from the positions at that time).
@@ -52,9 +60,16 @@ struct DeformationFields {
   Values lambda;                // #P, d0 / (d0 + d1); 0 on F0, 1 on F1
   Points grad_lambda;           // #P by 3, gradient of lambda (zero on F0 and F1)
   IndexList deformable;         // rows with region != Zero, ascending
+  Vec3 box_centre = Vec3::Zero();  // centre of the positions' bounding box when the fields were computed
+  double box_extent = std::numeric_limits<double>::infinity();  // its diagonal, model units (inf: unknown,
+                                                                // no reach check)
 
   std::size_t memory_bytes() const;
 };
+
+// validate(params), then InvalidArgument naming "translation" / "center" when |t| or the centre's
+// distance from fields.box_centre exceeds kStepReach * fields.box_extent.
+void validate(const DeformParams& params, const DeformationFields& fields);
 
 // Computes lambda and its gradient with nearest-neighbour queries to F0 and F1 (k-d trees
 // over each region). Throws Conflict when a surfel has d0 + d1 == 0 (it lies in both),

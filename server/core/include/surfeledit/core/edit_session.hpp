@@ -179,6 +179,9 @@ class EditSession {
                StepResult& out);
   // Applies `params` (restored state) and detects; the core of deform() and of back-off.
   void step_once(const DeformParams& params, StepResult& out);
+  // Puts `before` back after a step failed part-way (an unsaved detector is rebuilt from the restored
+  // model) and the version to `version_before`.
+  void roll_back(SessionImage& before, std::uint64_t version_before);
   // Merge without the history entry (session_merge.cpp); the core of merge() and of response "merge".
   MergeOutcome merge_now(bool crease);
   // The detector for `settings` (make_detector), reset from the model as it is now (null for none).

@@ -7,6 +7,7 @@
 // Save: .ply and .pcd with positions, normals, radii (and colours when present).
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "surfeledit/core/surfel_model.hpp"
@@ -14,10 +15,13 @@
 namespace surfeledit {
 
 struct LoadParams {
-  int normal_k = 16;  // neighbours for normal estimation when the file has no normals
+  int normal_k = 16;             // neighbours for normal estimation when the file has no normals
+  std::uint64_t max_points = 0;  // refuse (TooLarge) a header announcing more points than this; 0: no limit
 };
 
-// Throws Error(Io | InvalidArgument | NotFound) naming the file and the problem.
+// Throws Error(Io | InvalidArgument | NotFound | TooLarge) naming the file and the problem. Only regular
+// files are read; the counts a PLY/PCD header announces are checked against the file's size (and
+// max_points) before anything is allocated for them (model_headers.hpp in src/).
 SurfelArrays load_surfels(const std::string& path, LoadParams params = {});
 void save_surfels(const std::string& path, const SurfelArrays& arrays);
 

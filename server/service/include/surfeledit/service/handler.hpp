@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,6 +23,8 @@ struct HandlerConfig {
   std::uint64_t max_chunk_surfels = 65536;       // per LoadChunk / StatePage / Update sample
   std::uint64_t max_model_surfels = 20'000'000;  // per model
   int threads = 0;                               // per-session worker threads; 0 = all cores
+  std::string data_root;                         // OP_LOAD_FILE reads only below it; empty: file loading off
+  std::uint64_t max_file_bytes = std::uint64_t(1) << 30;  // largest file OP_LOAD_FILE reads
 };
 
 struct HandlerState;
@@ -35,8 +38,14 @@ class Handler {
 
   // Serves one request and returns its reply (the stored one for a repeated request id).
   // Appends the changes to publish to `updates`. Never throws for bad input: every
-  // failure becomes an error reply, and a failed request changes nothing.
+  // failure becomes an error reply, and a failed request changes nothing. nullptr: the reply comes
+  // later from finish_loads() (an OP_LOAD_FILE whose file is being read, or a repeat of one).
   std::shared_ptr<const Reply> handle(const Command& command, std::vector<UpdateEvent>& updates);
+  // Commits the file loads that finished off the request thread (in the order they finished) and
+  // returns their replies; appends their updates. Each OP_LOAD_FILE gets exactly one reply.
+  std::vector<std::shared_ptr<const Reply>> finish_loads(std::vector<UpdateEvent>& updates);
+  // Called from a loading thread when a load finished (wakes the request thread); set before serving.
+  void set_on_load_done(std::function<void()> on_done);
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);

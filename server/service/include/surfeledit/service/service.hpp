@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 
 namespace surfeledit::service {
 
@@ -27,6 +28,8 @@ struct ServiceConfig {
   // queued updates of a session are coalesced into one (PROTOCOL.md, "Updates").
   std::uint64_t max_update_queue_bytes = std::uint64_t(256) << 20;
   UpdateThread update_thread = UpdateThread::Auto;
+  std::string data_root;                                  // OP_LOAD_FILE reads only below it; empty: off
+  std::uint64_t max_file_bytes = std::uint64_t(1) << 30;  // largest file OP_LOAD_FILE reads (1 GiB)
 };
 
 class Service {

@@ -1,0 +1,230 @@
+#include "model_headers.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "surfeledit/core/types.hpp"
+
+namespace surfeledit::model_headers {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& path, const std::string& what) {
+  throw Error(ErrorCode::Io, "path", "'" + path + "': " + what);
+}
+
+// The file's size and its first kMaxHeaderBytes bytes.
+struct Head {
+  std::uint64_t size = 0;
+  std::string bytes;
+};
+
+Head read_head(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) bad(path, "cannot be opened");
+  Head h;
+  in.seekg(0, std::ios::end);
+  h.size = static_cast<std::uint64_t>(in.tellg());
+  in.seekg(0);
+  h.bytes.resize(static_cast<std::size_t>(std::min<std::uint64_t>(h.size, kMaxHeaderBytes)));
+  in.read(h.bytes.data(), static_cast<std::streamsize>(h.bytes.size()));
+  h.bytes.resize(static_cast<std::size_t>(in.gcount()));
+  return h;
+}
+
+// Header lines up to and including the one starting with `last` (e.g. "end_header"); `end` is set to
+// the byte offset just after it. Fails when it is not within the head.
+std::vector<std::string> header_lines(const std::string& path, const Head& h, const std::string& last,
+                                      std::uint64_t& end) {
+  std::vector<std::string> lines;
+  std::size_t pos = 0;
+  while (pos < h.bytes.size()) {
+    const std::size_t nl = h.bytes.find('\n', pos);
+    if (nl == std::string::npos) break;
+    std::string line = h.bytes.substr(pos, nl - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = nl + 1;
+    lines.push_back(line);
+    if (line.compare(0, last.size(), last) == 0) {
+      end = pos;
+      return lines;
+    }
+  }
+  bad(path, "no '" + last + "' line within the first " + std::to_string(kMaxHeaderBytes) + " bytes");
+}
+
+std::uint64_t parse_count(const std::string& path, const std::string& text, const std::string& what) {
+  if (text.empty() || text.size() > 19 || !std::all_of(text.begin(), text.end(), ::isdigit)) {
+    bad(path, what + " '" + text + "' is not a count");
+  }
+  return std::stoull(text);
+}
+
+// a * b, or UINT64_MAX when it overflows (then it exceeds any file).
+std::uint64_t times(std::uint64_t a, std::uint64_t b) {
+  if (a != 0 && b > UINT64_MAX / a) return UINT64_MAX;
+  return a * b;
+}
+
+std::uint64_t plus(std::uint64_t a, std::uint64_t b) { return b > UINT64_MAX - a ? UINT64_MAX : a + b; }
+
+void check_points(const std::string& path, std::uint64_t points, std::uint64_t max_points) {
+  if (max_points > 0 && points > max_points) {
+    throw Error(ErrorCode::TooLarge, "path",
+                "'" + path + "': the header announces " + std::to_string(points) + " points, beyond the limit of " +
+                    std::to_string(max_points));
+  }
+}
+
+void check_fits(const std::string& path, std::uint64_t need, std::uint64_t have, const std::string& what) {
+  if (need > have) {
+    bad(path, "the header announces " + what + " (at least " + std::to_string(need) + " bytes) but the file has " +
+                  std::to_string(have) + " bytes after it");
+  }
+}
+
+int ply_scalar_size(const std::string& type) {
+  static const std::map<std::string, int> sizes = {
+      {"char", 1},  {"uchar", 1},  {"int8", 1},  {"uint8", 1},   {"short", 2},   {"ushort", 2},
+      {"int16", 2}, {"uint16", 2}, {"int", 4},   {"uint", 4},    {"int32", 4},   {"uint32", 4},
+      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+  const auto it = sizes.find(type);
+  return it == sizes.end() ? 0 : it->second;
+}
+
+Announced check_ply(const std::string& path, const Head& h, std::uint64_t max_points) {
+  if (h.bytes.compare(0, 4, "ply\n") != 0 && h.bytes.compare(0, 5, "ply\r\n") != 0) bad(path, "not a PLY file");
+  std::uint64_t end = 0;
+  const std::vector<std::string> lines = header_lines(path, h, "end_header", end);
+  bool ascii = false, has_format = false;
+  struct Element {
+    std::string name;
+    std::uint64_t count = 0;
+    std::uint64_t min_bytes = 0;  // the least one element can take in the file
+  };
+  std::vector<Element> elements;
+  for (std::size_t i = 1; i + 1 < lines.size(); ++i) {
+    std::istringstream in(lines[i]);
+    std::string word;
+    in >> word;
+    if (word == "format") {
+      std::string format;
+      in >> format;
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") {
+        bad(path, "unknown PLY format '" + format + "'");
+      }
+      ascii = format == "ascii";
+      has_format = true;
+    } else if (word == "element") {
+      Element e;
+      std::string count;
+      in >> e.name >> count;
+      e.count = parse_count(path, count, "element " + e.name + " count");
+      elements.push_back(e);
+    } else if (word == "property") {
+      if (elements.empty()) bad(path, "a property before any element");
+      std::string type;
+      in >> type;
+      std::uint64_t bytes = 0;
+      if (type == "list") {
+        std::string count_type, item_type;
+        in >> count_type >> item_type;
+        if (!ply_scalar_size(count_type) || !ply_scalar_size(item_type)) bad(path, "unknown PLY list type");
+        bytes = ascii ? 2 : static_cast<std::uint64_t>(ply_scalar_size(count_type));  // an empty list
+      } else {
+        if (!ply_scalar_size(type)) bad(path, "unknown PLY property type '" + type + "'");
+        bytes = ascii ? 2 : static_cast<std::uint64_t>(ply_scalar_size(type));  // ascii: a digit and a separator
+      }
+      elements.back().min_bytes += bytes;
+    } else if (word != "comment" && word != "obj_info" && !word.empty()) {
+      bad(path, "unexpected PLY header line '" + lines[i].substr(0, 80) + "'");
+    }
+  }
+  if (!has_format) bad(path, "no PLY format line");
+  Announced a;
+  std::uint64_t need = 0;
+  for (const Element& e : elements) {
+    if (e.name == "vertex") a.points = e.count;
+    // An element without properties still takes a line (ascii) or is refused beyond the file's size.
+    need = plus(need, times(e.count, std::max<std::uint64_t>(e.min_bytes, 1)));
+  }
+  check_points(path, a.points, max_points);
+  check_fits(path, need, h.size - end, "its elements");
+  return a;
+}
+
+Announced check_pcd(const std::string& path, const Head& h, std::uint64_t max_points) {
+  std::uint64_t end = 0;
+  const std::vector<std::string> lines = header_lines(path, h, "DATA", end);
+  std::vector<std::uint64_t> sizes, counts;
+  std::uint64_t width = 0, height = 1, points = 0, fields = 0;
+  bool has_width = false, has_points = false;
+  std::string data;
+  for (const std::string& line : lines) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    std::string key, value;
+    in >> key;
+    std::vector<std::string> values;
+    while (in >> value) values.push_back(value);
+    if (key == "FIELDS") {
+      fields = values.size();
+    } else if (key == "SIZE" || key == "COUNT") {
+      std::vector<std::uint64_t>& out = key == "SIZE" ? sizes : counts;
+      for (const std::string& v : values) out.push_back(parse_count(path, v, key));
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      if (values.size() != 1) bad(path, key + " needs one value");
+      const std::uint64_t v = parse_count(path, values[0], key);
+      if (key == "WIDTH") width = v, has_width = true;
+      else if (key == "HEIGHT") height = v;
+      else points = v, has_points = true;
+    } else if (key == "DATA") {
+      data = values.empty() ? "" : values[0];
+    }
+  }
+  if (fields == 0 || sizes.size() != fields || (!counts.empty() && counts.size() != fields) || !has_width) {
+    bad(path, "not a readable PCD file (FIELDS, SIZE, COUNT and WIDTH missing or inconsistent)");
+  }
+  std::uint64_t step = 0, values_per_point = 0;
+  for (std::size_t i = 0; i < fields; ++i) {
+    const std::uint64_t count = counts.empty() ? 1 : counts[i];
+    if (sizes[i] == 0 || sizes[i] > 8 || count > (1u << 20)) bad(path, "a PCD field of size 0 or beyond 8 bytes, or count beyond 2^20");
+    step += sizes[i] * count;
+    values_per_point += count;
+  }
+  Announced a;
+  a.points = times(width, height);
+  if (has_points && points != a.points) {
+    bad(path, "POINTS " + std::to_string(points) + " differs from WIDTH x HEIGHT = " + std::to_string(a.points));
+  }
+  check_points(path, a.points, max_points);
+  const std::uint64_t have = h.size - end;
+  if (data == "binary") {
+    check_fits(path, times(a.points, step), have, std::to_string(a.points) + " binary points");
+  } else if (data == "ascii") {
+    check_fits(path, times(a.points, times(values_per_point, 2)), have, std::to_string(a.points) + " text points");
+  } else if (data == "binary_compressed") {
+    check_fits(path, times(a.points, step), times(have, kMaxPcdCompression),
+               std::to_string(a.points) + " compressed points (decompressing to over " +
+                   std::to_string(kMaxPcdCompression) + " times the data)");
+  } else {
+    bad(path, "unknown PCD DATA '" + data + "'");
+  }
+  return a;
+}
+
+}  // namespace
+
+Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points) {
+  const Head h = read_head(path);
+  if (ext == ".ply") return check_ply(path, h, max_points);
+  if (ext == ".pcd") return check_pcd(path, h, max_points);
+  if (h.bytes.find('\0') != std::string::npos) bad(path, "not a text OBJ file (holds NUL bytes)");
+  return {};
+}
+
+}  // namespace surfeledit::model_headers

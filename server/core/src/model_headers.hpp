@@ -1,0 +1,26 @@
+// Checks of a model file's header before any reader allocates (docs/hardening.md, "Files"): the counts
+// a PLY or PCD header announces must fit in the bytes the file actually has, and stay within a point
+// limit. Reads at most the first kMaxHeaderBytes of the file, so a huge file of garbage (or a sparse
+// file of zeros) fails at once with bounded memory.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace surfeledit::model_headers {
+
+constexpr std::uint64_t kMaxHeaderBytes = 64 * 1024;
+// binary_compressed PCD: the decompressed data may be at most this many times the file's data bytes.
+constexpr std::uint64_t kMaxPcdCompression = 128;
+
+// What a header announces.
+struct Announced {
+  std::uint64_t points = 0;  // vertices (PLY) / points (PCD)
+};
+
+// `ext` is ".ply", ".pcd" or ".obj" (lower case). Throws Error(Io, "path") naming the file when the
+// header is missing or malformed or announces more data than the file holds, Error(TooLarge, "path")
+// when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text.
+Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points);
+
+}  // namespace surfeledit::model_headers
