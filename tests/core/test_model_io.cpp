@@ -102,10 +102,14 @@ TEST_F(ModelIo, ClipLinesRoundTripAsExtraProperties) {
   EXPECT_EQ(load_surfels(path("plain.ply")).clip_dirs.rows(), 0);
 }
 
-// Known bug (found by this test, left for its owner): loading a .ply saved with colours (an UINT32 "rgb"
-// field) throws std::bad_alloc from read_fields() in from_cloud(), sized by what PCL's PLYReader
-// returns for such a file. Enable when fixed.
-TEST_F(ModelIo, DISABLED_PlyRoundTripKeepsColours) { expect_round_trip(random_surfels(300, 5), path("cloud.ply")); }
+// A .ply saved with colours loads with them (PCL's writer once wrote 4 bytes for 3 declared uchar
+// properties, and loading threw bad_alloc). The file agrees with its header: vertex stride checked.
+TEST_F(ModelIo, PlyRoundTripKeepsColours) {
+  expect_round_trip(random_surfels(300, 5), path("cloud.ply"));
+  std::ifstream in(path("cloud.ply"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("property uchar red\nproperty uchar green\nproperty uchar blue\n"), std::string::npos);
+}
 
 TEST_F(ModelIo, ObjOctahedronGivesVertexSurfelsWithAnalyticNormals) {
   const std::string file = path("octahedron.obj");

@@ -135,7 +135,7 @@ TEST(Settings, SimplificationAndApproximateSearch) {
 // One message style for every setting: kind and range, enum names, unknown settings.
 TEST(Settings, UniformMessages) {
   const SessionSettings s;
-  EXPECT_EQ(expect_error(s, {{"boundary_n", 2.5}}, "boundary_n"), "boundary_n: expects an integer >= 1, got 2.5");
+  EXPECT_EQ(expect_error(s, {{"boundary_n", 2.5}}, "boundary_n"), "boundary_n: expects an integer in [1, 256], got 2.5");
   EXPECT_EQ(expect_error(s, {{"boundary_n", std::string("ten")}}, "boundary_n"),
             "boundary_n: expects an integer in [1, 256], got 'ten'");
   EXPECT_EQ(expect_error(s, {{"max_level", std::int64_t{65}}}, "max_level"),

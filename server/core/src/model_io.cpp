@@ -53,13 +53,32 @@ double read_scalar(const std::uint8_t* p, std::uint8_t datatype) {
   }
 }
 
+std::size_t scalar_size(std::uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: case pcl::PCLPointField::UINT8: return 1;
+    case pcl::PCLPointField::INT16: case pcl::PCLPointField::UINT16: return 2;
+    case pcl::PCLPointField::FLOAT64: return 8;
+    default: return 4;
+  }
+}
+
+// What a reader returned is consistent: every point's bytes are there and `f` lies inside a point. A
+// reader that miscounted (or a file that contradicts its header) is refused instead of read past its end.
+void check_layout(const std::string& path, const pcl::PCLPointCloud2& c, const pcl::PCLPointField& f) {
+  const std::uint64_t n = std::uint64_t(c.width) * c.height;
+  if (std::uint64_t(f.offset) + scalar_size(f.datatype) > c.point_step || c.data.size() / std::max<std::uint32_t>(c.point_step, 1) < n) {
+    throw io_error(path, "the data does not match the header (field '" + f.name + "')");
+  }
+}
+
 // Reads named scalar fields into an n by k matrix; false if any is missing.
-bool read_fields(const pcl::PCLPointCloud2& c, const std::vector<std::string>& names,
+bool read_fields(const std::string& path, const pcl::PCLPointCloud2& c, const std::vector<std::string>& names,
                  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& out) {
   std::vector<const pcl::PCLPointField*> fields;
   for (const auto& n : names) {
     const auto* f = find_field(c, n);
     if (!f) return false;
+    check_layout(path, c, *f);
     fields.push_back(f);
   }
   const std::size_t n = static_cast<std::size_t>(c.width) * c.height;
@@ -74,10 +93,14 @@ bool read_fields(const pcl::PCLPointCloud2& c, const std::vector<std::string>& n
 }
 
 // Packed "rgb"/"rgba" (float or uint32 bit pattern) -> #P by 3 colours; empty if absent.
-Colors read_colors(const pcl::PCLPointCloud2& c) {
+Colors read_colors(const std::string& path, const pcl::PCLPointCloud2& c) {
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
+  if (read_fields(path, c, {"red", "green", "blue"}, m))  // separate channels (as PLY keeps them)
+    return m.cwiseMax(0.0).cwiseMin(255.0).cast<std::uint8_t>();
   const pcl::PCLPointField* f = find_field(c, "rgb");
   if (!f) f = find_field(c, "rgba");
   if (!f || (f->datatype != pcl::PCLPointField::FLOAT32 && f->datatype != pcl::PCLPointField::UINT32)) return {};
+  check_layout(path, c, *f);
   const std::size_t n = static_cast<std::size_t>(c.width) * c.height;
   Colors out(static_cast<Eigen::Index>(n), 3);
   for (std::size_t i = 0; i < n; ++i) {
@@ -168,21 +191,21 @@ const std::vector<std::string> kClipDirFields = {"clip_dx", "clip_dy", "clip_dz"
 SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, const LoadParams& params) {
   SurfelArrays a;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
-  if (!read_fields(c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
+  if (!read_fields(path, c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
   a.positions = m;
   if (a.positions.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
   require_finite(a.positions, "path '" + path + "' positions");
-  if (read_fields(c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(c, {"nx", "ny", "nz"}, m)) {
+  if (read_fields(path, c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(path, c, {"nx", "ny", "nz"}, m)) {
     a.normals = m;
   } else {
     a.normals = estimate_normals(a.positions, params.normal_k, path);
   }
-  if (read_fields(c, {"radius"}, m)) a.radii = m.col(0);
-  a.colors = read_colors(c);
+  if (read_fields(path, c, {"radius"}, m)) a.radii = m.col(0);
+  a.colors = read_colors(path, c);
   // Clip lines of a merge's crease (extra vertex properties written by save_surfels).
-  if (read_fields(c, kClipPointFields, m)) {
+  if (read_fields(path, c, kClipPointFields, m)) {
     a.clip_points = m;
-    if (!read_fields(c, kClipDirFields, m)) throw io_error(path, "clip line points without directions");
+    if (!read_fields(path, c, kClipDirFields, m)) throw io_error(path, "clip line points without directions");
     a.clip_dirs = m;
   }
   return a;
@@ -192,7 +215,7 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
 // normals (area-weighted), triangulating polygons as fans.
 SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
-  if (!read_fields(mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
+  if (!read_fields(path, mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
   const Points v = m;
   require_finite(v, "path '" + path + "' vertices");
   Points acc = Points::Zero(v.rows(), 3);
@@ -312,7 +335,12 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
   for (const char* f : {"x", "y", "z"}) add(f, pcl::PCLPointField::FLOAT64, 8);
   for (const char* f : {"normal_x", "normal_y", "normal_z"}) add(f, pcl::PCLPointField::FLOAT32, 4);
   if (radii) add("radius", pcl::PCLPointField::FLOAT32, 4);
-  if (colors) add("rgb", pcl::PCLPointField::UINT32, 4);
+  // PLY: three uchar properties. PCL's PLYWriter declares a packed UINT32 "rgb" as three uchar properties
+  // but writes all four bytes, so the file contradicts its own header (the old bad_alloc on loading).
+  const bool ply = ext == ".ply";
+  if (colors && ply)
+    for (const char* f : {"red", "green", "blue"}) add(f, pcl::PCLPointField::UINT8, 1);
+  if (colors && !ply) add("rgb", pcl::PCLPointField::UINT32, 4);
   if (clips)
     for (const auto* names : {&kClipPointFields, &kClipDirFields})
       for (const std::string& f : *names) add(f, pcl::PCLPointField::FLOAT64, 8);
@@ -338,7 +366,10 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
       std::memcpy(p + o, &v, 4);
       o += 4;
     }
-    if (colors) {
+    if (colors && ply) {
+      for (int k = 0; k < 3; ++k) p[o + k] = static_cast<std::uint8_t>(a.colors(i, k));
+      o += 3;
+    } else if (colors) {
       const std::uint32_t v = (std::uint32_t(a.colors(i, 0)) << 16) | (std::uint32_t(a.colors(i, 1)) << 8) | a.colors(i, 2);
       std::memcpy(p + o, &v, 4);
       o += 4;
