@@ -10,23 +10,50 @@ export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
 echo "== C++ tests"
 ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)"
+# sanitizer_build NAME DIR CMAKE_OPTION [EXTRA_CMAKE_ARGS...] TARGETS: a separate instrumented build (no Python
+# module, no benchmarks) of the given test targets in DIR; logs in $BUILD/setup-NAME-*.log.
+sanitizer_build() {
+  local name="$1" dir="$2" option="$3" targets="$4"
+  shift 4
+  if [ ! -f "$dir/CMakeCache.txt" ]; then
+    cmake -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo "-D$option=ON" \
+      -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache \
+      -DSURFELEDIT_BUILD_PYTHON=OFF -DSURFELEDIT_BUILD_BENCH=OFF "$@" >"$BUILD/setup-$name-configure.log" 2>&1 \
+      || { tail -n 40 "$BUILD/setup-$name-configure.log"; exit 1; }
+  fi
+  # shellcheck disable=SC2086  # the targets are words
+  cmake --build "$dir" -j "$(nproc)" --target $targets >"$BUILD/setup-$name-build.log" 2>&1 \
+    || { grep -E "error|Error" "$BUILD/setup-$name-build.log" | head -n 40; exit 1; }
+}
+
 echo "== ThreadSanitizer: background hierarchy rebuilds while steps run"
-# A separate instrumented build of the core tests (no Python module); the suppression covers a
-# load-time mutex misuse in libOpenNI2, which PCL pulls in (tests/tsan_suppressions.txt).
+# The suppression covers a load-time mutex misuse in libOpenNI2, which PCL pulls in (tests/tsan_suppressions.txt).
 TSAN_BUILD="${SURFELEDIT_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
 export TSAN_OPTIONS="suppressions=$ROOT/tests/tsan_suppressions.txt halt_on_error=1"
-if [ ! -f "$TSAN_BUILD/CMakeCache.txt" ]; then
-  cmake -S "$ROOT" -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSURFELEDIT_TSAN=ON \
-    -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache \
-    -DSURFELEDIT_BUILD_PYTHON=OFF -DSURFELEDIT_BUILD_BENCH=OFF >"$BUILD/setup-tsan-configure.log" 2>&1 \
-    || { tail -n 40 "$BUILD/setup-tsan-configure.log"; exit 1; }
-fi
-cmake --build "$TSAN_BUILD" -j "$(nproc)" --target surfeledit_core_tests >"$BUILD/setup-tsan-build.log" 2>&1 \
-  || { grep -E "error|Error" "$BUILD/setup-tsan-build.log" | head -n 40; exit 1; }
+sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_core_tests
 "$TSAN_BUILD/tests/surfeledit_core_tests" \
   --gtest_filter='BvhRebuild.*:BvhUpdate.StatusFreshRefitRebuilding:CollisionBvh.BackgroundRebuildWhileStepsArrive' \
   --gtest_brief=1
 unset TSAN_OPTIONS
+
+# AddressSanitizer and UndefinedBehaviorSanitizer: every core and service test, each in its own build
+# (-O1 -g: quicker to build and run than -O2, still optimised enough to keep the tests fast).
+SANITIZED_TESTS="surfeledit_core_tests surfeledit_service_tests"
+SANITIZER_FLAGS=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g")
+run_sanitized() {  # run_sanitized DIR: both test binaries, brief output
+  "$1/tests/surfeledit_core_tests" --gtest_brief=1
+  "$1/tests/surfeledit_service_tests" --gtest_brief=1 >"$1/service-tests.log" 2>&1 \
+    || { tail -n 60 "$1/service-tests.log"; exit 1; }
+}
+echo "== AddressSanitizer: core and service tests"
+ASAN_BUILD="${SURFELEDIT_ASAN_BUILD_DIR:-$ROOT/build-asan}"
+sanitizer_build asan "$ASAN_BUILD" SURFELEDIT_ASAN "$SANITIZED_TESTS" "${SANITIZER_FLAGS[@]}"
+# Leak checking is off: OpenMP, PCL and Cyclone keep process-lifetime allocations it would list.
+ASAN_OPTIONS="detect_leaks=0 abort_on_error=1" run_sanitized "$ASAN_BUILD"
+echo "== UndefinedBehaviorSanitizer: core and service tests"
+UBSAN_BUILD="${SURFELEDIT_UBSAN_BUILD_DIR:-$ROOT/build-ubsan}"
+sanitizer_build ubsan "$UBSAN_BUILD" SURFELEDIT_UBSAN "$SANITIZED_TESTS" "${SANITIZER_FLAGS[@]}"
+UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" run_sanitized "$UBSAN_BUILD"
 
 echo "== Python tests"
 cd "$ROOT"

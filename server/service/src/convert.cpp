@@ -175,6 +175,10 @@ std::vector<NamedSetting> to_core(const surfeledit_proto_Configure& c, const std
     const surfeledit_proto_Setting& s = c.settings._buffer[i];
     NamedSetting named;
     named.name = str(s.name);
+    if (named.name.empty()) {  // found by the request fuzzer: the error named no field
+      throw Error(ErrorCode::InvalidArgument, field + ".settings[" + std::to_string(i) + "].name",
+                  "a setting name is required");
+    }
     switch (s.kind) {
       case surfeledit_proto_SETTING_NUMBER: named.value = s.number; break;
       case surfeledit_proto_SETTING_INT: named.value = integral_or_number(s.number); break;
