@@ -75,7 +75,7 @@ def test_integers_come_back_as_int_and_messages_are_uniform():
     assert type(got["threshold"]) is float and got["threshold"] == 1.0
     s.configure(boundary_n=8.0)  # an integral float is still accepted for an integer setting
     assert s.settings()["boundary_n"] == 8
-    with pytest.raises(InvalidArgumentError, match=r"boundary_n: expects an integer >= 1, got 2\.5"):
+    with pytest.raises(InvalidArgumentError, match=r"boundary_n: expects an integer in \[1, 256\], got 2\.5"):
         s.configure(boundary_n=2.5)
     with pytest.raises(InvalidArgumentError, match="algorithm: unknown value 'x'; expected one of none, simple,"):
         s.configure(algorithm="x")
@@ -98,9 +98,9 @@ def test_setting_specs_describe_every_setting():
         assert bool(x["choices"]) == (x["kind"] == "text")
         assert x["doc"] and x["expects"]
     by_name = {x["name"]: x for x in specs}
-    assert by_name["boundary_n"]["min"] == 1 and by_name["boundary_n"]["max"] is None
+    assert by_name["boundary_n"]["min"] == 1 and by_name["boundary_n"]["max"] == 256  # bounded (docs/hardening.md)
     assert by_name["max_variation"]["min"] == 0.0 and by_name["max_variation"]["max"] == 1.0
-    assert by_name["split_threshold"]["min_exclusive"] and by_name["split_threshold"]["expects"] == "a finite number > 1"
+    assert by_name["split_threshold"]["min_exclusive"] and by_name["split_threshold"]["expects"] == "a finite number in (1, 1e+06]"
     assert by_name["algorithm"]["choices"] == ["none", "simple", "improved", "temporal", "robust"]
     for x in specs:  # the keyword docs are built from the table
         assert x["name"] + ": " + x["doc"] in core.EditSession.configure.__doc__

@@ -129,20 +129,14 @@ class ServerProcess(ManagedProcess):
 
 
 @pytest.fixture
-def data_root(tmp_path: Path) -> Path:
-    """The directory the ``server`` fixture's server may load files from (``--data-root``)."""
-    root = tmp_path / "data-root"
-    root.mkdir(exist_ok=True)
-    return root
-
-
-@pytest.fixture
-def server(request: pytest.FixtureRequest, tmp_path: Path, data_root: Path) -> Iterator[ServerProcess]:
-    """A running surfeledit-server on a fresh domain, reading files below ``data_root``; killed at teardown
-    whatever happens."""
+def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ServerProcess]:
+    """A running surfeledit-server on a fresh domain, loading files from ``tmp_path / "data-root"``
+    (``--data-root``; the ``data_root`` fixture); killed at teardown whatever happens."""
     exe = server_executable()
     domain = free_domain()
-    srv = ServerProcess(exe, domain, tmp_path / f"server-{domain}.log", data_root)
+    root = tmp_path / "data-root"
+    root.mkdir(exist_ok=True)
+    srv = ServerProcess(exe, domain, tmp_path / f"server-{domain}.log", root)
     request.addfinalizer(srv.stop)
     yield srv
     assert srv.alive, f"surfeledit-server died during the test:\n{srv.log_tail()}"
@@ -161,6 +155,13 @@ def connect_to(srv: ServerProcess, timeout: float = 20.0) -> surfeledit.Client:
             last = e
     pytest.fail(f"surfeledit-server on domain {srv.domain} did not answer within {timeout} s ({last}):\n"
                 f"{srv.log_tail()}")
+
+
+@pytest.fixture
+def data_root(server: ServerProcess) -> Path:
+    """The directory the ``server`` fixture's server may load files from (``--data-root``)."""
+    assert server.data_root is not None
+    return server.data_root
 
 
 @pytest.fixture

@@ -145,7 +145,9 @@ def write_slow_cloud(path: Path, n: int) -> None:
 def test_other_clients_are_served_while_a_slow_file_loads(server: ServerProcess, data_root: Path,
                                                          make_client: Callable[[], surfeledit.Client]) -> None:
     write_slow_cloud(data_root / "slow.ply", 400_000)
-    loader, other = make_client(), make_client()
+    other = make_client()
+    # The loader waits as long as the load takes (the machine may be busy): no retry after 10 s.
+    loader = surfeledit.connect(domain=server.domain, spawn=False, timeout=120.0)
     s = loader.open_session("slow")
     o = other.open_session("busy")
     done: List[float] = []
@@ -170,12 +172,14 @@ def test_other_clients_are_served_while_a_slow_file_loads(server: ServerProcess,
             served.append((b, b - a))
         time.sleep(0.05)
     t.join(120)
+    surfels = s.info().surfels if done and not failure else None
+    loader.close()
     assert not failure, failure
-    assert done and s.info().surfels == 400_000
+    assert done and surfels == 400_000
     load_s = done[0] - t0
     in_time = [rtt for when, rtt in served if when < done[0]]
     assert load_s > 0.5, f"the load took only {load_s:.2f} s: too fast to show anything"
     assert len(in_time) >= 3, (load_s, served)
-    assert max(in_time) < 0.5, (load_s, max(in_time))
+    assert max(in_time) < min(1.0, load_s / 2), (load_s, max(in_time))  # never waited for the load
     print(f"load {load_s:.2f} s; {len(in_time)} requests of another client served meanwhile, "
           f"max round trip {max(in_time) * 1e3:.0f} ms")
