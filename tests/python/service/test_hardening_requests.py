@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from typing import Any, Iterator, Tuple
+from typing import Any, Tuple
 
 import numpy as np
 import pytest
@@ -15,19 +15,7 @@ import pytest
 import surfeledit
 from surfeledit import errors, proto
 
-from .conftest import Scene
-
-
-@pytest.fixture
-def loaded(client: surfeledit.Client, scene: Scene) -> Iterator[Tuple[surfeledit.Client, surfeledit.Session]]:
-    pos, nrm, rad, part = scene
-    s = client.open_session("hard")
-    s.load_points(pos, nrm, rad)
-    ids = s.ids()
-    s.set_regions(zero=ids[part == 0], one=ids[part == 1])
-    s.deform(translation=(0.0, 0.0, -0.01))
-    yield client, s
-    s.close()
+from .test_bad_input import loaded  # noqa: F401  (fixture: a loaded session with regions)
 
 
 def snapshot(s: surfeledit.Session) -> Tuple[int, int, np.ndarray]:
@@ -50,7 +38,7 @@ def refused_twice_unchanged(s: surfeledit.Session, field: str, **step: Any) -> N
 
 
 def test_configure_threads_beyond_the_hardware_is_refused_and_the_server_survives(loaded: Any) -> None:
-    client, s = loaded
+    client, s, _ = loaded
     before = snapshot(s)
     for value in (2147483647, (os.cpu_count() or 1) + 1, -1):
         with pytest.raises(errors.InvalidArgumentError) as e:
@@ -64,7 +52,7 @@ def test_configure_threads_beyond_the_hardware_is_refused_and_the_server_survive
 
 
 def test_a_step_to_1e308_is_refused_twice_and_changes_nothing(loaded: Any) -> None:
-    _, s = loaded
+    _, s, _ = loaded
     refused_twice_unchanged(s, "translation", translation=(1e308, 0.0, 0.0))
     refused_twice_unchanged(s, "translation", translation=(1e12, 0.0, 0.0))  # beyond 1e6 model extents
     refused_twice_unchanged(s, "center", axis=(0, 0, 1), angle=0.1, center=(1e300, 0.0, 0.0))
@@ -77,7 +65,7 @@ def test_a_step_to_1e308_is_refused_twice_and_changes_nothing(loaded: Any) -> No
 
 
 def test_a_collapsing_axis_is_refused(loaded: Any) -> None:
-    _, s = loaded
+    _, s, _ = loaded
     refused_twice_unchanged(s, "axis", axis=(1e200, 1e200, 0.0), angle=math.pi / 2)
     refused_twice_unchanged(s, "axis", axis=(1e-170, 1e-170, 0.0), angle=math.pi / 2)
     refused_twice_unchanged(s, "axis", axis=(0.0, 0.0, 0.0), angle=0.5)
@@ -98,7 +86,7 @@ def raw_reply(client: surfeledit.Client, request: "proto.Request", timeout: floa
 
 
 def test_unknown_enum_values_get_one_typed_reply_quickly(loaded: Any) -> None:
-    client, s = loaded
+    client, s, _ = loaded
     before = snapshot(s)
     for op in (99, -1, 2**31 - 1):
         req = client.new_request(proto.Op.OP_INFO, s.name)
