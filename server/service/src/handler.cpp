@@ -37,6 +37,7 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::History, {"OP_HISTORY", serve_history, true, T::Version, false});
   row(Op::Merge, {"OP_MERGE", serve_merge, true, T::VersionAndSessionInfo, true});
   row(Op::Curves, {"OP_CURVES", serve_curves, true, T::Version, false});
+  row(Op::Invite, {"OP_INVITE", serve_invite, true, T::Version, true});
   return t;
 }
 
@@ -49,6 +50,7 @@ void dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   }
   if (command.missing) std::rethrow_exception(command.missing);
   SessionEntry* entry = op->attached ? &state.sessions.attached(command.session, command.client_id) : nullptr;
+  if (entry) check_role(*entry, command);
   if (command.invalid) std::rethrow_exception(command.invalid);
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
@@ -74,7 +76,8 @@ bool has_handler(Op op) { return find_op(op) != nullptr; }
 HandlerState::HandlerState(const HandlerConfig& c)
     : config(c),
       sessions(SessionParams{c.threads}),
-      uploads(UploadLimits{c.max_chunk_surfels, c.max_model_surfels}),
+      uploads(UploadLimits{c.max_chunk_surfels, c.max_model_surfels, c.max_client_upload_bytes, c.max_upload_bytes}),
+      cache(RequestCacheLimits{1024, 4096, static_cast<std::size_t>(c.max_reply_cache_bytes)}),
       started(Clock::now()) {}
 
 Handler::Handler(HandlerConfig config) : state_(std::make_unique<HandlerState>(config)) {
@@ -103,15 +106,32 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
   auto reply = std::make_shared<Reply>();
   reply->client_id = command.client_id;
   reply->request_id = command.request_id;
+  reply->request_op = static_cast<std::uint32_t>(command.op);
   const std::string& session = command.session;
   const std::string op = op_name(command.op);
   auto log = logger();
   log->debug("request {}#{} {} session '{}'", reply->client_id, reply->request_id, op, session);
 
+  // Identity first: the cache and everything else see only requests of the writer bound to the id.
+  if (!reply->client_id.empty() && command.sender != 0 &&
+      !state_->clients.admit(reply->client_id, command.sender, t0)) {
+    log->warn("request {}#{} {} session '{}' refused without a reply: client id bound to another writer (sender "
+              "{:x}), or that writer holds too many ids",
+              reply->client_id, reply->request_id, op, session, command.sender);
+    return nullptr;
+  }
   if (!reply->client_id.empty()) {
     if (auto stored = state_->cache.find(reply->client_id, reply->request_id)) {
-      log->debug("request {}#{} is a repeat: answered with the stored reply", reply->client_id, reply->request_id);
-      return stored;
+      if (stored->request_op == reply->request_op) {
+        log->debug("request {}#{} is a repeat: answered with the stored reply", reply->client_id, reply->request_id);
+        return stored;
+      }
+      // Same id, another op: not a repeat; refused without touching the stored reply.
+      reply->status = Status::InvalidArgument;
+      reply->field = "request_id";
+      reply->message = "request id " + std::to_string(reply->request_id) + " was used for " +
+                       op_name(static_cast<Op>(stored->request_op)) + "; request ids must be unique per client";
+      return reply;
     }
   }
 
@@ -131,8 +151,10 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
     dispatch(*state_, command, *reply, updates);
   } catch (const Error& e) {
     fail(status_of(e.code()), e.field(), message_of(e));
+  } catch (const PermissionDenied& e) {
+    fail(Status::PermissionDenied, e.field(), e.what());
   } catch (const std::bad_alloc&) {
-    fail(Status::TooLarge, "", "out of memory while serving " + op);
+    fail(Status::TooLarge, "op", "out of memory while serving " + op);
   } catch (const std::exception& e) {
     fail(Status::Internal, "", std::string("internal error: ") + e.what());
   }

@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "surfeledit/service/client_registry.hpp"
 #include "surfeledit/service/command.hpp"
 #include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/handler.hpp"
@@ -29,6 +30,7 @@ struct HandlerState {
   SessionRegistry sessions;
   UploadTable uploads;        // uploads in progress
   RequestCache cache;         // replies for repeated request ids
+  ClientRegistry clients;     // client id -> the writer it is bound to, activity, lease
   std::chrono::steady_clock::time_point started;  // for the uptime
 };
 
@@ -65,6 +67,10 @@ const OpEntry* find_op(Op op);
 // The reply tail: the session's version, and its SessionInfo when `tail` says so.
 void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail);
 
+// Refuses (PermissionDenied) a command whose op needs a stronger role in the session than the
+// client has (client_ops.cpp).
+void check_role(const SessionEntry& entry, const Command& command);
+
 // The session's description for replies (session_ops.cpp).
 SessionInfo session_info(const SessionEntry& entry);
 
@@ -87,6 +93,7 @@ void serve_redo(OpContext& c);
 void serve_history(OpContext& c);
 void serve_merge(OpContext& c);
 void serve_curves(OpContext& c);
+void serve_invite(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

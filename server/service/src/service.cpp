@@ -28,6 +28,7 @@ constexpr const char* kUpdateTopic = "surfeledit_update";
 // Waitset tags.
 constexpr dds_attach_t kRequestsTag = 1;
 constexpr dds_attach_t kStopTag = 2;
+constexpr dds_attach_t kWritersTag = 3;
 
 // Topic types matched by name only (see dds::without_type_info); static: topics refer to them.
 const dds_topic_descriptor_t kRequestType = dds::without_type_info(surfeledit_proto_Request_desc);
@@ -36,6 +37,10 @@ const dds_topic_descriptor_t kUpdateType = dds::without_type_info(surfeledit_pro
 
 // Requests taken per loan.
 constexpr std::size_t kTakeBatch = 16;
+
+// Liveliness lease the reply writer offers (automatic: Cyclone asserts it); clients take a reply
+// writer that is not alive for this long as a dead server (PROTOCOL.md, "Leases").
+constexpr dds_duration_t kServerLiveliness = DDS_MSECS(1000);
 
 HandlerConfig handler_config(const ServiceConfig& c) {
   if (c.domain < 0 || c.domain > 232) throw std::invalid_argument("domain must be in 0..232");
@@ -49,7 +54,18 @@ HandlerConfig handler_config(const ServiceConfig& c) {
   }
   if (c.threads < 0) throw std::invalid_argument("threads must be >= 0");
   if (c.max_update_queue_bytes == 0) throw std::invalid_argument("max_update_queue_bytes must be positive");
-  return HandlerConfig{c.max_chunk_surfels, c.max_model_surfels, c.threads};
+  if (c.client_lease_ms == 0 || c.client_lease_ms > 3'600'000) {
+    throw std::invalid_argument("client_lease_ms must be in 1..3600000");
+  }
+  if (c.max_client_upload_bytes == 0 || c.max_upload_bytes == 0 || c.max_reply_cache_bytes == 0) {
+    throw std::invalid_argument("upload and reply cache limits must be positive");
+  }
+  HandlerConfig h{c.max_chunk_surfels, c.max_model_surfels, c.threads};
+  h.max_client_upload_bytes = c.max_client_upload_bytes;
+  h.max_upload_bytes = c.max_upload_bytes;
+  h.max_reply_cache_bytes = c.max_reply_cache_bytes;
+  h.client_lease = std::chrono::milliseconds(c.client_lease_ms);
+  return h;
 }
 
 }  // namespace
@@ -63,8 +79,10 @@ struct Service::Impl {
         request_topic(dds::make_topic(participant, &kRequestType, kRequestTopic, qos)),
         reply_topic(dds::make_topic(participant, &kReplyType, kReplyTopic, qos)),
         update_topic(dds::make_topic(participant, &kUpdateType, kUpdateTopic, qos)),
-        request_reader(dds::make_reader(participant, request_topic, qos)),
-        reply_writer(dds::make_writer(participant, reply_topic, qos)),
+        writer_wake(participant),
+        request_reader(make_request_reader()),
+        reply_qos(dds::protocol_qos()),
+        reply_writer(dds::make_writer(participant, reply_topic, reply_qos.automatic_liveliness(kServerLiveliness))),
         update_writer(dds::make_writer(participant, update_topic, qos)),
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
@@ -72,10 +90,19 @@ struct Service::Impl {
         publisher(make_publisher(c)) {
     waitset.attach(requests, kRequestsTag);
     waitset.attach(stop_guard.entity(), kStopTag);
+    waitset.attach(writer_wake.entity(), kWritersTag);
   }
 
+  dds::Entity make_request_reader() {
+    writer_events.wake_with(writer_wake.entity().get());
+    return dds::make_reader(participant, request_topic, qos, writer_events.listener());
+  }
+  // Applies the queued liveliness / match changes of request writers and detaches clients whose
+  // lease ran out; returns how long the waitset may sleep before the next lease check.
+  dds_duration_t check_leases();
+
   void serve_available();
-  void serve(const surfeledit_proto_Request& request);
+  void serve(const surfeledit_proto_Request& request, dds_instance_handle_t sender);
   // Request thread: copies the event's surfels and queues them for the publisher thread.
   void publish(const UpdateEvent& event);
   // The queue is full: merges the session's queued updates and this one into one update.
@@ -93,7 +120,10 @@ struct Service::Impl {
   dds::Entity request_topic;
   dds::Entity reply_topic;
   dds::Entity update_topic;
+  dds::WriterEvents writer_events;   // before the reader whose listener refers to it
+  dds::GuardCondition writer_wake;   // triggered by writer_events
   dds::Entity request_reader;
+  dds::Qos reply_qos;
   dds::Entity reply_writer;
   dds::Entity update_writer;
   dds::Entity requests;  // read condition: the reader holds samples
@@ -128,17 +158,20 @@ void Service::Impl::serve_available() {
     });
     for (std::size_t i : order) {
       if (!loan.info(i).valid_data) continue;  // instance state change only (e.g. a client left)
-      serve(loan.sample(i));
+      serve(loan.sample(i), loan.info(i).publication_handle);
       if (stopping.load()) return;
     }
   }
 }
 
-void Service::Impl::serve(const surfeledit_proto_Request& request) {
+void Service::Impl::serve(const surfeledit_proto_Request& request, dds_instance_handle_t sender) {
   std::vector<UpdateEvent> events;
   std::shared_ptr<const Reply> reply;
   try {
-    reply = handler.handle(decode(request), events);
+    Command command = decode(request);
+    command.sender = sender;
+    reply = handler.handle(command, events);
+    if (!reply) return;  // refused without a reply (a spoofed client id): nothing to send or publish
   } catch (const std::exception& e) {
     // handle() turns every failure into a reply; this is the last resort (e.g. out of memory there).
     logger()->error("request {}#{} could not be handled: {}", str(request.client_id), request.request_id, e.what());
@@ -157,6 +190,23 @@ void Service::Impl::serve(const surfeledit_proto_Request& request) {
     logger()->error("reply to {}#{} not sent: {}", reply->client_id, reply->request_id, e.what());
   }
   for (const UpdateEvent& event : events) publish(event);
+}
+
+dds_duration_t Service::Impl::check_leases() {
+  writer_wake.clear();
+  for (const dds::WriterEvents::Event& e : writer_events.take()) {
+    if (e.alive) {
+      handler.writer_alive(e.writer);
+    } else {
+      handler.writer_lost(e.writer);
+    }
+  }
+  std::vector<UpdateEvent> events;
+  handler.expire_leases(events);
+  for (const UpdateEvent& event : events) publish(event);
+  const auto next = handler.next_lease_check();
+  if (!next) return DDS_INFINITY;
+  return DDS_MSECS(next->count() + 1);
 }
 
 void Service::Impl::publish(const UpdateEvent& event) {
@@ -237,10 +287,12 @@ Service::~Service() = default;
 void Service::run() {
   Impl& s = *impl_;
   logger()->debug("serving requests on domain {}", s.config.domain);
+  dds_duration_t sleep = DDS_INFINITY;
   while (!s.stopping.load()) {
-    s.waitset.wait(DDS_INFINITY);
+    s.waitset.wait(sleep);
     if (s.stopping.load()) break;
     s.serve_available();
+    sleep = s.check_leases();
   }
   s.stop_publisher();
   logger()->info("stopped");

@@ -5,6 +5,7 @@
 // (handler_ops.hpp, in src/); this header names project types only.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -22,6 +23,11 @@ struct HandlerConfig {
   std::uint64_t max_chunk_surfels = 65536;       // per LoadChunk / StatePage / Update sample
   std::uint64_t max_model_surfels = 20'000'000;  // per model
   int threads = 0;                               // per-session worker threads; 0 = all cores
+  // Identity, leases and memory bounds (PROTOCOL.md, "Identity and access", "Leases").
+  std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
+  std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
+  std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeats
+  std::chrono::milliseconds client_lease{2000};  // a client whose writer is gone this long is detached
 };
 
 struct HandlerState;
@@ -35,8 +41,21 @@ class Handler {
 
   // Serves one request and returns its reply (the stored one for a repeated request id).
   // Appends the changes to publish to `updates`. Never throws for bad input: every
-  // failure becomes an error reply, and a failed request changes nothing.
+  // failure becomes an error reply, and a failed request changes nothing. Returns nullptr (no
+  // reply may be sent) when the command's client id is bound to another sender: a reply would
+  // carry the victim's id and reach the victim, not the sender.
   std::shared_ptr<const Reply> handle(const Command& command, std::vector<UpdateEvent>& updates);
+
+  // Leases (client_ops.cpp). The request writer `sender` lost its liveliness or was unmatched /
+  // is alive again; clients bound to it are detached once it stayed gone for config().client_lease.
+  void writer_lost(std::uint64_t sender);
+  void writer_alive(std::uint64_t sender);
+  // Detaches every client whose lease ran out: closes its sessions (dropping those it was the
+  // last client of, with a "close" update appended to `updates`), drops its uploads and cached
+  // replies and forgets its id and memberships. Returns the ids detached.
+  std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates);
+  // Time until the next lease can run out (nullopt: none is running).
+  std::optional<std::chrono::milliseconds> next_lease_check() const;
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);

@@ -27,6 +27,11 @@ struct ServiceConfig {
   // queued updates of a session are coalesced into one (PROTOCOL.md, "Updates").
   std::uint64_t max_update_queue_bytes = std::uint64_t(256) << 20;
   UpdateThread update_thread = UpdateThread::Auto;
+  // Identity, leases and memory bounds (PROTOCOL.md, "Identity and access", "Leases").
+  std::uint64_t client_lease_ms = 2000;  // detach a client whose request writer is gone (not alive / unmatched) this long
+  std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
+  std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
+  std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeated requests
 };
 
 class Service {
