@@ -21,8 +21,10 @@ from typing import Any, Iterable, List, Optional
 from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
+from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
+from cyclonedds.util import duration
 
 from . import errors
 from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
@@ -36,6 +38,15 @@ _log = logging.getLogger("surfeledit")
 _ANY_NEW = SampleState.NotRead | ViewState.Any | InstanceState.Any
 _PROBE_S = 1.5  # how long connect() looks for an already running server before spawning one
 _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's update writer
+# Liveliness lease the request writer offers (automatic: Cyclone asserts it while the process
+# lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
+CLIENT_LIVELINESS_S = 1.0
+_GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
+
+
+def _request_writer_qos() -> Qos:
+    """The protocol's request QoS plus automatic liveliness (PROTOCOL.md, "Leases")."""
+    return Qos(*request_qos().policies, Policy.Liveliness.Automatic(duration(seconds=CLIENT_LIVELINESS_S)))
 
 
 def _ns(seconds: float) -> int:
@@ -134,8 +145,9 @@ class Client:
         self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
         self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
         self._upd_topic: Optional[Topic] = None
-        self._writer = DataWriter(self._participant, self._req_topic, qos=request_qos())
+        self._writer = DataWriter(self._participant, self._req_topic, qos=_request_writer_qos())
         self._replies = Inbox(self._participant, self._rep_topic, reply_qos())
+        self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
 
     # -- lifecycle -------------------------------------------------------------------------------
     def __enter__(self) -> "Client":
@@ -159,7 +171,8 @@ class Client:
             return
         # Sessions detach so the server can drop sessions nobody uses; when no server is matched any
         # more (it exited) the client counts as closed first, so they only mark themselves closed.
-        if self._writer.get_publication_matched_status().current_count == 0:
+        if self._writer.get_publication_matched_status().current_count == 0 or (
+                self._server_seen and not self.server_alive()):
             self._closed = True
         for child in list(self._children):
             try:
@@ -229,6 +242,10 @@ class Client:
                 raise errors.RequestTimeoutError(
                     f"no reply to request {request.request_id} ({request.op.name}) on domain {self.domain} "
                     f"within {timeout:.1f} s (tried {retries + 1} times)")
+        if int(reply.request_op) != int(request.op.value):
+            raise errors.ReplyMismatchError(
+                f"the reply to request {request.request_id} ({request.op.name}) answers op {int(reply.request_op)}; "
+                "ignored", "request_op")
         if check and reply.status != proto.Status.STATUS_OK:
             raise errors.error_for_status(int(reply.status.value), reply.message, reply.field)
         return reply
@@ -249,10 +266,24 @@ class Client:
                         continue  # instance-state change without data
                     if s.client_id == self.client_id and s.request_id == request_id:
                         return s
+            self._check_server_alive(request_id)
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            self._replies.wait(remaining)
+            self._replies.wait(min(remaining, _GONE_POLL_S))
+
+    def server_alive(self) -> bool:
+        """Whether a reply writer (the server's) is matched and alive by DDS liveliness."""
+        reader = self._replies.reader
+        return _matched(reader) > 0 and int(reader.get_liveliness_changed_status().alive_count) > 0
+
+    def _check_server_alive(self, request_id: int) -> None:
+        if self.server_alive():
+            self._server_seen = True
+        elif self._server_seen:
+            raise errors.ServerGoneError(
+                f"the surfeledit server on domain {self.domain} is gone (its reply writer is no longer alive) "
+                f"while request {request_id} waited for its reply")
 
     # -- high-level API -------------------------------------------------------------------------
     def info(self, session: str = "") -> "proto.ServerInfo":
@@ -273,9 +304,13 @@ class Client:
         """Creates the named session (or attaches if it exists)."""
         return Session(self, name, self.request(proto.Op.OP_OPEN_SESSION, name))
 
-    def join_session(self, name: str) -> Session:
-        """Attaches to an existing session (:class:`~surfeledit.errors.NotFoundError` otherwise)."""
-        return Session(self, name, self.request(proto.Op.OP_JOIN_SESSION, name))
+    def join_session(self, name: str, token: str = "") -> Session:
+        """Attaches to an existing session: one this client is a member of, or another's with the
+        ``token`` of an invitation (:meth:`Session.invite`), in the role it grants.
+        :class:`~surfeledit.errors.NotFoundError` otherwise, the same whether the session exists or not."""
+        request = self.new_request(proto.Op.OP_JOIN_SESSION, name)
+        request.token = str(token)
+        return Session(self, name, self.call(request))
 
     def probe(self, timeout: float) -> bool:
         """True if a server is discovered and answers OP_INFO within about ``timeout`` seconds."""
