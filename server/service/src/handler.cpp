@@ -161,7 +161,8 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
 
   if (reply->status != Status::Ok) {
     // The reply's version is the session's (unchanged) current version.
-    SessionEntry* entry = state_->sessions.find(session);
+    // (0 for a session the caller is not a member of: a refusal tells nothing about it.)
+    SessionEntry* entry = state_->sessions.find_for(session, reply->client_id);
     reply->version = entry ? entry->session->version() : 0;
     const auto level = reply->status == Status::Internal ? spdlog::level::warn : spdlog::level::info;
     log->log(level, "request {}#{} {} session '{}' failed: status {} field '{}': {}", reply->client_id,
