@@ -22,7 +22,7 @@ from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.qos import Policy, Qos
-from cyclonedds.sub import DataReader
+from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
@@ -42,6 +42,18 @@ _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's upda
 # lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
 CLIENT_LIVELINESS_S = 1.0
 _GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
+
+
+def reply_partition(client_id: str) -> str:
+    """The partition the server writes a client's replies in (PROTOCOL.md, "Identity and access")."""
+    return "surfeledit.reply." + client_id
+
+
+def _reply_reader_qos() -> Qos:
+    """The protocol's reply QoS, transient-local: the server's per-client reply writer is made at the
+    first reply, and the reply written before this reader matched it still arrives."""
+    return Qos(*[p for p in reply_qos().policies if not isinstance(p, type(Policy.Durability.Volatile))],
+               Policy.Durability.TransientLocal)
 
 
 def _request_writer_qos() -> Qos:
@@ -100,8 +112,9 @@ def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeou
 class Inbox:
     """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
 
-    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any) -> None:
-        self.reader = DataReader(participant, topic, qos=qos)
+    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any,
+                 parent: Optional[Subscriber] = None) -> None:
+        self.reader = DataReader(parent if parent is not None else participant, topic, qos=qos)
         self._cond = ReadCondition(self.reader, _ANY_NEW)
         self._waitset = WaitSet(participant)
         self._waitset.attach(self._cond)
@@ -146,7 +159,10 @@ class Client:
         self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
         self._upd_topic: Optional[Topic] = None
         self._writer = DataWriter(self._participant, self._req_topic, qos=_request_writer_qos())
-        self._replies = Inbox(self._participant, self._rep_topic, reply_qos())
+        # Replies come in this client's own partition, from a writer the server makes at the first reply.
+        self._rep_sub = Subscriber(self._participant,
+                                   qos=Qos(Policy.Partition(partitions=[reply_partition(self.client_id)])))
+        self._replies = Inbox(self._participant, self._rep_topic, _reply_reader_qos(), parent=self._rep_sub)
         self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -181,7 +197,7 @@ class Client:
                 _log.warning("closing %r failed", child, exc_info=True)
         self._closed = True
         self._replies.close()
-        _delete(self._writer, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
+        _delete(self._writer, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
         if self._server is not None:
             stop_process(self._server)
             self._server = None
@@ -192,8 +208,9 @@ class Client:
 
     # -- matching ------------------------------------------------------------------------------
     def wait_for_server(self, timeout: float) -> bool:
-        """Waits until a server's request reader and reply writer are discovered; True if so."""
-        return wait_matched(self._participant, (self._writer, self._replies.reader), timeout)
+        """Waits until a server's request reader is discovered; True if so (its reply writer for this
+        client is made at the first reply)."""
+        return wait_matched(self._participant, (self._writer,), timeout)
 
     def update_inbox(self, match_timeout: float = _WATCH_MATCH_S) -> Inbox:
         """A new reader of ``surfeledit_update`` (all sessions), returned once the server's update

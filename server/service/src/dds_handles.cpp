@@ -42,6 +42,17 @@ Qos& Qos::automatic_liveliness(dds_duration_t lease) {
   return *this;
 }
 
+Qos& Qos::transient_local(int32_t depth) {
+  dds_qset_durability(qos_, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, depth);
+  return *this;
+}
+
+Qos& Qos::partition(const std::string& name) {
+  dds_qset_partition1(qos_, name.c_str());
+  return *this;
+}
+
 Qos protocol_qos() {
   Qos qos;
   qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();
@@ -107,8 +118,12 @@ std::vector<WriterEvents::Event> WriterEvents::take() {
   return std::exchange(events_, {});
 }
 
-Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos) {
-  return Entity(dds_create_writer(participant.get(), topic.get(), qos.get(), nullptr), "dds_create_writer");
+Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos) {
+  return Entity(dds_create_writer(parent.get(), topic.get(), qos.get(), nullptr), "dds_create_writer");
+}
+
+Entity make_publisher(const Entity& participant, const Qos& qos) {
+  return Entity(dds_create_publisher(participant.get(), qos.get(), nullptr), "dds_create_publisher");
 }
 
 Entity make_read_condition(const Entity& reader) {

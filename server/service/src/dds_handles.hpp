@@ -57,6 +57,10 @@ class Qos {
   Qos& volatile_durability();
   // Automatic liveliness: Cyclone asserts it for the writer every lease (PROTOCOL.md, "Leases").
   Qos& automatic_liveliness(dds_duration_t lease);
+  // Keep the last `depth` samples for readers that match later (durability transient-local).
+  Qos& transient_local(int32_t depth);
+  // The one partition of a publisher or subscriber.
+  Qos& partition(const std::string& name);
 
  private:
   dds_qos_t* qos_;
@@ -79,7 +83,10 @@ Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type,
 Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos);
 // A reader with a listener (nullptr: none); the listener is copied by Cyclone.
 Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos, const dds_listener_t* listener);
-Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos);
+// `parent`: the participant or a publisher.
+Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos);
+// A publisher whose QoS names its partition.
+Entity make_publisher(const Entity& participant, const Qos& qos);
 // A read condition on every sample of the reader (any sample, view and instance state).
 Entity make_read_condition(const Entity& reader);
 

@@ -146,3 +146,22 @@ def test_a_viewer_reads_but_every_change_is_refused_and_changes_nothing(
     np.testing.assert_array_equal(viewer.positions(), s.positions())
     assert [h.version for h in viewer.history()] == [h.version for h in s.history()]
     assert viewer.info().state_hash == before[1]
+
+
+def test_replies_travel_in_the_client_partition_not_the_default_one(
+        server: ServerProcess, client: surfeledit.Client) -> None:
+    """Reduces accidental exposure only (any participant may join a partition; PROTOCOL.md)."""
+    listener = subprocess.Popen([sys.executable, str(PEER), "listen", str(server.domain), json.dumps({"seconds": 3})],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert json.loads(listener.stdout.readline() or "{}").get("ready") if listener.stdout else False
+        s = loaded_session(client, "quiet")
+        for _ in range(3):
+            s.deform(translation=(0.0, 0.0, -0.01))
+        out, err = listener.communicate(timeout=30)
+    finally:
+        if listener.poll() is None:
+            listener.kill()
+            listener.wait()
+    assert listener.returncode == 0, err
+    assert json.loads(out.strip().splitlines()[-1])["replies"] == 0
