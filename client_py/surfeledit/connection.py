@@ -42,6 +42,7 @@ _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's upda
 # lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
 CLIENT_LIVELINESS_S = 1.0
 _GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
+_GONE_GRACE_S = 0.3  # how long it may be not alive before the server counts as gone
 
 
 def reply_partition(client_id: str) -> str:
@@ -272,6 +273,7 @@ class Client:
         return self.call(self.new_request(op, session, **args), check=check)
 
     def _wait_reply(self, request_id: int, deadline: float) -> Optional["proto.Reply"]:
+        not_alive_since: Optional[float] = None
         while True:
             # Drain everything new; replies for other clients (same topic) and stale repeats are dropped.
             while True:
@@ -283,7 +285,7 @@ class Client:
                         continue  # instance-state change without data
                     if s.client_id == self.client_id and s.request_id == request_id:
                         return s
-            self._check_server_alive(request_id)
+            not_alive_since = self._check_server_alive(request_id, not_alive_since)
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
@@ -294,13 +296,21 @@ class Client:
         reader = self._replies.reader
         return _matched(reader) > 0 and int(reader.get_liveliness_changed_status().alive_count) > 0
 
-    def _check_server_alive(self, request_id: int) -> None:
+    def _check_server_alive(self, request_id: int, not_alive_since: Optional[float]) -> Optional[float]:
+        """Raises ServerGoneError once a reply writer seen alive before has not been alive for
+        _GONE_GRACE_S (a writer the server re-creates for this client matches within milliseconds);
+        returns since when it is not alive (None: alive)."""
         if self.server_alive():
             self._server_seen = True
-        elif self._server_seen:
+            return None
+        now = time.monotonic()
+        if not_alive_since is None:
+            return now
+        if self._server_seen and now - not_alive_since >= _GONE_GRACE_S:
             raise errors.ServerGoneError(
                 f"the surfeledit server on domain {self.domain} is gone (its reply writer is no longer alive) "
                 f"while request {request_id} waited for its reply")
+        return not_alive_since
 
     # -- high-level API -------------------------------------------------------------------------
     def info(self, session: str = "") -> "proto.ServerInfo":
