@@ -32,6 +32,8 @@ from .watcher import Watcher
 from .errors import (ConflictError, InternalServerError, InvalidArgumentError, NotFoundError, RequestTimeoutError,
                      ServerIOError, ServerStartError, SurfelEditError, TooLargeError)
 
+from .errors import PermissionDeniedError, ReplyMismatchError, ServerGoneError
+
 logging.getLogger("surfeledit").addHandler(logging.NullHandler())
 
 
@@ -51,5 +53,5 @@ __all__ = [
     "Changes", "UpdateEvent", "MergeResult", "Curve", "Watcher", "proto",
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
-    "ServerStartError",
+    "ServerStartError", "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError",
 ]

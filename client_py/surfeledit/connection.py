@@ -21,8 +21,10 @@ from typing import Any, Iterable, List, Optional, Union
 from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
-from cyclonedds.sub import DataReader
+from cyclonedds.qos import Policy, Qos
+from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
+from cyclonedds.util import duration
 
 from . import errors
 from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
@@ -36,6 +38,28 @@ _log = logging.getLogger("surfeledit")
 _ANY_NEW = SampleState.NotRead | ViewState.Any | InstanceState.Any
 _PROBE_S = 1.5  # how long connect() looks for an already running server before spawning one
 _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's update writer
+# Liveliness lease the request writer offers (automatic: Cyclone asserts it while the process
+# lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
+CLIENT_LIVELINESS_S = 1.0
+_GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
+_GONE_GRACE_S = 0.3  # how long it may be not alive before the server counts as gone
+
+
+def reply_partition(client_id: str) -> str:
+    """The partition the server writes a client's replies in (PROTOCOL.md, "Identity and access")."""
+    return "surfeledit.reply." + client_id
+
+
+def _reply_reader_qos() -> Qos:
+    """The protocol's reply QoS, transient-local: the server's per-client reply writer is made at the
+    first reply, and the reply written before this reader matched it still arrives."""
+    return Qos(*[p for p in reply_qos().policies if not isinstance(p, type(Policy.Durability.Volatile))],
+               Policy.Durability.TransientLocal)
+
+
+def _request_writer_qos() -> Qos:
+    """The protocol's request QoS plus automatic liveliness (PROTOCOL.md, "Leases")."""
+    return Qos(*request_qos().policies, Policy.Liveliness.Automatic(duration(seconds=CLIENT_LIVELINESS_S)))
 
 
 def _ns(seconds: float) -> int:
@@ -97,8 +121,9 @@ def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeou
 class Inbox:
     """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
 
-    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any) -> None:
-        self.reader = DataReader(participant, topic, qos=qos)
+    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any,
+                 parent: Optional[Subscriber] = None) -> None:
+        self.reader = DataReader(parent if parent is not None else participant, topic, qos=qos)
         self._cond = ReadCondition(self.reader, _ANY_NEW)
         self._waitset = WaitSet(participant)
         self._waitset.attach(self._cond)
@@ -142,8 +167,12 @@ class Client:
         self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
         self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
         self._upd_topic: Optional[Topic] = None
-        self._writer = DataWriter(self._participant, self._req_topic, qos=request_qos())
-        self._replies = Inbox(self._participant, self._rep_topic, reply_qos())
+        self._writer = DataWriter(self._participant, self._req_topic, qos=_request_writer_qos())
+        # Replies come in this client's own partition, from a writer the server makes at the first reply.
+        self._rep_sub = Subscriber(self._participant,
+                                   qos=Qos(Policy.Partition(partitions=[reply_partition(self.client_id)])))
+        self._replies = Inbox(self._participant, self._rep_topic, _reply_reader_qos(), parent=self._rep_sub)
+        self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
 
     # -- lifecycle -------------------------------------------------------------------------------
     def __enter__(self) -> "Client":
@@ -167,7 +196,8 @@ class Client:
             return
         # Sessions detach so the server can drop sessions nobody uses; when no server is matched any
         # more (it exited) the client counts as closed first, so they only mark themselves closed.
-        if self._writer.get_publication_matched_status().current_count == 0:
+        if self._writer.get_publication_matched_status().current_count == 0 or (
+                self._server_seen and not self.server_alive()):
             self._closed = True
         for child in list(self._children):
             try:
@@ -176,7 +206,7 @@ class Client:
                 _log.warning("closing %r failed", child, exc_info=True)
         self._closed = True
         self._replies.close()
-        _delete(self._writer, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
+        _delete(self._writer, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
         if self._server is not None:
             stop_process(self._server)
             self._server = None
@@ -187,8 +217,9 @@ class Client:
 
     # -- matching ------------------------------------------------------------------------------
     def wait_for_server(self, timeout: float) -> bool:
-        """Waits until a server's request reader and reply writer are discovered; True if so."""
-        return wait_matched(self._participant, (self._writer, self._replies.reader), timeout)
+        """Waits until a server's request reader is discovered; True if so (its reply writer for this
+        client is made at the first reply)."""
+        return wait_matched(self._participant, (self._writer,), timeout)
 
     def update_inbox(self, match_timeout: float = _WATCH_MATCH_S) -> Inbox:
         """A new reader of ``surfeledit_update`` (all sessions), returned once the server's update
@@ -237,6 +268,10 @@ class Client:
                 raise errors.RequestTimeoutError(
                     f"no reply to request {request.request_id} ({_op_label(request.op)}) on domain {self.domain} "
                     f"within {timeout:.1f} s (tried {retries + 1} times)")
+        if int(reply.request_op) != int(request.op.value):
+            raise errors.ReplyMismatchError(
+                f"the reply to request {request.request_id} ({request.op.name}) answers op {int(reply.request_op)}; "
+                "ignored", "request_op")
         if check and reply.status != proto.Status.STATUS_OK:
             raise errors.error_for_status(int(reply.status.value), reply.message, reply.field)
         return reply
@@ -246,6 +281,7 @@ class Client:
         return self.call(self.new_request(op, session, **args), check=check)
 
     def _wait_reply(self, request_id: int, deadline: float) -> Optional["proto.Reply"]:
+        not_alive_since: Optional[float] = None
         while True:
             # Drain everything new; replies for other clients (same topic) and stale repeats are dropped.
             while True:
@@ -257,10 +293,32 @@ class Client:
                         continue  # instance-state change without data
                     if s.client_id == self.client_id and s.request_id == request_id:
                         return s
+            not_alive_since = self._check_server_alive(request_id, not_alive_since)
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return None
-            self._replies.wait(remaining)
+            self._replies.wait(min(remaining, _GONE_POLL_S))
+
+    def server_alive(self) -> bool:
+        """Whether a reply writer (the server's) is matched and alive by DDS liveliness."""
+        reader = self._replies.reader
+        return _matched(reader) > 0 and int(reader.get_liveliness_changed_status().alive_count) > 0
+
+    def _check_server_alive(self, request_id: int, not_alive_since: Optional[float]) -> Optional[float]:
+        """Raises ServerGoneError once a reply writer seen alive before has not been alive for
+        _GONE_GRACE_S (a writer the server re-creates for this client matches within milliseconds);
+        returns since when it is not alive (None: alive)."""
+        if self.server_alive():
+            self._server_seen = True
+            return None
+        now = time.monotonic()
+        if not_alive_since is None:
+            return now
+        if self._server_seen and now - not_alive_since >= _GONE_GRACE_S:
+            raise errors.ServerGoneError(
+                f"the surfeledit server on domain {self.domain} is gone (its reply writer is no longer alive) "
+                f"while request {request_id} waited for its reply")
+        return not_alive_since
 
     # -- high-level API -------------------------------------------------------------------------
     def info(self, session: str = "") -> "proto.ServerInfo":
@@ -281,9 +339,13 @@ class Client:
         """Creates the named session (or attaches if it exists)."""
         return Session(self, name, self.request(proto.Op.OP_OPEN_SESSION, name))
 
-    def join_session(self, name: str) -> Session:
-        """Attaches to an existing session (:class:`~surfeledit.errors.NotFoundError` otherwise)."""
-        return Session(self, name, self.request(proto.Op.OP_JOIN_SESSION, name))
+    def join_session(self, name: str, token: str = "") -> Session:
+        """Attaches to an existing session: one this client is a member of, or another's with the
+        ``token`` of an invitation (:meth:`Session.invite`), in the role it grants.
+        :class:`~surfeledit.errors.NotFoundError` otherwise, the same whether the session exists or not."""
+        request = self.new_request(proto.Op.OP_JOIN_SESSION, name)
+        request.token = str(token)
+        return Session(self, name, self.call(request))
 
     def probe(self, timeout: float) -> bool:
         """True if a server is discovered and answers OP_INFO within about ``timeout`` seconds."""

@@ -9,8 +9,12 @@ the ``Status`` enum of ``proto/surfeledit.idl`` (whose numbers equal the core's 
     4 STATUS_TOO_LARGE        -> TooLargeError
     5 STATUS_IO               -> ServerIOError
     6 STATUS_INTERNAL         -> InternalServerError
+    7 STATUS_PERMISSION_DENIED -> PermissionDeniedError (also a PermissionError)
 
-:class:`RequestTimeoutError` is raised by the client itself when no reply arrives in time.
+The client itself raises :class:`RequestTimeoutError` when no reply arrives in time,
+:class:`ServerGoneError` when the server's reply writer is no longer alive (DDS liveliness, about a
+second after the server died), and :class:`ReplyMismatchError` when a reply carrying the request's
+client id and request id answers another op or lacks the op's result.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from typing import Dict, Optional, Type
 __all__ = [
     "SurfelEditError", "InvalidArgumentError", "NotFoundError", "ConflictError", "TooLargeError",
     "ServerIOError", "InternalServerError", "RequestTimeoutError", "ServerStartError", "error_for_status",
+    "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError",
 ]
 
 
@@ -80,6 +85,25 @@ class InternalServerError(SurfelEditError):
     status = 6
 
 
+class PermissionDeniedError(SurfelEditError, PermissionError):
+    """The caller's role in the session does not allow the op (a viewer changing it, a non-owner inviting). Status 7."""
+
+    status = 7
+
+
+class ServerGoneError(SurfelEditError, ConnectionError):
+    """The server stopped answering: its reply writer lost its DDS liveliness or was unmatched."""
+
+    status = 0
+
+
+class ReplyMismatchError(SurfelEditError):
+    """A reply with this request's ids answers another op or lacks the op's result (a forged or
+    confused reply); nothing from it is used."""
+
+    status = 0
+
+
 class RequestTimeoutError(SurfelEditError, TimeoutError):
     """No reply arrived in time (after one retry with the same request id)."""
 
@@ -99,6 +123,7 @@ _BY_STATUS: Dict[int, Type[SurfelEditError]] = {
     4: TooLargeError,
     5: ServerIOError,
     6: InternalServerError,
+    7: PermissionDeniedError,
 }
 
 

@@ -61,7 +61,10 @@ def _setting_value(s: "proto.Setting") -> SettingValue:
 
 def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
     """The :class:`StepResult` of a DEFORM reply (the only place that reads the wire's step type)."""
-    step = reply.step[0] if reply.step else proto.StepResult()
+    if not reply.step:
+        # Never a default StepResult: a deform reply without its result is not this request's answer.
+        raise errors.ReplyMismatchError(f"deform reply (request {reply.request_id}) without a step result", "step")
+    step = reply.step[0]
     colliding = np.asarray(step.colliding, dtype=np.uint64)
     depths = np.asarray(step.depths, dtype=np.float64)
     if depths.shape != colliding.shape:
@@ -146,6 +149,19 @@ class Session(StateArrays):
         if reply.session_info:
             self._info = reply.session_info[0]
         return reply
+
+    # -- access ------------------------------------------------------------------------------
+    def invite(self, role: str = "editor") -> str:
+        """A token that lets another client join this session (``client.join_session(name, token=...)``)
+        as ``role``: ``"editor"`` (reads and changes) or ``"viewer"`` (reads only). Owner only
+        (:class:`~surfeledit.errors.PermissionDeniedError` otherwise); tokens stay valid until the
+        session is dropped and may be used by several clients."""
+        if role not in ("editor", "viewer"):
+            raise errors.InvalidArgumentError(f"role {role!r}: expected 'editor' or 'viewer'", "invite.role")
+        reply = self._request(proto.Op.OP_INVITE, invite=proto.Invite(role=role))
+        if not reply.token:
+            raise errors.ReplyMismatchError("invite reply without a token", "token")
+        return str(reply.token)
 
     # -- info --------------------------------------------------------------------------------
     def info(self) -> "proto.SessionInfo":

@@ -70,7 +70,29 @@ int main(int argc, char** argv) {
                  "when a core is left beyond --threads (auto)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "on", "off"}));
+  // Identity, leases and memory bounds (proto/PROTOCOL.md, "Identity and access" and "Leases").
+  app.add_option("--client-lease-ms", config.client_lease_ms,
+                 "Detach a client whose request writer has not been alive (DDS liveliness) or matched for this long: "
+                 "its sessions are closed and its unfinished uploads freed")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
+  std::uint64_t client_upload_mb = config.max_client_upload_bytes >> 20;
+  app.add_option("--max-client-upload-mb", client_upload_mb,
+                 "Memory of one client's unfinished uploads, MiB (reserved as chunks arrive)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 30));
+  std::uint64_t upload_mb = config.max_upload_bytes >> 20;
+  app.add_option("--max-upload-mb", upload_mb, "Memory of all clients' unfinished uploads, MiB")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 30));
+  std::uint64_t reply_cache_mb = config.max_reply_cache_bytes >> 20;
+  app.add_option("--max-reply-cache-mb", reply_cache_mb, "Replies kept for repeated requests, MiB (estimated)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 20));
   CLI11_PARSE(app, argc, argv);
+  config.max_client_upload_bytes = client_upload_mb << 20;
+  config.max_upload_bytes = upload_mb << 20;
+  config.max_reply_cache_bytes = reply_cache_mb << 20;
   config.update_thread = update_thread == "on"    ? surfeledit::service::UpdateThread::On
                          : update_thread == "off" ? surfeledit::service::UpdateThread::Off
                                                   : surfeledit::service::UpdateThread::Auto;

@@ -71,7 +71,10 @@ struct RequestBuilder {
   surfeledit_proto_SetRegions set_regions{};
   surfeledit_proto_Deform deform{};
   surfeledit_proto_GetState get_state{};
+  surfeledit_proto_Invite invite{};
   std::string blend = "linear";
+  std::string role = "editor";  // OP_INVITE's argument
+  std::string token;            // sent with every request (OP_JOIN_SESSION reads it)
 
   const surfeledit_proto_Request& make(surfeledit_proto_Op op, std::uint64_t id) {
     req = surfeledit_proto_Request{};
@@ -92,8 +95,13 @@ struct RequestBuilder {
         one(req.deform, &deform);
         break;
       case surfeledit_proto_OP_GET_STATE: one(req.get_state, &get_state); break;
+      case surfeledit_proto_OP_INVITE:
+        invite.role = const_cast<char*>(role.c_str());
+        one(req.invite, &invite);
+        break;
       default: break;
     }
+    req.token = const_cast<char*>(token.c_str());
     return req;
   }
 };

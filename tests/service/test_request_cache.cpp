@@ -78,3 +78,25 @@ TEST(RequestCache, PutReplacesTheSameId) {
   EXPECT_EQ(cache.size("a"), 1u);
   EXPECT_EQ(cache.find("a", 7)->message, "new");
 }
+
+TEST(RequestCache, IsBoundedInBytesAcrossClients) {
+  const std::size_t one = reply_bytes(*reply_for("a", 1));
+  RequestCache cache(RequestCacheLimits{1024, 4096, 3 * one});
+  cache.put(reply_for("a", 1));
+  cache.put(reply_for("b", 1));
+  cache.put(reply_for("a", 2));
+  EXPECT_EQ(cache.bytes(), 3 * one);
+  cache.put(reply_for("c", 1));  // evicts the least recently used reply of any client: a#1
+  EXPECT_EQ(cache.bytes(), 3 * one);
+  EXPECT_EQ(cache.find("a", 1), nullptr);
+  EXPECT_NE(cache.find("b", 1), nullptr);
+  auto big = std::make_shared<Reply>();
+  big->client_id = "d";
+  big->request_id = 1;
+  big->message.assign(4 * one, 'x');
+  cache.put(big);  // larger than the bound: not stored, nothing else evicted
+  EXPECT_EQ(cache.find("d", 1), nullptr);
+  EXPECT_EQ(cache.bytes(), 3 * one);
+  cache.forget("b");
+  EXPECT_EQ(cache.bytes(), 2 * one);
+}

@@ -23,6 +23,8 @@ TEST_F(HandlerTest, InfoWithoutSession) {
 
 TEST_F(HandlerTest, TheLastCloseDropsTheSession) {
   ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Ok);
+  rb.token = send(surfeledit_proto_OP_INVITE)->token;
+  ASSERT_EQ(rb.token.size(), 32u);
   rb.client = "client-b";
   ASSERT_EQ(send(surfeledit_proto_OP_JOIN_SESSION)->session_info->clients, 2u);
   ASSERT_EQ(send(surfeledit_proto_OP_CLOSE_SESSION)->status, Status::Ok);
@@ -34,4 +36,45 @@ TEST_F(HandlerTest, TheLastCloseDropsTheSession) {
   const auto info = send(surfeledit_proto_OP_INFO);
   EXPECT_TRUE(info->server_info->sessions.empty());
   EXPECT_EQ(send(surfeledit_proto_OP_CLOSE_SESSION)->status, Status::Conflict);
+}
+
+// Privacy without DDS: the handler alone (sender 0) still keeps sessions private to their members.
+TEST_F(HandlerTest, SessionsArePrivateAndRolesAreEnforced) {
+  ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Ok);
+  rb.role = "viewer";
+  const std::string viewer_token = send(surfeledit_proto_OP_INVITE)->token;
+  rb.client = "client-b";
+  // Not a member: the same NotFound as for a session that does not exist, and nothing listed.
+  const auto denied = send(surfeledit_proto_OP_JOIN_SESSION);
+  rb.session = "no-such-session";
+  const auto missing = send(surfeledit_proto_OP_JOIN_SESSION);
+  EXPECT_EQ(denied->status, Status::NotFound);
+  EXPECT_EQ(denied->status, missing->status);
+  EXPECT_EQ(denied->field, missing->field);
+  rb.session = "s";
+  rb.token = "0123456789abcdef0123456789abcdef";  // wrong token
+  EXPECT_EQ(send(surfeledit_proto_OP_JOIN_SESSION)->status, Status::NotFound);
+  const auto info = send(surfeledit_proto_OP_INFO);
+  EXPECT_TRUE(info->server_info->sessions.empty());
+  EXPECT_FALSE(info->session_info);
+  EXPECT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Conflict);  // the name is taken
+  // A viewer reads but never changes.
+  rb.token = viewer_token;
+  ASSERT_EQ(send(surfeledit_proto_OP_JOIN_SESSION)->status, Status::Ok);
+  EXPECT_EQ(send(surfeledit_proto_OP_INFO)->server_info->sessions, std::vector<std::string>{"s"});
+  rb.load_begin.total = 4;
+  const auto refused = send(surfeledit_proto_OP_LOAD_BEGIN);
+  EXPECT_EQ(refused->status, Status::PermissionDenied);
+  EXPECT_EQ(refused->field, "session");
+  EXPECT_EQ(send(surfeledit_proto_OP_INVITE)->status, Status::PermissionDenied);
+  EXPECT_EQ(send(surfeledit_proto_OP_HISTORY)->status, Status::Ok);
+}
+
+// A repeated request id with another op is not answered from the cache.
+TEST_F(HandlerTest, ARequestIdReusedForAnotherOpIsRefused) {
+  ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION, 7)->status, Status::Ok);
+  const auto r = send(surfeledit_proto_OP_INFO, 7);
+  EXPECT_EQ(r->status, Status::InvalidArgument);
+  EXPECT_EQ(r->field, "request_id");
+  EXPECT_EQ(r->request_op, static_cast<std::uint32_t>(surfeledit_proto_OP_INFO));
 }

@@ -102,3 +102,27 @@ TEST(UploadTable, OneUploadPerClientAndSession) {
   EXPECT_EQ(t.size(), 1u);
   EXPECT_EQ(t.find("a", "s"), nullptr);
 }
+
+TEST(UploadTable, ReservesAsChunksArriveWithinPerClientAndTotalLimits) {
+  // 7 doubles per surfel with radii: 56 bytes; limits of 10 and 14 surfels' worth.
+  UploadTable t(UploadLimits{8, 100, 10 * 56, 14 * 56});
+  t.begin("a", "s", 40, true);
+  EXPECT_EQ(t.bytes(), 0u);  // nothing reserved at LOAD_BEGIN
+  const ChunkArrays c = sphere_chunk(4, 0, 40);
+  t.add_chunk("a", "s", c.data(0));
+  EXPECT_EQ(t.client_bytes("a"), 4u * 56);
+  t.add_chunk("a", "s", sphere_chunk(4, 4, 40).data(4));  // 8 rows (doubling)
+  EXPECT_EQ(t.client_bytes("a"), 8u * 56);
+  expect_error([&] { t.add_chunk("a", "s", sphere_chunk(4, 8, 40).data(8)); }, ErrorCode::TooLarge, "load_chunk");
+  EXPECT_EQ(t.find("a", "s")->received(), 8u);  // the refused chunk stored nothing
+  t.begin("b", "s", 40, true);
+  t.add_chunk("b", "s", sphere_chunk(4, 0, 40).data(0));
+  EXPECT_EQ(t.bytes(), 12u * 56);
+  // b is within its own limit, but the total (14) is not.
+  expect_error([&] { t.add_chunk("b", "s", sphere_chunk(4, 4, 40).data(4)); }, ErrorCode::TooLarge, "load_chunk");
+  t.erase_client("a");
+  EXPECT_EQ(t.bytes(), 4u * 56);
+  EXPECT_EQ(t.client_bytes("a"), 0u);
+  t.add_chunk("b", "s", sphere_chunk(4, 4, 40).data(4));
+  EXPECT_EQ(t.client_bytes("b"), 8u * 56);
+}

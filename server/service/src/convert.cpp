@@ -1,6 +1,7 @@
 #include "surfeledit/service/convert.hpp"
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <type_traits>
 #include <variant>
@@ -62,7 +63,8 @@ static_assert(static_cast<std::uint32_t>(Op::Redo) == surfeledit_proto_OP_REDO, 
 static_assert(static_cast<std::uint32_t>(Op::History) == surfeledit_proto_OP_HISTORY, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Merge) == surfeledit_proto_OP_MERGE, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Curves) == surfeledit_proto_OP_CURVES, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_CURVES + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Invite) == surfeledit_proto_OP_INVITE, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_INVITE + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>
@@ -219,6 +221,7 @@ Command decode(const surfeledit_proto_Request& r) {
   c.request_id = r.request_id;
   c.session = str(r.session);
   c.op = static_cast<Op>(r.op);
+  c.token = str(r.token);
   switch (c.op) {
     case Op::LoadBegin:
       decode_argument(c, r.load_begin, "load_begin", [](const surfeledit_proto_LoadBegin& a) {
@@ -280,6 +283,16 @@ Command decode(const surfeledit_proto_Request& r) {
     case Op::Curves:
       decode_argument(c, r.curves, "curves",
                       [](const surfeledit_proto_Curves& a) { return CurvesArgs{a.refine_angle}; });
+      break;
+    case Op::Invite:
+      decode_argument(c, r.invite, "invite", [](const surfeledit_proto_Invite& a) {
+        const std::string name = str(a.role);
+        const std::optional<Role> role = invitable_role(name);
+        if (!role) {
+          throw Error(ErrorCode::InvalidArgument, "invite.role", "role '" + name + "': expected 'editor' or 'viewer'");
+        }
+        return InviteArgs{*role};
+      });
       break;
     default: break;  // no argument (or an op outside the list, rejected by the handler)
   }
@@ -384,6 +397,13 @@ ReplyView::ReplyView(const Reply& reply) {
     server_info_.sessions = borrow<dds_sequence_string>(session_names_);
     server_info_.max_chunk_surfels = s.max_chunk_surfels;
     server_info_.max_model_surfels = s.max_model_surfels;
+    server_info_.clients = s.clients;
+    server_info_.upload_bytes = s.upload_bytes;
+    server_info_.client_upload_bytes = s.client_upload_bytes;
+    server_info_.max_upload_bytes = s.max_upload_bytes;
+    server_info_.max_client_upload_bytes = s.max_client_upload_bytes;
+    server_info_.reply_cache_bytes = s.reply_cache_bytes;
+    server_info_.client_lease_s = s.client_lease_s;
   }
   msg_.server_info =
       borrow_one<dds_sequence_surfeledit_proto_ServerInfo>(&server_info_, reply.server_info.has_value());
@@ -435,6 +455,8 @@ ReplyView::ReplyView(const Reply& reply) {
     merge_.curves_ms = m.curves_ms;
   }
   msg_.merge = borrow_one<dds_sequence_surfeledit_proto_MergeResult>(&merge_, reply.merge.has_value());
+  msg_.token = cstr(reply.token);
+  msg_.request_op = reply.request_op;
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {

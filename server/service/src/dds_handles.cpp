@@ -37,6 +37,22 @@ Qos& Qos::volatile_durability() {
   return *this;
 }
 
+Qos& Qos::automatic_liveliness(dds_duration_t lease) {
+  dds_qset_liveliness(qos_, DDS_LIVELINESS_AUTOMATIC, lease);
+  return *this;
+}
+
+Qos& Qos::transient_local(int32_t depth) {
+  dds_qset_durability(qos_, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, depth);
+  return *this;
+}
+
+Qos& Qos::partition(const std::string& name) {
+  dds_qset_partition1(qos_, name.c_str());
+  return *this;
+}
+
 Qos protocol_qos() {
   Qos qos;
   qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();
@@ -64,8 +80,50 @@ Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qo
   return Entity(dds_create_reader(participant.get(), topic.get(), qos.get(), nullptr), "dds_create_reader");
 }
 
-Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos) {
-  return Entity(dds_create_writer(participant.get(), topic.get(), qos.get(), nullptr), "dds_create_writer");
+Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos, const dds_listener_t* listener) {
+  return Entity(dds_create_reader(participant.get(), topic.get(), qos.get(), listener), "dds_create_reader");
+}
+
+WriterEvents::WriterEvents() : listener_(dds_create_listener(this)) {
+  if (!listener_) throw std::runtime_error("dds_create_listener: out of memory");
+  dds_lset_liveliness_changed(listener_, &WriterEvents::on_liveliness);
+  dds_lset_subscription_matched(listener_, &WriterEvents::on_matched);
+}
+
+WriterEvents::~WriterEvents() { dds_delete_listener(listener_); }
+
+void WriterEvents::on_liveliness(dds_entity_t, const dds_liveliness_changed_status_t status, void* arg) {
+  auto* self = static_cast<WriterEvents*>(arg);
+  if (status.alive_count_change > 0) {
+    self->push(status.last_publication_handle, true);
+  } else if (status.alive_count_change < 0 || status.not_alive_count_change > 0) {
+    self->push(status.last_publication_handle, false);
+  }
+}
+
+void WriterEvents::on_matched(dds_entity_t, const dds_subscription_matched_status_t status, void* arg) {
+  if (status.current_count_change < 0) static_cast<WriterEvents*>(arg)->push(status.last_publication_handle, false);
+}
+
+void WriterEvents::push(dds_instance_handle_t writer, bool alive) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    events_.push_back(Event{writer, alive});
+  }
+  if (wake_ > 0) (void)dds_set_guardcondition(wake_, true);
+}
+
+std::vector<WriterEvents::Event> WriterEvents::take() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(events_, {});
+}
+
+Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos) {
+  return Entity(dds_create_writer(parent.get(), topic.get(), qos.get(), nullptr), "dds_create_writer");
+}
+
+Entity make_publisher(const Entity& participant, const Qos& qos) {
+  return Entity(dds_create_publisher(participant.get(), qos.get(), nullptr), "dds_create_publisher");
 }
 
 Entity make_read_condition(const Entity& reader) {

@@ -5,6 +5,7 @@
 #include <dds/dds.h>
 
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,6 +55,12 @@ class Qos {
   Qos& reliable(dds_duration_t max_blocking);
   Qos& keep_all();
   Qos& volatile_durability();
+  // Automatic liveliness: Cyclone asserts it for the writer every lease (PROTOCOL.md, "Leases").
+  Qos& automatic_liveliness(dds_duration_t lease);
+  // Keep the last `depth` samples for readers that match later (durability transient-local).
+  Qos& transient_local(int32_t depth);
+  // The one partition of a publisher or subscriber.
+  Qos& partition(const std::string& name);
 
  private:
   dds_qos_t* qos_;
@@ -74,9 +81,44 @@ Entity make_participant(dds_domainid_t domain);
 Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type, const std::string& name,
                   const Qos& qos);
 Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos);
-Entity make_writer(const Entity& participant, const Entity& topic, const Qos& qos);
+// A reader with a listener (nullptr: none); the listener is copied by Cyclone.
+Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos, const dds_listener_t* listener);
+// `parent`: the participant or a publisher.
+Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos);
+// A publisher whose QoS names its partition.
+Entity make_publisher(const Entity& participant, const Qos& qos);
 // A read condition on every sample of the reader (any sample, view and instance state).
 Entity make_read_condition(const Entity& reader);
+
+// Liveliness and match changes of the remote writers of one reader, as reported by Cyclone's
+// listener thread, queued for the thread that serves requests (which a guard condition wakes).
+class WriterEvents {
+ public:
+  struct Event {
+    dds_instance_handle_t writer;  // publication handle
+    bool alive;                    // false: lost its liveliness or unmatched
+  };
+  WriterEvents();
+  ~WriterEvents();
+  WriterEvents(const WriterEvents&) = delete;
+  WriterEvents& operator=(const WriterEvents&) = delete;
+  // The listener to give the reader; events are pushed to this object and `wake` is triggered.
+  const dds_listener_t* listener() const { return listener_; }
+  // Sets the guard condition triggered on every event (before the reader is created).
+  void wake_with(dds_entity_t guard) { wake_ = guard; }
+  // Takes the events queued so far, oldest first.
+  std::vector<Event> take();
+
+ private:
+  static void on_liveliness(dds_entity_t reader, const dds_liveliness_changed_status_t status, void* arg);
+  static void on_matched(dds_entity_t reader, const dds_subscription_matched_status_t status, void* arg);
+  void push(dds_instance_handle_t writer, bool alive);
+
+  dds_listener_t* listener_;
+  dds_entity_t wake_ = 0;
+  std::mutex mutex_;
+  std::vector<Event> events_;
+};
 
 // A guard condition another thread can trigger to wake a waitset.
 class GuardCondition {

@@ -38,6 +38,7 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::History, {"OP_HISTORY", serve_history, true, T::Version, false});
   row(Op::Merge, {"OP_MERGE", serve_merge, true, T::VersionAndSessionInfo, true});
   row(Op::Curves, {"OP_CURVES", serve_curves, true, T::Version, false});
+  row(Op::Invite, {"OP_INVITE", serve_invite, true, T::Version, true});
   return t;
 }
 
@@ -51,6 +52,7 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   }
   if (command.missing) std::rethrow_exception(command.missing);
   SessionEntry* entry = op->attached ? &state.sessions.attached(command.session, command.client_id) : nullptr;
+  if (entry) check_role(*entry, command);
   if (command.invalid) std::rethrow_exception(command.invalid);
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
@@ -88,13 +90,17 @@ void run_guarded(HandlerState& state, const std::string& op, const std::string& 
     body();
   } catch (const Error& e) {
     fail(status_of(e.code()), e.field(), message_of(e));
+  } catch (const PermissionDenied& e) {
+    fail(Status::PermissionDenied, e.field(), e.what());
   } catch (const std::bad_alloc&) {
     fail(Status::TooLarge, argument_of(op), "out of memory while serving " + op);
   } catch (const std::exception& e) {
     fail(Status::Internal, "", std::string("internal error: ") + e.what());
   }
   if (reply.status != Status::Ok) {
-    SessionEntry* entry = state.sessions.find(session);
+    // The reply's version is the session's (unchanged) current version
+    // (0 for a session the caller is not a member of: a refusal tells nothing about it).
+    SessionEntry* entry = state.sessions.find_for(session, reply.client_id);
     reply.version = entry ? entry->session->version() : 0;
     const auto level = reply.status == Status::Internal ? spdlog::level::warn : spdlog::level::info;
     logger()->log(level, "request {}#{} {} session '{}' failed: status {} field '{}': {}", reply.client_id,
@@ -121,7 +127,8 @@ bool has_handler(Op op) { return find_op(op) != nullptr; }
 HandlerState::HandlerState(const HandlerConfig& c)
     : config(c),
       sessions(SessionParams{c.threads}),
-      uploads(UploadLimits{c.max_chunk_surfels, c.max_model_surfels}),
+      uploads(UploadLimits{c.max_chunk_surfels, c.max_model_surfels, c.max_client_upload_bytes, c.max_upload_bytes}),
+      cache(RequestCacheLimits{1024, 4096, static_cast<std::size_t>(c.max_reply_cache_bytes)}),
       started(Clock::now()),
       data_root(c.data_root, c.max_file_bytes) {}
 
@@ -151,11 +158,20 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
   auto reply = std::make_shared<Reply>();
   reply->client_id = command.client_id;
   reply->request_id = command.request_id;
+  reply->request_op = static_cast<std::uint32_t>(command.op);
   const std::string& session = command.session;
   const std::string op = op_name(command.op);
   auto log = logger();
   log->debug("request {}#{} {} session '{}'", reply->client_id, reply->request_id, op, session);
 
+  // Identity first: the cache and everything else see only requests of the writer bound to the id.
+  if (!reply->client_id.empty() && command.sender != 0 &&
+      !state_->clients.admit(reply->client_id, command.sender, t0)) {
+    log->warn("request {}#{} {} session '{}' refused without a reply: client id bound to another writer (sender "
+              "{:x}), or that writer holds too many ids",
+              reply->client_id, reply->request_id, op, session, command.sender);
+    return nullptr;
+  }
   if (!reply->client_id.empty()) {
     if (state_->loads.pending(reply->client_id, reply->request_id)) {
       log->debug("request {}#{} is a repeat of a load in progress: its reply comes when it finishes",
@@ -163,8 +179,16 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
       return nullptr;
     }
     if (auto stored = state_->cache.find(reply->client_id, reply->request_id)) {
-      log->debug("request {}#{} is a repeat: answered with the stored reply", reply->client_id, reply->request_id);
-      return stored;
+      if (stored->request_op == reply->request_op) {
+        log->debug("request {}#{} is a repeat: answered with the stored reply", reply->client_id, reply->request_id);
+        return stored;
+      }
+      // Same id, another op: not a repeat; refused without touching the stored reply.
+      reply->status = Status::InvalidArgument;
+      reply->field = "request_id";
+      reply->message = "request id " + std::to_string(reply->request_id) + " was used for " +
+                       op_name(static_cast<Op>(stored->request_op)) + "; request ids must be unique per client";
+      return reply;
     }
   }
 

@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "surfeledit/service/client_registry.hpp"
 #include "surfeledit/service/command.hpp"
 #include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/handler.hpp"
@@ -31,6 +32,7 @@ struct HandlerState {
   SessionRegistry sessions;
   UploadTable uploads;        // uploads in progress
   RequestCache cache;         // replies for repeated request ids
+  ClientRegistry clients;     // client id -> the writer it is bound to, activity, lease
   std::chrono::steady_clock::time_point started;  // for the uptime
   DataRoot data_root;         // where OP_LOAD_FILE may read
   FileLoads loads;            // OP_LOAD_FILE loads running off the request thread
@@ -70,6 +72,10 @@ const OpEntry* find_op(Op op);
 // The reply tail: the session's version, and its SessionInfo when `tail` says so.
 void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail);
 
+// Refuses (PermissionDenied) a command whose op needs a stronger role in the session than the
+// client has (client_ops.cpp).
+void check_role(const SessionEntry& entry, const Command& command);
+
 // The session's description for replies (session_ops.cpp).
 SessionInfo session_info(const SessionEntry& entry);
 
@@ -95,6 +101,7 @@ void serve_curves(OpContext& c);
 // The second half of OP_LOAD_FILE, on the request thread once the file was read (load_ops.cpp): commits
 // the model into the session (the client must still be attached) and fills the reply.
 void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::vector<UpdateEvent>& updates);
+void serve_invite(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

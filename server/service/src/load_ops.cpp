@@ -31,7 +31,9 @@ void serve_load_begin(OpContext& c) {
   c.state.uploads.begin(c.command.client_id, c.command.session, args.total, args.has_radii);
 }
 
-void serve_load_chunk(OpContext& c) { upload_in_progress(c, "load_chunk").add_chunk(args_of<ChunkData>(c)); }
+void serve_load_chunk(OpContext& c) {
+  c.state.uploads.add_chunk(c.command.client_id, c.command.session, args_of<ChunkData>(c));
+}
 
 void serve_load_commit(OpContext& c) {
   Upload& upload = upload_in_progress(c, "op");
@@ -40,8 +42,8 @@ void serve_load_commit(OpContext& c) {
                 "upload incomplete: received " + std::to_string(upload.received()) + " of " +
                     std::to_string(upload.total()) + " surfels");
   }
-  prefixed("load_chunk", [&] { validate_arrays(upload.arrays()); });
-  SurfelArrays arrays = upload.take();
+  SurfelArrays arrays = upload.arrays();
+  prefixed("load_chunk", [&] { validate_arrays(arrays); });
   c.state.uploads.erase(c.command.client_id, c.command.session);
   SurfelModel model = prefixed("load_chunk", [&] { return SurfelModel::from_arrays(std::move(arrays)); });
   replace_model(c, std::move(model));

@@ -4,9 +4,53 @@
 
 namespace surfeledit::service {
 
-RequestCache::RequestCache(std::size_t per_client, std::size_t max_clients)
-    : per_client_(per_client), max_clients_(max_clients) {
-  if (per_client_ == 0 || max_clients_ == 0) throw std::invalid_argument("RequestCache limits must be positive");
+namespace {
+
+constexpr std::size_t kReplyOverhead = 512;  // bytes: the Reply object, its cache slot and list nodes
+
+template <typename T>
+std::size_t vec_bytes(const std::vector<T>& v) {
+  return v.size() * sizeof(T);
+}
+
+}  // namespace
+
+std::size_t reply_bytes(const Reply& r) {
+  std::size_t n = kReplyOverhead + r.client_id.size() + r.field.size() + r.message.size() + r.token.size();
+  for (const auto& t : r.timings) n += t.first.size() + sizeof(double) + 32;
+  if (r.state) {
+    const StatePage& p = *r.state;
+    n += vec_bytes(p.ids) + vec_bytes(p.positions) + vec_bytes(p.normals) + vec_bytes(p.radii) + vec_bytes(p.removed) +
+         vec_bytes(p.clip_points) + vec_bytes(p.clip_dirs);
+  }
+  if (r.session_info) {
+    n += r.session_info->name.size() + 64 * (r.session_info->structures.size() + r.session_info->settings.size());
+  }
+  if (r.server_info) {
+    for (const auto& s : r.server_info->sessions) n += s.size() + 32;
+  }
+  if (r.step) {
+    n += vec_bytes(r.step->colliding) + vec_bytes(r.step->depths) + vec_bytes(r.step->inserted) +
+         vec_bytes(r.step->features);
+  }
+  for (const auto& h : r.history) n += 64 + h.op.size() + h.client_id.size() + vec_bytes(h.touched);
+  auto curve_bytes = [](const std::vector<CurveInfo>& curves) {
+    std::size_t b = 0;
+    for (const auto& c : curves) b += 32 + vec_bytes(c.points);
+    return b;
+  };
+  n += curve_bytes(r.curves);
+  if (r.merge) {
+    n += vec_bytes(r.merge->removed) + vec_bytes(r.merge->features) + vec_bytes(r.merge->moved) +
+         vec_bytes(r.merge->inserted) + curve_bytes(r.merge->curves);
+  }
+  return n;
+}
+
+RequestCache::RequestCache(RequestCacheLimits limits) : limits_(limits) {
+  if (limits_.per_client == 0 || limits_.max_clients == 0 || limits_.max_bytes == 0) {
+    throw std::invalid_argument("RequestCache limits must be positive");
+  }
 }
 
 RequestCache::ClientReplies& RequestCache::touch(const std::string& client_id) {
@@ -15,14 +59,27 @@ RequestCache::ClientReplies& RequestCache::touch(const std::string& client_id) {
     activity_.splice(activity_.begin(), activity_, it->second.activity);
     return it->second;
   }
-  while (clients_.size() >= max_clients_) {
-    clients_.erase(activity_.back());
-    activity_.pop_back();
-  }
+  while (clients_.size() >= limits_.max_clients) drop_client(activity_.back());
   activity_.push_front(client_id);
   ClientReplies& c = clients_[client_id];
   c.activity = activity_.begin();
   return c;
+}
+
+void RequestCache::erase(ClientReplies& c, std::unordered_map<std::uint64_t, Slot>::iterator slot) {
+  bytes_ -= slot->second.bytes;
+  c.order.erase(slot->second.in_client);
+  lru_.erase(slot->second.in_global);
+  c.by_id.erase(slot);
+}
+
+void RequestCache::drop_client(const std::string& client_id) {
+  auto it = clients_.find(client_id);
+  if (it == clients_.end()) return;
+  ClientReplies& c = it->second;
+  while (!c.by_id.empty()) erase(c, c.by_id.begin());
+  activity_.erase(c.activity);
+  clients_.erase(it);
 }
 
 std::shared_ptr<const Reply> RequestCache::find(const std::string& client_id, std::uint64_t request_id) {
@@ -31,34 +88,41 @@ std::shared_ptr<const Reply> RequestCache::find(const std::string& client_id, st
   ClientReplies& c = cit->second;
   auto rit = c.by_id.find(request_id);
   if (rit == c.by_id.end()) return nullptr;
-  c.order.splice(c.order.begin(), c.order, rit->second);
+  c.order.splice(c.order.begin(), c.order, rit->second.in_client);
+  lru_.splice(lru_.begin(), lru_, rit->second.in_global);
   activity_.splice(activity_.begin(), activity_, c.activity);
-  return *rit->second;
+  return rit->second.reply;
 }
 
 void RequestCache::put(std::shared_ptr<const Reply> reply) {
   if (!reply) throw std::invalid_argument("RequestCache::put: null reply");
-  ClientReplies& c = touch(reply->client_id);
+  const std::string client_id = reply->client_id;
   const std::uint64_t id = reply->request_id;
-  auto rit = c.by_id.find(id);
-  if (rit != c.by_id.end()) {
-    c.order.erase(rit->second);
-    c.by_id.erase(rit);
+  const std::size_t size = reply_bytes(*reply);
+  {
+    ClientReplies& c = touch(client_id);
+    auto rit = c.by_id.find(id);
+    if (rit != c.by_id.end()) erase(c, rit);
+    if (size > limits_.max_bytes) {
+      if (c.by_id.empty()) drop_client(client_id);
+      return;
+    }
+    c.order.push_front(id);
+    lru_.emplace_front(client_id, id);
+    c.by_id[id] = Slot{std::move(reply), size, c.order.begin(), lru_.begin()};
+    bytes_ += size;
+    while (c.order.size() > limits_.per_client) erase(c, c.by_id.find(c.order.back()));
   }
-  c.order.push_front(std::move(reply));
-  c.by_id[id] = c.order.begin();
-  while (c.order.size() > per_client_) {
-    c.by_id.erase(c.order.back()->request_id);
-    c.order.pop_back();
+  // The byte bound: least recently used replies of any client first (never the one just stored).
+  while (bytes_ > limits_.max_bytes && lru_.size() > 1) {
+    const Key oldest = lru_.back();
+    ClientReplies& c = clients_.at(oldest.first);
+    erase(c, c.by_id.find(oldest.second));
+    if (c.by_id.empty() && oldest.first != client_id) drop_client(oldest.first);
   }
 }
 
-void RequestCache::forget(const std::string& client_id) {
-  auto it = clients_.find(client_id);
-  if (it == clients_.end()) return;
-  activity_.erase(it->second.activity);
-  clients_.erase(it);
-}
+void RequestCache::forget(const std::string& client_id) { drop_client(client_id); }
 
 std::size_t RequestCache::size(const std::string& client_id) const {
   auto it = clients_.find(client_id);

@@ -30,17 +30,27 @@ void serve_info(OpContext& c) {
   ServerInfo info;
   info.version = SURFELEDIT_VERSION;
   info.uptime_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - state.started).count();
-  info.sessions = state.sessions.names();
+  // Only the sessions the caller is a member of; others' are neither listed nor described.
+  info.sessions = state.sessions.names_for(c.command.client_id);
   info.max_chunk_surfels = state.config.max_chunk_surfels;
   info.max_model_surfels = state.config.max_model_surfels;
+  info.clients = static_cast<std::uint32_t>(state.clients.size());
+  info.upload_bytes = state.uploads.bytes();
+  info.client_upload_bytes = state.uploads.client_bytes(c.command.client_id);
+  info.max_upload_bytes = state.config.max_upload_bytes;
+  info.max_client_upload_bytes = state.config.max_client_upload_bytes;
+  info.reply_cache_bytes = state.cache.bytes();
+  info.client_lease_s = std::chrono::duration<double>(state.config.client_lease).count();
   c.reply.server_info = std::move(info);
-  // The session, when named and open, for the reply tail.
-  c.entry = c.command.session.empty() ? nullptr : c.state.sessions.find(c.command.session);
+  // The session, when named and the caller is a member, for the reply tail.
+  c.entry = c.command.session.empty() ? nullptr : c.state.sessions.find_for(c.command.session, c.command.client_id);
 }
 
 void serve_open_session(OpContext& c) { c.entry = &c.state.sessions.open(c.command.session, c.command.client_id); }
 
-void serve_join_session(OpContext& c) { c.entry = &c.state.sessions.join(c.command.session, c.command.client_id); }
+void serve_join_session(OpContext& c) {
+  c.entry = &c.state.sessions.join(c.command.session, c.command.client_id, c.command.token);
+}
 
 void serve_close_session(OpContext& c) {
   const std::string& session = c.command.session;

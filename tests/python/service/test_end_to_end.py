@@ -80,9 +80,9 @@ def test_ten_steps_updates_and_late_join(client: surfeledit.Client,
     np.testing.assert_array_equal(ch.ids, deforms[-1].ids)
     np.testing.assert_array_equal(ch.positions, final.positions[ch.ids.astype(np.int64)])
 
-    # A second client joining late sees the same state.
+    # A second client joining late (invited: sessions are private) sees the same state.
     other = make_client()
-    with other.join_session("e2e") as late:
+    with other.join_session("e2e", token=session.invite("viewer")) as late:
         st = late.state()
         assert st.version == final.version
         for name in ("ids", "positions", "normals", "radii"):

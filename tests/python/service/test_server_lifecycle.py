@@ -50,6 +50,7 @@ def test_one_process_serves_independent_sessions(server: ServerProcess) -> None:
         np.testing.assert_allclose(pl[one], positions[one] + [0.0, 0.0, -0.02], atol=1e-12)
         np.testing.assert_allclose(pr[one], positions[one] + [0.2, 0.0, 0.0], atol=1e-12)
         np.testing.assert_array_equal(pl[zero], positions[zero])
-        assert set(a.info().sessions) >= {"left", "right"}
+        # Each client lists only its own (private) session.
+        assert set(a.info().sessions) == {"left"} and set(b.info().sessions) == {"right"}
     a.close()
     b.close()

@@ -12,6 +12,7 @@
 
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/types.hpp"
+#include "surfeledit/service/access.hpp"
 #include "surfeledit/service/upload.hpp"
 
 namespace surfeledit::service {
@@ -36,8 +37,9 @@ enum class Op : std::uint32_t {
   History = 15,
   Merge = 16,
   Curves = 17,
+  Invite = 18,
 };
-constexpr std::size_t kOpCount = 18;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = 19;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {
@@ -84,11 +86,16 @@ struct CurvesArgs {
   double refine_angle = 0.5;  // radians: an edge bending more than this is split (validated by the core)
 };
 
+// OP_INVITE: the role the invitation grants.
+struct InviteArgs {
+  Role role = Role::Viewer;  // Editor or Viewer
+};
+
 // The op's argument: none (std::monostate), or the struct of that op. OP_LOAD_CHUNK's is a
 // ChunkData pointing into the received sample, which must outlive the Command; OP_DEFORM's is
 // the validated DeformParams.
 using OpArguments = std::variant<std::monostate, LoadBeginArgs, ChunkData, LoadFileArgs, SetRegionsArgs,
-                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs, MergeArgs, CurvesArgs>;
+                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs, MergeArgs, CurvesArgs, InviteArgs>;
 
 struct Command {
   std::string client_id;       // empty: rejected by the handler (field "client_id")
@@ -101,6 +108,10 @@ struct Command {
   // The argument is present but invalid: reported after the session is checked (so that an
   // unattached client hears about the session first).
   std::exception_ptr invalid;
+  std::string token;           // OP_JOIN_SESSION: invitation token (empty: members only)
+  // The DDS writer that sent the request (its publication handle); 0: not from DDS (tests, in-process),
+  // then the client id is not bound to a sender.
+  std::uint64_t sender = 0;
 };
 
 }  // namespace surfeledit::service

@@ -5,6 +5,7 @@
 // (handler_ops.hpp, in src/); this header names project types only.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -25,6 +26,11 @@ struct HandlerConfig {
   int threads = 0;                               // per-session worker threads; 0 = all cores
   std::string data_root;                         // OP_LOAD_FILE reads only below it; empty: file loading off
   std::uint64_t max_file_bytes = std::uint64_t(1) << 30;  // largest file OP_LOAD_FILE reads
+  // Identity, leases and memory bounds (PROTOCOL.md, "Identity and access", "Leases").
+  std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
+  std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
+  std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeats
+  std::chrono::milliseconds client_lease{2000};  // a client whose writer is gone this long is detached
 };
 
 struct HandlerState;
@@ -38,14 +44,27 @@ class Handler {
 
   // Serves one request and returns its reply (the stored one for a repeated request id).
   // Appends the changes to publish to `updates`. Never throws for bad input: every
-  // failure becomes an error reply, and a failed request changes nothing. nullptr: the reply comes
-  // later from finish_loads() (an OP_LOAD_FILE whose file is being read, or a repeat of one).
+  // failure becomes an error reply, and a failed request changes nothing. Returns nullptr (no
+  // reply now) for an OP_LOAD_FILE whose file is being read, or a repeat of one (the reply comes
+  // later from finish_loads()), and when the command's client id is bound to another sender (a
+  // reply would carry the victim's id and reach the victim, not the sender).
   std::shared_ptr<const Reply> handle(const Command& command, std::vector<UpdateEvent>& updates);
   // Commits the file loads that finished off the request thread (in the order they finished) and
   // returns their replies; appends their updates. Each OP_LOAD_FILE gets exactly one reply.
   std::vector<std::shared_ptr<const Reply>> finish_loads(std::vector<UpdateEvent>& updates);
   // Called from a loading thread when a load finished (wakes the request thread); set before serving.
   void set_on_load_done(std::function<void()> on_done);
+
+  // Leases (client_ops.cpp). The request writer `sender` lost its liveliness or was unmatched /
+  // is alive again; clients bound to it are detached once it stayed gone for config().client_lease.
+  void writer_lost(std::uint64_t sender);
+  void writer_alive(std::uint64_t sender);
+  // Detaches every client whose lease ran out: closes its sessions (dropping those it was the
+  // last client of, with a "close" update appended to `updates`), drops its uploads and cached
+  // replies and forgets its id and memberships. Returns the ids detached.
+  std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates);
+  // Time until the next lease can run out (nullopt: none is running).
+  std::optional<std::chrono::milliseconds> next_lease_check() const;
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);

@@ -21,6 +21,7 @@ enum class Status : std::uint32_t {
   TooLarge = 4,
   Io = 5,
   Internal = 6,
+  PermissionDenied = 7,  // the caller's role in the session does not allow the op
 };
 
 // One page of GET_STATE: ids ascending with their attributes.
@@ -64,6 +65,13 @@ struct ServerInfo {
   std::vector<std::string> sessions;  // names, sorted
   std::uint64_t max_chunk_surfels = 0;
   std::uint64_t max_model_surfels = 0;
+  std::uint32_t clients = 0;                   // clients known to the server (bound ids)
+  std::uint64_t upload_bytes = 0;              // memory of unfinished uploads, all clients
+  std::uint64_t client_upload_bytes = 0;       // of those, the caller's
+  std::uint64_t max_upload_bytes = 0;          // total upload memory limit
+  std::uint64_t max_client_upload_bytes = 0;   // per-client upload memory limit
+  std::uint64_t reply_cache_bytes = 0;         // replies kept for repeats (estimated bytes)
+  double client_lease_s = 0.0;                 // detach a client whose writer is not alive this long
 };
 
 // The collision detector's counters of one step (proto CollisionStats).
@@ -133,6 +141,8 @@ struct Reply {
   std::vector<HistoryInfo> history;  // OP_HISTORY
   std::optional<MergeInfo> merge;    // OP_MERGE
   std::vector<CurveInfo> curves;     // OP_CURVES
+  std::string token;                 // OP_INVITE: the invitation token
+  std::uint32_t request_op = 0;      // the op number of the request answered
 };
 
 }  // namespace surfeledit::service

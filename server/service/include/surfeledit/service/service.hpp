@@ -30,6 +30,11 @@ struct ServiceConfig {
   UpdateThread update_thread = UpdateThread::Auto;
   std::string data_root;                                  // OP_LOAD_FILE reads only below it; empty: off
   std::uint64_t max_file_bytes = std::uint64_t(1) << 30;  // largest file OP_LOAD_FILE reads (1 GiB)
+  // Identity, leases and memory bounds (PROTOCOL.md, "Identity and access", "Leases").
+  std::uint64_t client_lease_ms = 2000;  // detach a client whose request writer is gone (not alive / unmatched) this long
+  std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
+  std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
+  std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeated requests
 };
 
 class Service {

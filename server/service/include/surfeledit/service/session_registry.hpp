@@ -1,5 +1,7 @@
-// Sessions by name and the clients attached to each; a session is dropped when its last
-// client closes it.
+// Sessions by name, the clients attached to each and who may see them: a session is private to
+// the client that opened it (its owner); others become members with a token the owner made
+// (invite) and then open, join, read or edit it as their role allows (access.hpp). A session is
+// dropped when its last attached client closes it or is detached.
 #pragma once
 
 #include <cstdint>
@@ -10,33 +12,52 @@
 #include <vector>
 
 #include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/service/access.hpp"
 
 namespace surfeledit::service {
 
 struct SessionEntry {
   std::unique_ptr<EditSession> session;
-  std::set<std::string> clients;  // attached client ids
-  std::uint64_t steps = 0;        // deformation steps applied so far
+  std::set<std::string> clients;         // attached client ids
+  std::uint64_t steps = 0;               // deformation steps applied so far
+  std::string owner;                     // the client that opened it
+  std::map<std::string, Role> members;   // client id -> role (the owner included); kept while attached or not
+  std::map<std::string, Role> invites;   // token -> role it grants (valid until the session is dropped)
+
+  // The client's role; nullptr when it is not a member.
+  const Role* role_of(const std::string& client) const;
 };
 
 class SessionRegistry {
  public:
   explicit SessionRegistry(SessionParams params = {}) : params_(params) {}
 
-  // Creates the session (or attaches to it) and attaches the client. Throws
-  // InvalidArgument (field "session") on an empty or overlong name.
+  // Creates the session (the client becomes its owner) or attaches a member to it. Throws
+  // InvalidArgument (field "session") on an empty or overlong name, Conflict (field "session")
+  // when the name belongs to a session the client is not a member of (join it with a token).
   SessionEntry& open(const std::string& name, const std::string& client);
-  // Attaches the client to an existing session; throws NotFound otherwise.
-  SessionEntry& join(const std::string& name, const std::string& client);
-  // The session the client is attached to; throws Conflict (field "session") otherwise.
+  // Attaches a member, or makes the client a member with the role a valid `token` grants. A
+  // session that does not exist and a non-member without a valid token get the same NotFound.
+  SessionEntry& join(const std::string& name, const std::string& client, const std::string& token);
+  // The session the client is attached to; throws Conflict (field "session") otherwise, with the
+  // same message whether the session exists or not.
   SessionEntry& attached(const std::string& name, const std::string& client);
   // Detaches the client (Conflict if not attached); returns true when that dropped the session.
   bool close(const std::string& name, const std::string& client);
+  // A token granting `role` in the session (the caller checked the inviter's role).
+  std::string invite(SessionEntry& entry, Role role);
 
   SessionEntry* find(const std::string& name);
   const SessionEntry* find(const std::string& name) const;
-  // Names, sorted.
+  // The session when `client` is a member of it (nullptr otherwise, also when it does not exist).
+  SessionEntry* find_for(const std::string& name, const std::string& client);
+  // Names, sorted: all of them, and those `client` is a member of.
   std::vector<std::string> names() const;
+  std::vector<std::string> names_for(const std::string& client) const;
+  // Sessions the client is attached to, sorted.
+  std::vector<std::string> attached_to(const std::string& client) const;
+  // Forgets the client's memberships (it was detached for good); attachments are closed by the caller first.
+  void forget_member(const std::string& client);
   std::size_t size() const { return sessions_.size(); }
 
  private:
