@@ -188,7 +188,9 @@ void Service::Impl::serve(const surfeledit_proto_Request& request, dds_instance_
     Command command = decode(request);
     command.sender = sender;
     reply = handler.handle(command, events);
-    if (!reply) return;  // refused without a reply (a spoofed client id): nothing to send or publish
+    // nullptr: refused without a reply (a spoofed client id), or a file load that replies when it
+    // finished (finish_loads); either way nothing to send or publish now.
+    if (!reply) return;
   } catch (const std::exception& e) {
     // handle() turns every failure into a reply; this is the last resort (e.g. out of memory there).
     logger()->error("request {}#{} could not be handled: {}", str(request.client_id), request.request_id, e.what());
@@ -200,7 +202,7 @@ void Service::Impl::serve(const surfeledit_proto_Request& request, dds_instance_
     reply = std::move(fallback);
     events.clear();
   }
-  if (reply) send(*reply);  // nullptr: a file load replies when it finished (finish_loads)
+  send(*reply);
   for (const UpdateEvent& event : events) publish(event);
 }
 
