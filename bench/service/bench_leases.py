@@ -11,8 +11,9 @@ What is measured (seconds, wall clock, time.monotonic), each --runs times on a f
               liveliness lease (1 s) + --client-lease-ms.
   gone        the server gets SIGKILL; the client's next request raises ServerGoneError after this long
               (expected: up to the server's 1 s liveliness lease).
-  first_ms    a fresh client's first OP_INFO round trip (the server makes the client's reply writer,
-              in its partition, and the client's reader must discover it) against its next ten (median).
+  first_ms    a fresh client's first OP_INFO round trip once the server's request reader is matched (the
+              server makes the client's reply writer, in its partition, and the client's reader must
+              discover it) against its next ten (next_ms, median).
 Medians and ranges are printed with the machine load (uptime).
 """
 
@@ -61,10 +62,13 @@ def connect(domain: int) -> surfeledit.Client:
 def one_run(exe: str, lease_ms: int) -> Dict[str, float]:
     domain = free_domain()
     srv = start_server(exe, domain, "--client-lease-ms", str(lease_ms))
-    owner = connect(domain)
+    connect(domain).close()  # the server is up
+    owner = surfeledit.Client(domain)
     try:
+        if not owner.wait_for_server(10.0):
+            raise RuntimeError("server not discovered")
         t0 = time.monotonic()
-        owner.info()
+        owner.info()  # this client's first request: its reply writer is made now
         first_ms = (time.monotonic() - t0) * 1e3
         later = []
         for _ in range(10):
