@@ -268,9 +268,9 @@ class Client:
                 raise errors.RequestTimeoutError(
                     f"no reply to request {request.request_id} ({_op_label(request.op)}) on domain {self.domain} "
                     f"within {timeout:.1f} s (tried {retries + 1} times)")
-        if int(reply.request_op) != int(request.op.value):
+        if int(reply.request_op) != int(request.op):
             raise errors.ReplyMismatchError(
-                f"the reply to request {request.request_id} ({request.op.name}) answers op {int(reply.request_op)}; "
+                f"the reply to request {request.request_id} ({_op_label(request.op)}) answers op {int(reply.request_op)}; "
                 "ignored", "request_op")
         if check and reply.status != proto.Status.STATUS_OK:
             raise errors.error_for_status(int(reply.status.value), reply.message, reply.field)

@@ -15,7 +15,7 @@ namespace {
 
 TEST_F(HandlerTest, OpNumbersOutsideTheEnumAreRefusedNamingTheOp) {
   ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Ok);
-  for (const std::int32_t op : {18, 99, -1, INT32_MIN, INT32_MAX}) {
+  for (const std::int32_t op : {static_cast<std::int32_t>(kOpCount), 99, -1, INT32_MIN, INT32_MAX}) {
     surfeledit_proto_Request req = rb.make(surfeledit_proto_OP_INFO, next_id++);
     req.op = op;
     const auto r = handler.handle(decode(req), updates);

@@ -456,7 +456,7 @@ ReplyView::ReplyView(const Reply& reply) {
   }
   msg_.merge = borrow_one<dds_sequence_surfeledit_proto_MergeResult>(&merge_, reply.merge.has_value());
   msg_.token = cstr(reply.token);
-  msg_.request_op = reply.request_op;
+  msg_.request_op = static_cast<std::int32_t>(reply.request_op);
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {

@@ -213,6 +213,7 @@ std::vector<std::shared_ptr<const Reply>> Handler::finish_loads(std::vector<Upda
     auto reply = std::make_shared<Reply>();
     reply->client_id = load.client_id;
     reply->request_id = load.request_id;
+    reply->request_op = static_cast<std::uint32_t>(Op::LoadFile);
     run_guarded(*state_, "OP_LOAD_FILE", load.session, *reply, updates,
                 [&] { finish_load_file(*state_, load, *reply, updates); });
     reply->timings.emplace_back("total", ms_since(load.started));
