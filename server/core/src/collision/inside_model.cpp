@@ -164,15 +164,15 @@ bool InsideModel::crossed(const Vec3& a, const Vec3& b, Index& probes) const {
     const Vec3 x = a + (s / len) * t;
     const Probe pr = probe(x);
     ++probes;
-    if (s > 0.0 && pr.inside) return true;
+    if (pr.inside) return true;
     // Nothing changes within the sphere that holds no zero surfel and no cap; but never advance by
     // more than one radius of the nearest surfel near the surface (a wall of two radii is not jumped).
     const double r = radii_[pr.nearest];
     const double free = std::sqrt(pr.dist2) - 0.5 * r;
     double step = std::max(std::min(free, holes_.empty() ? free : clearance(x)), r);
     if (len > 0.0 && kMaxTraceProbes * step < len) step = len / kMaxTraceProbes;
-    s += step;
-    if (s >= len) return false;
+    if (s >= len) return false;  // b was the last sample
+    s = std::min(s + step, len);
   }
   return false;
 }
