@@ -59,7 +59,7 @@ Values surfel_areas(const Points& positions, int k) {
   const KdTree tree(positions);
   const KnnResult nn = tree.knn(positions, kk + 1);  // the surfel itself first
   constexpr double kPi = 3.14159265358979323846;
-  for (Index i = 0; i < n; ++i) out[i] = kPi * nn.dist2(i, kk) / (kk + 1);
+  for (Index i = 0; i < n; ++i) out[i] = kPi * nn.dist2(i, kk) / (kk + 0.5);
   return out;
 }
 

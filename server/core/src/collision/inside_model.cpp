@@ -58,7 +58,7 @@ InsideModel::InsideModel(const Points& positions, const Points& normals, const V
   find_holes();
 }
 
-// Open boundary: a zero surfel whose neighbours (of like normal, projected on its tangent plane)
+// Open boundary: a zero surfel whose neighbours (not facing away, projected on its tangent plane)
 // leave an angular gap wider than 90 degrees. Boundary surfels within three radii of each other form
 // one loop; each loop of at least kHoleMinSurfels becomes a ball (centroid, farthest member + radius).
 void InsideModel::find_holes() {
@@ -73,7 +73,8 @@ void InsideModel::find_holes() {
     angles.clear();
     for (int j = 1; j <= kHoleNeighbours; ++j) {
       const Index q = nn.indices(i, j);
-      if (q < 0 || normals_.row(q).dot(ni.transpose()) < 0.5) continue;
+      // The other side of a thin wall is no neighbour; the other face of an edge is (it closes the gap).
+      if (q < 0 || normals_.row(q).dot(ni.transpose()) < -0.5) continue;
       const Vec3 d = (positions_.row(q) - positions_.row(i)).transpose();
       angles.push_back(std::atan2(d.dot(v), d.dot(u)));
     }

@@ -24,10 +24,11 @@ struct WindingParams {
   int area_k = 8;      // surfel_areas(): neighbours of the local density estimate (>= 1)
 };
 
-// Area per surfel from the local sample density: pi d_k^2 / k with d_k the distance to the k-th
-// nearest other surfel (#P). Disc radii of splats overlap (a radius of one spacing covers about pi
+// Area per surfel from the local sample density: pi d_k^2 / (k + 1/2) with d_k the distance to the
+// k-th nearest other surfel (#P): the disc of radius d_k holds the surfel, k - 1 neighbours and, half
+// in, the k-th on its rim. Disc radii of splats overlap (a radius of one spacing covers about pi
 // surfels' share each), so pi r^2 would overweight every surfel; the density area sums to the
-// surface area. Sets of at most k surfels get pi d^2 / (count - 1) with d the farthest one, a single
+// surface area. Sets of at most k surfels use their farthest surfel (k = count - 1), a single
 // surfel area 0.
 Values surfel_areas(const Points& positions, int k = 8);
 
