@@ -108,17 +108,17 @@ struct WindingNumber::Impl {
     return id;
   }
 
-  double at_local(const Vec3& q) const {
+  double at_local(const Vec3& q, double beta) const {
     if (nodes.empty()) return 0.0;
     double w = 0.0;
     Index stack[128];
     int top = 0;
     stack[top++] = 0;
-    const double beta2 = params.beta * params.beta;
+    const double beta2 = beta * beta;
     while (top > 0) {
       const Node& n = nodes[static_cast<std::size_t>(stack[--top])];
       const double d2 = (q - n.center).squaredNorm();
-      if (params.beta > 0.0 && d2 > beta2 * n.radius * n.radius) {
+      if (beta > 0.0 && d2 > beta2 * n.radius * n.radius) {
         w += far_field(n, q);
       } else if (n.left < 0 || top + 2 > 128) {
         for (Index i = n.begin; i < n.end; ++i)
@@ -173,7 +173,9 @@ WindingNumber::~WindingNumber() = default;
 WindingNumber::WindingNumber(WindingNumber&&) noexcept = default;
 WindingNumber& WindingNumber::operator=(WindingNumber&&) noexcept = default;
 
-double WindingNumber::at(const Vec3& q) const { return impl_->at_local(q - impl_->origin); }
+double WindingNumber::at(const Vec3& q) const { return impl_->at_local(q - impl_->origin, impl_->params.beta); }
+
+double WindingNumber::at(const Vec3& q, double beta) const { return impl_->at_local(q - impl_->origin, beta); }
 
 Values WindingNumber::at(const Points& queries, int threads) const {
   require_finite(queries, "queries");

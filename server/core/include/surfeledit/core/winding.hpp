@@ -43,6 +43,8 @@ class WindingNumber {
 
   // w at q (dimensionless). Thread-safe, const.
   double at(const Vec3& q) const;
+  // w at q with another far-field acceptance `beta` (>= 0; 0 = exact).
+  double at(const Vec3& q, double beta) const;
   // #Q queries -> #Q values, multithreaded (`threads`: 0 = all); results independent of threads.
   Values at(const Points& queries, int threads = 0) const;
 
