@@ -167,12 +167,14 @@ bool InsideModel::crossed(const Vec3& a, const Vec3& b, Index& probes) const {
   const Vec3 t = b - a;
   const double len = t.norm();
   if (!(len > 0.0)) return false;
-  double s = 0.0;  // distance travelled from a
+  double s = 0.0;       // distance travelled from a
+  bool entered = false;  // left the inside run a may start in (leaving the solid is no crossing)
   for (Index made = 0; made < kMaxTraceProbes; ++made) {
     const Vec3 x = a + (s / len) * t;
     const Probe pr = probe(x);
     ++probes;
-    if (pr.inside) return true;
+    if (pr.inside && entered) return true;
+    entered |= !pr.inside;
     // Nothing changes within the sphere that holds no zero surfel and no cap; but never advance by
     // more than one radius of the nearest surfel near the surface (a wall of two radii is not jumped).
     const double r = radii_[pr.nearest];

@@ -42,8 +42,8 @@ class InsideModel {
   // Squared radius of a sphere at p (nearest zero surfel at dist2 with radius r) that holds no zero
   // surfel and stays out of the open boundary's balls.
   double sphere_rho2(const Vec3& p, double dist2, double radius, double margin) const;
-  // True when a point of the segment a -> b, ends included, is inside (a point that leaves the solid
-  // during the step was in it during the step).
+  // True when the segment a -> b enters the solid: a point of it, b included, is inside after an outside
+  // one (a point that starts inside and leaves was reported when it got there; it is not crossing).
   // `probes` counts the queries made.
   bool crossed(const Vec3& a, const Vec3& b, Index& probes) const;
   // Whether crossed() is worth calling for a step t = b - a of a point now at distance sqrt(dist2)
