@@ -150,9 +150,15 @@ def piercing(scale: float = 1.0, seed: int = 1, steps: int = 50) -> SceneSetup:
     Full size (scale 1): spacing 0.01; plate 2.59 x 2.59 x 0.15 (~150k surfels), ball radius 0.691
     (~60k surfels) starting two spacings above the plate and ending two spacings below it.
     """
-    h = _spacing(0.01, scale)
-    half_t, r = 0.075, 0.691
-    plate = core.make_box([1.296, 1.296, half_t])
+    return _ball_through_plate("piercing", _spacing(0.01, scale), 1.296, 0.075, 0.691, seed, steps,
+                               "ball (one region) pushed down through a rigid plate")
+
+
+def _ball_through_plate(name: str, h: float, half_w: float, half_t: float, r: float, seed: int, steps: int,
+                        description: str) -> SceneSetup:
+    """A square plate (half width ``half_w``, half thickness ``half_t``) about the origin, the zero
+    region, and a ball of radius ``r`` (the one region) moved from two spacings above it to two below."""
+    plate = core.make_box([half_w, half_w, half_t])
     z0 = half_t + r + 2.0 * h
     scene = core.Scene()
     scene.add(plate)
@@ -161,9 +167,8 @@ def piercing(scale: float = 1.0, seed: int = 1, steps: int = 50) -> SceneSetup:
     scene.add(core.make_sphere(r, center=[0.0, 0.0, z0], rotation=rotation_matrix((1.0, 2.0, 3.0), 0.7)))
     s = scene.sample(spacing=h, seed=seed)
     part = np.asarray(s.part)
-    return _setup("piercing", s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, plate.sdf,
-                  Motion(translation=(0.0, 0.0, -2.0 * z0)), steps,
-                  "ball (one region) pushed down through a rigid plate")
+    return _setup(name, s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, plate.sdf,
+                  Motion(translation=(0.0, 0.0, -2.0 * z0)), steps, description)
 
 
 # -- 2. cup ------------------------------------------------------------------------------------------
@@ -325,16 +330,8 @@ def thinwall(scale: float = 1.0, seed: int = 1, steps: int = 1, thickness: float
     + ~8k ball surfels). With ``steps`` = 1 no surfel is ever inside the wall after a step.
     """
     h = _spacing(0.01, scale)
-    half_t, r = 0.5 * thickness * h, 0.25
-    wall = core.make_box([0.8, 0.8, half_t])
-    z0 = half_t + r + 2.0 * h
-    scene = core.Scene()
-    scene.add(wall)
-    scene.add(core.make_sphere(r, center=[0.0, 0.0, z0], rotation=rotation_matrix((1.0, 2.0, 3.0), 0.7)))
-    s = scene.sample(spacing=h, seed=seed)
-    part = np.asarray(s.part)
-    return _setup("thinwall", s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, wall.sdf,
-                  Motion(translation=(0.0, 0.0, -2.0 * z0)), steps, "ball pushed through a thin rigid wall")
+    return _ball_through_plate("thinwall", h, 0.8, 0.5 * thickness * h, 0.25, seed, steps,
+                               "ball pushed through a thin rigid wall")
 
 
 SCENES = {"piercing": piercing, "cup": cup, "concave": concave, "bunny": bunny, "thinwall": thinwall}
