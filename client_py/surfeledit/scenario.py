@@ -74,7 +74,7 @@ class Scenario:
 
 def make_scenario(name: str, scale: float = 1.0, steps: Optional[int] = None, seed: int = 1,
                   **scene_kwargs: Any) -> Scenario:
-    """Builds a named scenario (``piercing``, ``cup``, ``concave``, ``bunny``); ``scale`` multiplies
+    """Builds a named scenario (``piercing``, ``cup``, ``concave``, ``bunny``, ``thinwall``); ``scale`` multiplies
     the surfel count (not for ``bunny``), ``steps`` overrides the scene's default step count."""
     if name not in _scenes.SCENES:
         raise ValueError(f"unknown scene {name!r} (expected one of {', '.join(_scenes.SCENES)})")
