@@ -84,7 +84,6 @@ class RobustKernel {
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
   void on_inserted(Index added) { orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1); }
   const ZeroSet* zero_set() const { return nullptr; }
-  const InsideModel* inside_model() const { return inside_.get(); }
   std::size_t memory_bytes() const;
 
  private:
