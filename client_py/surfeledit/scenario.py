@@ -74,7 +74,7 @@ class Scenario:
 
 def make_scenario(name: str, scale: float = 1.0, steps: Optional[int] = None, seed: int = 1,
                   **scene_kwargs: Any) -> Scenario:
-    """Builds a named scenario (``piercing``, ``cup``, ``concave``, ``bunny``); ``scale`` multiplies
+    """Builds a named scenario (``piercing``, ``cup``, ``concave``, ``bunny``, ``thinwall``); ``scale`` multiplies
     the surfel count (not for ``bunny``), ``steps`` overrides the scene's default step count."""
     if name not in _scenes.SCENES:
         raise ValueError(f"unknown scene {name!r} (expected one of {', '.join(_scenes.SCENES)})")
@@ -256,7 +256,10 @@ class RunResult:
                     peak_colliding=max(r.colliding for r in self.records),
                     peak_truth=max(r.truth for r in self.records),
                     min_precision=min(r.precision for r in self.records),
-                    min_recall=min(r.recall for r in self.records))
+                    min_recall=min(r.recall for r in self.records),
+                    # over the steps with at least 50 true collisions (1.0 when there are none)
+                    min_precision_50=min([r.precision for r in self.records if r.truth >= 50], default=1.0),
+                    min_recall_50=min([r.recall for r in self.records if r.truth >= 50], default=1.0))
 
 
 #: Called after each step with (step, backend, output, state); may edit the session (e.g. remove).
@@ -387,6 +390,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--scale", type=float, default=1.0, help="surfel count multiplier (0.1 -> ~10x fewer)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--threads", type=int, default=0, help="detector threads (0 = all)")
+    ap.add_argument("--inside", default=None,
+                    help="comma-separated inside modes (nearest, winding, vote): temporal and robust run once per "
+                         "mode, labelled e.g. robust/winding (docs/algorithms.md §4.6)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="another session setting, e.g. --set boundary_n=12 --set resample=true")
     args = ap.parse_args(argv)
@@ -408,21 +414,30 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.remote:
         from .connection import connect
         client = connect(domain=args.domain, spawn=True)
+    runs: List[Tuple[str, str, Dict[str, Any]]] = []  # (label, algorithm, settings)
+    modes = [m.strip() for m in args.inside.split(",") if m.strip()] if args.inside else []
+    for alg in algorithms:
+        if modes and alg in ("temporal", "robust"):
+            runs += [(f"{alg}/{m}", alg, dict(settings, inside=m)) for m in modes]
+        else:
+            runs.append((alg, alg, settings))
     results: List[RunResult] = []
     try:
-        for alg in algorithms:
+        for label, alg, run_settings in runs:
             backend: Backend = (RemoteBackend(client, f"scenario-{alg}") if client is not None
                                 else LocalBackend(args.threads))
 
-            def show(k: int, _b: Any, out: StepOutput, _s: ModelState, alg: str = alg) -> None:
+            def show(k: int, _b: Any, out: StepOutput, _s: ModelState, alg: str = label) -> None:
                 print(f"{alg:9s} step {k:3d}  detect {out.stats.get('detect_ms', float('nan')):9.3f} ms  "
                       f"step {out.step_ms:9.3f} ms  colliding {len(out.colliding):6d}  "
                       f"queries {int(out.stats.get('queries', 0)):7d}", flush=True)
 
-            res = run(scenario, alg, backend=backend, settings=settings, after_step=show)
+            res = run(scenario, alg, backend=backend, settings=run_settings, after_step=show)
             backend.close()
+            res.algorithm = label
             for r in res.records:
-                print(f"{alg:9s} step {r.step:3d}  truth {r.truth:6d}  precision {r.precision:.4f}  "
+                r.algorithm = label
+                print(f"{label:9s} step {r.step:3d}  truth {r.truth:6d}  precision {r.precision:.4f}  "
                       f"recall {r.recall:.4f}")
             results.append(res)
     finally:
@@ -438,7 +453,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"  {res.algorithm:9s} detect median {s['median_detect_ms']:.3f} ms max {s['max_detect_ms']:.3f} ms; "
               f"step median {s['median_step_ms']:.3f} ms; preprocessing {s['preprocess_ms']:.3f} ms; "
               f"peak colliding {s['peak_colliding']} (truth {s['peak_truth']}); "
-              f"min precision {s['min_precision']:.4f}, min recall {s['min_recall']:.4f}")
+              f"min precision {s['min_precision']:.4f}, min recall {s['min_recall']:.4f} "
+              f"(steps with >= 50 true: {s['min_precision_50']:.4f}, {s['min_recall_50']:.4f})")
     print(f"wrote {args.out / (sc.name + '.csv')} and {args.out / (sc.name + '.png')}")
     return 0
 

@@ -18,6 +18,7 @@ Scenes (all dimensions in model units; ``scale`` multiplies the surfel count, sp
   about its upper root into the cup wall; the zero region and the truth are the cup body alone.
 - :func:`concave` — a capsule standing on a slab, bent over (rotation about its root) until its end
   sweeps back into the slab: the concave collision of the thesis's Fig. 6.4.
+- :func:`thinwall` — a ball pushed through a wall 2.5 spacings thick in few steps (tunnelling).
 - :func:`bunny` — the watertight Stanford bunny with one ear pushed into its head; truth by a
   generalized winding number of the mesh (needs the mesh file and ``libigl``; tests only).
 """
@@ -149,9 +150,15 @@ def piercing(scale: float = 1.0, seed: int = 1, steps: int = 50) -> SceneSetup:
     Full size (scale 1): spacing 0.01; plate 2.59 x 2.59 x 0.15 (~150k surfels), ball radius 0.691
     (~60k surfels) starting two spacings above the plate and ending two spacings below it.
     """
-    h = _spacing(0.01, scale)
-    half_t, r = 0.075, 0.691
-    plate = core.make_box([1.296, 1.296, half_t])
+    return _ball_through_plate("piercing", _spacing(0.01, scale), 1.296, 0.075, 0.691, seed, steps,
+                               "ball (one region) pushed down through a rigid plate")
+
+
+def _ball_through_plate(name: str, h: float, half_w: float, half_t: float, r: float, seed: int, steps: int,
+                        description: str) -> SceneSetup:
+    """A square plate (half width ``half_w``, half thickness ``half_t``) about the origin, the zero
+    region, and a ball of radius ``r`` (the one region) moved from two spacings above it to two below."""
+    plate = core.make_box([half_w, half_w, half_t])
     z0 = half_t + r + 2.0 * h
     scene = core.Scene()
     scene.add(plate)
@@ -160,9 +167,8 @@ def piercing(scale: float = 1.0, seed: int = 1, steps: int = 50) -> SceneSetup:
     scene.add(core.make_sphere(r, center=[0.0, 0.0, z0], rotation=rotation_matrix((1.0, 2.0, 3.0), 0.7)))
     s = scene.sample(spacing=h, seed=seed)
     part = np.asarray(s.part)
-    return _setup("piercing", s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, plate.sdf,
-                  Motion(translation=(0.0, 0.0, -2.0 * z0)), steps,
-                  "ball (one region) pushed down through a rigid plate")
+    return _setup(name, s, np.flatnonzero(part == 0), np.flatnonzero(part == 1), h, plate.sdf,
+                  Motion(translation=(0.0, 0.0, -2.0 * z0)), steps, description)
 
 
 # -- 2. cup ------------------------------------------------------------------------------------------
@@ -314,4 +320,18 @@ def bunny(path: Optional[Path] = None, steps: int = 30, depth: float = 0.22) -> 
                   "bunny with one ear pushed into its head")
 
 
-SCENES = {"piercing": piercing, "cup": cup, "concave": concave, "bunny": bunny}
+# -- 5. thin wall -----------------------------------------------------------------------------------
+def thinwall(scale: float = 1.0, seed: int = 1, steps: int = 1, thickness: float = 2.5) -> SceneSetup:
+    """A ball pushed straight through a thin rigid wall (no tunnelling, docs/algorithms.md §4.7).
+
+    Wall: half extents (0.8, 0.8, thickness h / 2) about the origin (``thickness`` in spacings h);
+    ball: radius 0.25, starting two spacings above the wall and ending two spacings below it, so
+    every ball surfel passes through the wall during the motion. Full size: spacing 0.01 (~50k wall
+    + ~8k ball surfels). With ``steps`` = 1 no surfel is ever inside the wall after a step.
+    """
+    h = _spacing(0.01, scale)
+    return _ball_through_plate("thinwall", h, 0.8, 0.5 * thickness * h, 0.25, seed, steps,
+                               "ball pushed through a thin rigid wall")
+
+
+SCENES = {"piercing": piercing, "cup": cup, "concave": concave, "bunny": bunny, "thinwall": thinwall}

@@ -27,6 +27,7 @@ DeformParams make_deform_params(const Vec3& translation, const Vec3& axis, doubl
 void bind_errors(pyb::module_& m);
 void bind_kdtree(pyb::module_& m);
 void bind_inside_outside(pyb::module_& m);
+void bind_winding(pyb::module_& m);
 void bind_scene(pyb::module_& m);
 void bind_deformation(pyb::module_& m);
 void bind_model_io(pyb::module_& m);

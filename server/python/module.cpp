@@ -35,4 +35,5 @@ PYBIND11_MODULE(core, m) {
   bind_deformation(m);
   bind_model_io(m);
   bind_edit_session(m);
+  bind_winding(m);
 }

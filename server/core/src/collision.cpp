@@ -56,6 +56,7 @@ void validate(const CollisionParams& p) {
     msg << "must be finite and >= 0, got " << p.sphere_margin;
     throw Error(ErrorCode::InvalidArgument, "sphere_margin", msg.str());
   }
+  detail::validate_inside(p);
 }
 
 std::unique_ptr<CollisionDetector> CollisionDetector::create(const CollisionParams& params,

@@ -19,6 +19,25 @@ void RobustKernel::reset(const CollisionScene& scene, const IndexList&, const In
   for (Index r = 0; r < rows; ++r) orig_of_row[r] = r;
   orig_ = std::move(orig);
   orig_of_row_ = std::move(orig_of_row);
+  build_inside();
+}
+
+void RobustKernel::build_inside() {
+  inside_.reset();
+  if (params_.inside == InsideMode::Nearest && !params_.swept) return;
+  IndexList zero;
+  for (std::size_t o = 0; o < orig_.zero.size(); ++o)
+    if (orig_.zero[o] && orig_.alive[o]) zero.push_back(static_cast<Index>(o));
+  const Index n = static_cast<Index>(zero.size());
+  Points pos(n, 3), nrm(n, 3);
+  Values rad(n);
+  for (Index q = 0; q < n; ++q) {
+    pos.row(q) = orig_.positions.row(zero[q]);
+    nrm.row(q) = orig_.normals.row(zero[q]);
+    rad[q] = orig_.radii[zero[q]];
+  }
+  auto tree = std::make_shared<const KdTree>(pos, nearest_tree_params(params_.knn_eps));
+  inside_ = std::make_shared<const InsideModel>(pos, nrm, rad, std::move(tree), params_);
 }
 
 void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
@@ -47,6 +66,7 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
     for (std::size_t o = 0; o < orig_.alive.size(); ++o)
       if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
     orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
+    build_inside();
   }
   compact(orig_of_row_, keep);
 }
@@ -54,7 +74,7 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
 std::size_t RobustKernel::memory_bytes() const {
   return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size() + orig_.radii.size()) * sizeof(double) +
          orig_.zero.capacity() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : 0) +
-         orig_of_row_.capacity() * sizeof(Index);
+         orig_of_row_.capacity() * sizeof(Index) + (inside_ ? inside_->memory_bytes() : 0);
 }
 
 }  // namespace surfeledit::detail

@@ -141,6 +141,14 @@ std::vector<SettingSpec> make_table() {
                                              at_least(0)),
       row<&S::response, &E::backoff_max_iterations>("backoff_max_iterations", "back-off stops after this many "
                                                                               "re-tests", within(1, kMaxBackoffIterations)),
+      row<&S::collision, &C::inside>("inside", "temporal/robust inside test: nearest surfel (thesis), winding "
+                                               "number of the zero region, or k-nearest vote (docs/algorithms.md "
+                                               "§4.6)"),
+      row<&S::collision, &C::winding_beta>("winding_beta", "winding: far-field acceptance of the dipole tree "
+                                                           "(0 = exact sums)", within(0, 100)),
+      row<&S::collision, &C::vote_k>("vote_k", "vote: zero surfels that vote", within(1, 256)),
+      row<&S::collision, &C::swept>("swept", "temporal/robust: report points whose step passed through the "
+                                             "rigid solid (no tunnelling, docs/algorithms.md §4.7)"),
   };
 }
 

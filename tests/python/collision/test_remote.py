@@ -19,15 +19,16 @@ def test_remote_equals_in_process(scenarios):
     with surfeledit.connect(domain=domain, spawn=True) as client:
         backend = S.RemoteBackend(client, "scenario-test")
         try:
-            remote = {alg: S.run(sc, alg, backend=backend, settings={"threads": 1}) for alg in ("temporal", "robust")}
+            remote = {(alg, inside): S.run(sc, alg, backend=backend, settings={"threads": 1, "inside": inside})
+                      for alg in ("temporal", "robust") for inside in ("nearest", "winding")}
         except surfeledit.InvalidArgumentError as e:
             if e.field == "op":  # a server built before OP_CONFIGURE: not this code's failure
                 pytest.skip(f"the server found ({surfeledit.find_server_executable()}) predates OP_CONFIGURE: {e}")
             raise
         backend.close()
-    for alg, res in remote.items():
-        local = S.run(sc, alg, backend=S.LocalBackend(1), settings={"threads": 1})
+    for (alg, inside), res in remote.items():
+        local = S.run(sc, alg, backend=S.LocalBackend(1), settings={"threads": 1, "inside": inside})
         assert max(len(c) for c in local.colliding) > 0
         for k, (a, b) in enumerate(zip(res.colliding, local.colliding), 1):
-            assert np.array_equal(a, b), f"{alg} step {k}"
+            assert np.array_equal(a, b), f"{alg}/{inside} step {k}"
         assert [r.precision for r in res.records] == [r.precision for r in local.records]

@@ -45,6 +45,11 @@
 //     const ZeroSet* zero_set() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
 //   };
+//
+// What a tested point asks about inside/outside beyond the thesis's nearest-surfel test (`inside` =
+// winding | vote) and the swept test (`swept`) are not kernels: Temporal and Robust share one
+// immutable InsideModel (inside_model.hpp, §4.6-§4.7 of docs/algorithms.md), built in reset() and
+// on_removed(), asked in update(); its spheres (sphere_rho2) also stay clear of the open boundary.
 #pragma once
 
 #include <vector>

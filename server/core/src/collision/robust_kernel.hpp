@@ -4,11 +4,15 @@
 // collision change only when the nearest original surfel is a zero surfel; a point collides iff its
 // state changed an odd number of times (Def. 4.3). Each point keeps a sphere (c, rho2) and is only
 // re-tested once it leaves it. Depth (Eq. 6.4): rho - |p - c|.
+// With `inside` = winding | vote (§4.6) the inside state is "inside the rigid solid" (InsideModel over
+// the zero region) and every change of it counts; spheres then hold no zero surfel. With `swept`
+// (§4.7) a point whose step passed through the solid is also reported in that step.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
+#include "inside_model.hpp"
 #include "kernel.hpp"
 
 namespace surfeledit::detail {
@@ -18,13 +22,14 @@ class RobustKernel {
   static constexpr std::uint8_t kInside = 1;       // inside the original model at the last test
   static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
   static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at old_position
+  static constexpr std::uint8_t kCrossed = 8;      // swept: the last step passed through the solid
 
   // One cache line per point: the row sweep touches every state every step.
   struct alignas(64) State {
     Sphere sphere;                     // holds no original surfel
     Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
-    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate
-    bool colliding() const { return (flags & kColliding) != 0; }
+    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
+    bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
   };
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
@@ -49,7 +54,7 @@ class RobustKernel {
   }
   Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p);
+    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
     finish(s, pt.p);
     return made;
   }
@@ -58,6 +63,7 @@ class RobustKernel {
   // sphere emptied, so that it is tested as soon as it is a candidate again; a colliding one keeps
   // everything (it is still inside, farther than its step from the zero surface).
   Index not_candidate(State& s, const TestPoint& pt) const {
+    s.flags &= static_cast<std::uint8_t>(~kCrossed);
     if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2 && !(s.flags & kColliding)) {
       s.flags |= kFirstUpdate;
       s.sphere = {pt.p, 0.0};
@@ -68,7 +74,7 @@ class RobustKernel {
   // Its inside state may go stale while it is not tested, so its next test re-derives it from
   // old_position (the last position at which it was found not colliding), as after a reset: the
   // parity then compares that position with the new one, across the untested steps.
-  void skip(State& s) const { s.flags |= kFirstUpdate; }
+  void skip(State& s) const { s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed); }
   // Child: the parent's state (inside, colliding, first update, old position) and the sphere rule.
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
@@ -93,7 +99,36 @@ class RobustKernel {
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
-  Index test(State& s, const Vec3& p1) const {
+  Index test(State& s, const Vec3& p1, const Vec3& p0) const {
+    s.flags &= static_cast<std::uint8_t>(~kCrossed);
+    double r_near = 0.0;  // radius of the reference surfel nearest to p1
+    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, r_near) : test_zero(s, p1, r_near);
+    if (params_.swept && !s.colliding()) {
+      if (InsideModel::may_cross(p1 - p0, r_near) && inside_->crossed(p0, p1, made)) {
+        s.flags |= kCrossed;
+        s.sphere.rho2 = 0.0;  // tested again at the next step
+      }
+    }
+    return made;
+  }
+  // The inside state against the rigid solid (InsideModel); every change counts.
+  Index test_zero(State& s, const Vec3& p1, double& r_near) const {
+    Index made = 0;
+    if (s.flags & kFirstUpdate) {
+      s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
+      ++made;
+      set_inside(s, inside_->probe(s.old_position).inside);
+    }
+    const InsideModel::Probe pr = inside_->probe(p1);
+    ++made;
+    r_near = inside_->radius(pr.nearest);
+    s.sphere = {p1, inside_->sphere_rho2(p1, pr.dist2, r_near, params_.sphere_margin)};
+    if (pr.inside != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    set_inside(s, pr.inside);
+    return made;
+  }
+  // The thesis's test against the original model (Code 6.8).
+  Index test_original(State& s, const Vec3& p1, double& r_near) const {
     Index made = 0;
     const double w = params_.threshold;
     if (s.flags & kFirstUpdate) {
@@ -105,6 +140,7 @@ class RobustKernel {
     const Index k = orig_.tree->nearest(p1);
     ++made;
     const Vec3 d = p1 - row3(orig_.positions, k);
+    r_near = orig_.radii[k];
     s.sphere = {p1, sphere_rho2(d.squaredNorm(), orig_.radii[k], params_.sphere_margin)};
     const bool inside_now = d.dot(row3(orig_.normals, k)) < w;
     if (orig_.zero[k] && inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
@@ -112,6 +148,8 @@ class RobustKernel {
     return made;
   }
   // End of every step: the position of a point that does not collide is the last non-colliding one.
+  // The inside model over the alive zero surfels, when `inside` or `swept` needs it.
+  void build_inside();
   static void finish(State& s, const Vec3& p1) {
     if (!(s.flags & kColliding)) s.old_position = p1;
   }
@@ -122,6 +160,7 @@ class RobustKernel {
   CollisionParams params_;
   Snapshot orig_;
   IndexList orig_of_row_;  // #P: row of the original model, -1 for inserted rows
+  std::shared_ptr<const InsideModel> inside_;  // over the alive zero surfels; null with nearest and no swept
 };
 
 }  // namespace surfeledit::detail

@@ -3,11 +3,15 @@
 // cannot have changed and it is skipped. Otherwise it queries its nearest zero surfel, re-centres the
 // sphere (c = p, rho2 from |d| and the sphere margin) and is tested with the §4.1 heuristics.
 // Depth (Eq. 6.4): rho - |p - c| while skipped, |d| when tested.
+// With `inside` = winding | vote (§4.6) the test is "inside the rigid solid" (InsideModel) instead of
+// the §4.1 heuristics; with `swept` (§4.7) a point whose step passed through the solid collides in
+// that step (and is re-tested at the next).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
+#include "inside_model.hpp"
 #include "simple_kernel.hpp"
 
 namespace surfeledit::detail {
@@ -17,13 +21,24 @@ class TemporalKernel : public ZeroSetKernel {
   struct State {
     Sphere sphere;          // holds no zero surfel
     double depth = 0.0;     // depth estimate of the last evaluation (model units)
-    std::uint8_t hit = 0;   // colliding
+    std::uint8_t hit = 0;   // colliding (1: by the test, 2: only by the swept test this step)
     bool colliding() const { return hit != 0; }
   };
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
 
   using ZeroSetKernel::ZeroSetKernel;
+
+  void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads) {
+    ZeroSetKernel::reset(scene, deformable, zero_rows, threads);
+    build_inside();
+  }
+  void on_removed(const std::vector<bool>& keep, const IndexList& new_row) {
+    const KdTree* before = zero_.tree.get();
+    ZeroSetKernel::on_removed(keep, new_row);
+    if (zero_.tree.get() != before) build_inside();
+  }
+  std::size_t memory_bytes() const { return ZeroSetKernel::memory_bytes() + (inside_ ? inside_->memory_bytes() : 0); }
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             std::vector<State>& states) const {
@@ -42,6 +57,7 @@ class TemporalKernel : public ZeroSetKernel {
       if (s.colliding()) s.depth = std::max(0.0, std::sqrt(s.sphere.rho2) - std::sqrt(moved2));
       return 0;
     }
+    if (inside_) return update_inside(s, pt);
     const Index k = zero_.nearest(pt.p);
     const SimpleTest t = test(k, pt, s.colliding());
     s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};
@@ -55,6 +71,35 @@ class TemporalKernel : public ZeroSetKernel {
   void skip(State&) const {}
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
+
+ private:
+  // The model when `inside` is not nearest or `swept` is on (else null: the thesis's test).
+  void build_inside() {
+    inside_.reset();
+    if (params_.inside == InsideMode::Nearest && !params_.swept) return;
+    inside_ = std::make_shared<const InsideModel>(zero_.positions, zero_.normals, zero_.radii, zero_.tree, params_);
+  }
+  Index update_inside(State& s, const TestPoint& pt) const {
+    const InsideModel::Probe pr = inside_->probe(pt.p);
+    Index made = 1;
+    const double r = inside_->radius(pr.nearest);
+    s.sphere = {pt.p, inside_->sphere_rho2(pt.p, pr.dist2, r, params_.sphere_margin)};
+    s.depth = std::sqrt(pr.dist2);
+    if (params_.inside == InsideMode::Nearest) {  // swept only: the thesis's test, then the segment
+      const SimpleTest t = test(pr.nearest, pt, s.colliding() && s.hit != 2);
+      s.hit = t.state;
+    } else {
+      s.hit = pr.inside;
+    }
+    if (params_.swept && !s.hit && InsideModel::may_cross(pt.p - pt.previous(), r) &&
+        inside_->crossed(pt.previous(), pt.p, made)) {
+      s.hit = 2;
+      s.sphere.rho2 = 0.0;  // tested again at the next step
+    }
+    return made;
+  }
+
+  std::shared_ptr<const InsideModel> inside_;
 };
 
 }  // namespace surfeledit::detail

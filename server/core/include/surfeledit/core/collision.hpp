@@ -39,6 +39,16 @@ inline CollisionAlgorithm parse_algorithm(const std::string& name, const std::st
 }
 inline const char* to_string(CollisionAlgorithm algorithm) { return enum_name(algorithm); }
 
+// How Temporal and Robust decide that a point is inside the rigid solid (§4.6 of docs/algorithms.md).
+enum class InsideMode : std::uint8_t {
+  Nearest = 0,  // the thesis's test against one nearest reference surfel (§4.3, §4.4)
+  Winding = 1,  // generalized winding number of the zero region > 1/2 (fast dipole tree)
+  Vote = 2,     // the k nearest zero surfels vote, weighted by distance and normal agreement
+};
+constexpr EnumNames<InsideMode, 3> names_of(InsideMode) {
+  return {{{InsideMode::Nearest, "nearest"}, {InsideMode::Winding, "winding"}, {InsideMode::Vote, "vote"}}};
+}
+
 struct CollisionParams {
   CollisionAlgorithm algorithm = CollisionAlgorithm::Robust;  // which detector
   double threshold = 0.0;        // W: inside iff (p1 - p2) . n2 < W, model units
@@ -51,6 +61,11 @@ struct CollisionParams {
   int threads = 0;               // worker threads (0 = all); results do not depend on it
   double knn_eps = 0.0;          // approximate nearest-surfel queries (nanoflann's eps, >= 0): the surfel found
                                  // is at most sqrt(1 + eps) x as far as the nearest one; 0 = exact (default)
+  InsideMode inside = InsideMode::Nearest;  // Temporal/Robust: the inside test of a tested point (§4.6)
+  double winding_beta = 2.0;     // winding: far-field acceptance of the dipole tree (0 = exact sums), >= 0
+  int vote_k = 8;                // vote: zero surfels that vote, >= 1
+  bool swept = false;            // Temporal/Robust: a point whose step passed through the rigid solid is
+                                 // reported colliding in that step (no tunnelling, §4.7)
 };
 
 // Throws InvalidArgument naming the field (e.g. "boundary_n") and the value.
