@@ -96,32 +96,45 @@ TEST(StepBounds, AHugeStepIsRefusedTwiceAndChangesNothing) {
   EXPECT_EQ(fx.session.version(), version + 1);
 }
 
-// A step that passes validation but overflows (a model at the edge of the double range) is refused
-// after apply_step wrote the rows: deform() rolls back to the exact state before it.
-TEST(StepBounds, AStepThatOverflowsAfterApplyingIsRolledBack) {
+// A step that fails after apply_step wrote the rows is rolled back to the exact state before it. Response
+// "merge" with the one region (the sphere's bottom cap) pushed wholly into the slab: the merge would
+// remove every one-region surfel, so it throws Conflict after the step was applied. Before the roll-back
+// the step stayed applied and the version moved on.
+TEST(StepBounds, AStepThatFailsAfterApplyingIsRolledBack) {
+  SessionFixture fx;
+  IdList cap, rest;
+  for (SurfelId id : fx.one) (fx.s.positions(static_cast<Eigen::Index>(id), 2) < 0.56 ? cap : rest).push_back(id);
+  ASSERT_GT(cap.size(), 3u);
+  fx.session.configure({{"response", std::string("merge")}});
+  fx.session.set_regions({fx.zero, {}}, {cap, {}});
+  const Snapshot before(fx.session);
+  const std::uint64_t version = fx.session.version();
+  const auto history = fx.session.history().size();
+  DeformParams step;
+  step.translation = Vec3(0, 0, -0.53);  // the cap (z in [0.5, 0.56]) lands inside the slab (|z| < 0.15)
+  testing_util::expect_error([&] { fx.session.deform(step); }, ErrorCode::Conflict, "merge");
+  expect_same(before, Snapshot(fx.session), "after the failed step");
+  EXPECT_EQ(fx.session.version(), version);
+  EXPECT_EQ(fx.session.history().size(), history);
+  EXPECT_TRUE(fx.session.changes_since(version).changed.empty());
+  step.translation = Vec3(0, 0, -0.01);
+  fx.session.deform(step);  // the session is not poisoned
+  EXPECT_EQ(fx.session.version(), version + 1);
+}
+
+// Coordinates whose squared distances overflow break nearest-neighbour search: regions are refused.
+TEST(StepBounds, RegionsNeedCoordinatesWithinTheSearchableRange) {
   SessionFixture fx;
   SurfelArrays a;
-  a.positions = fx.s.positions * 1e302;  // extent ~1e302: kStepReach times it overflows, so no reach check
+  a.positions = fx.s.positions * 1e200;
   a.normals = fx.s.normals;
-  a.radii = fx.s.radii * 1e302;
+  a.radii = fx.s.radii * 1e200;
   EditSession session("big");
   session.load(SurfelModel::from_arrays(a));
-  session.configure({{"algorithm", std::string("none")}});
-  session.set_regions({fx.zero, {}}, {fx.one, {}});
-  DeformParams step;
-  step.translation = Vec3(1.5e308, 0, 0);
-  session.deform(step);  // still finite
-  const Snapshot before(session);
   const std::uint64_t version = session.version();
-  const auto history = session.history().size();
-  testing_util::expect_error([&] { session.deform(step); }, ErrorCode::InvalidArgument, "translation");
-  expect_same(before, Snapshot(session), "after the overflowing step");
+  testing_util::expect_error([&] { session.set_regions({fx.zero, {}}, {fx.one, {}}); },
+                             ErrorCode::InvalidArgument, "positions");
   EXPECT_EQ(session.version(), version);
-  EXPECT_EQ(session.history().size(), history);
-  EXPECT_TRUE(session.model().positions().allFinite());
-  step.translation = Vec3(-1.5e308, 0, 0);
-  session.deform(step);  // back: the session is not poisoned
-  EXPECT_EQ(session.version(), version + 1);
 }
 
 }  // namespace

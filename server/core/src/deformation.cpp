@@ -171,6 +171,13 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
                     " rows");
   }
   require_finite(positions, "positions");
+  // Squared distances of coordinates beyond kMaxCoordinate overflow: the nearest-neighbour search would
+  // find nothing (and the fields index row -1).
+  if (n > 0 && positions.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+    throw Error(ErrorCode::InvalidArgument, "positions",
+                "coordinates beyond " + fmt(kMaxCoordinate) + " model units (largest " +
+                    fmt(positions.cwiseAbs().maxCoeff()) + "): nearest-neighbour distances would overflow");
+  }
   IndexList f0, f1;
   DeformationFields fields;
   fields.regions = regions;

@@ -48,6 +48,7 @@ struct DeformParams {
 // distance from the model against the model's extent (bounding-box diagonal when the regions were set).
 constexpr double kMaxStepAngle = 1000.0;  // radians (about 159 turns)
 constexpr double kStepReach = 1e6;        // |t| and |c - box centre| at most this many extents
+constexpr double kMaxCoordinate = 1e150;  // compute_fields: |coordinate| bound (squared distances stay finite)
 
 // Throws InvalidArgument (naming the field) on non-finite values, |angle| > kMaxStepAngle, or, when
 // angle != 0, an axis whose normalised length is not 1 (zero, or so large that its norm overflows,
@@ -73,7 +74,7 @@ void validate(const DeformParams& params, const DeformationFields& fields);
 
 // Computes lambda and its gradient with nearest-neighbour queries to F0 and F1 (k-d trees
 // over each region). Throws Conflict when a surfel has d0 + d1 == 0 (it lies in both),
-// InvalidArgument when F0 or F1 is empty or sizes disagree.
+// InvalidArgument when F0 or F1 is empty, sizes disagree or a coordinate exceeds kMaxCoordinate.
 DeformationFields compute_fields(const Points& positions, const std::vector<Region>& regions,
                                  int threads = 0);
 
