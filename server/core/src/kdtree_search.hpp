@@ -8,7 +8,8 @@
 // Search. The classic incremental-distance descent (Arya & Mount): the squared distance from the query
 // to a node's cell is kept per axis and updated on the one axis a cut changes; a far child is visited
 // when that lower bound times (1 + eps) is <= the current worst accepted distance (inclusive, so ties are
-// never pruned). Ties are broken by the smaller slot, so an exact answer is unique whatever the visiting
+// never pruned; the bound is summed like a point's distance so rounding cannot lift it above one, and the
+// file is compiled without FMA contraction so both sums round alike). Ties are broken by the smaller slot, so an exact answer is unique whatever the visiting
 // order: a search started from a warm bound returns exactly what a cold one does.
 #pragma once
 
@@ -99,18 +100,17 @@ struct Tree {
   void search(const double* q, Set& set, double eps_factor) const {
     if (nodes.empty()) return;
     double off[3];
-    double mind2 = 0.0;
     for (int d = 0; d < 3; ++d) {
       const double below = box_lo[d] - q[d], above = q[d] - box_hi[d];
       off[d] = below > 0.0 ? below * below : (above > 0.0 ? above * above : 0.0);
-      mind2 += off[d];
     }
-    if (mind2 * eps_factor <= set.worst()) descend(0, q, mind2, off, set, eps_factor);
+    const double mind2 = off[0] + off[1] + off[2];
+    if (mind2 * eps_factor <= set.worst()) descend(0, q, off, set, eps_factor);
   }
 
  private:
   template <class Set>
-  void descend(std::uint32_t ni, const double* q, double mind2, double* off, Set& set, double eps_factor) const {
+  void descend(std::uint32_t ni, const double* q, double* off, Set& set, double eps_factor) const {
     const Node& nd = nodes[ni];
     if (nd.dim == kLeaf) {
       const double qx = q[0], qy = q[1], qz = q[2];
@@ -135,14 +135,15 @@ struct Tree {
       far = ni + 1;
       cut = to_left > 0.0 ? to_left * to_left : 0.0;
     }
-    descend(near, q, mind2, off, set, eps_factor);
+    descend(near, q, off, set, eps_factor);
     const double saved = off[d];
-    const double far_d2 = mind2 - saved + cut;
-    if (far_d2 * eps_factor <= set.worst()) {
-      off[d] = cut;
-      descend(far, q, far_d2, off, set, eps_factor);
-      off[d] = saved;
-    }
+    off[d] = cut;
+    // Summed afresh, in the leaf's order (x, y, z): every per-axis term is <= the same term of any point
+    // in the cell and rounding is monotonic, so the computed bound never exceeds a computed point distance
+    // (an incremental mind2 - saved + cut could, by an ulp, and prune a tie).
+    const double far_d2 = off[0] + off[1] + off[2];
+    if (far_d2 * eps_factor <= set.worst()) descend(far, q, off, set, eps_factor);
+    off[d] = saved;
   }
 };
 
