@@ -43,6 +43,16 @@ Box box_of(const double* xyz, std::uint32_t b, std::uint32_t e) {
   return box;
 }
 
+// The nearest float >= x / <= x (+-inf beyond float range, which only weakens a bound).
+float round_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+float round_down(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+
 // Spreads the low 10 bits of v to every third bit (Morton interleave).
 std::uint32_t spread(std::uint32_t v) {
   v &= 0x3ffu;
@@ -119,9 +129,9 @@ class MortonBuilder {
     t_.nodes[ni].a = static_cast<std::uint32_t>(t_.nodes.size());
     Box right = build(m, e);
     Node& nd = t_.nodes[ni];
-    nd.dim = static_cast<std::uint32_t>(dim);
-    nd.lo = left.hi[dim];
-    nd.hi = right.lo[dim];
+    nd.b = kInner | static_cast<std::uint32_t>(dim);
+    nd.lo = round_up(left.hi[dim]);
+    nd.hi = round_down(right.lo[dim]);
     right.add(left);
     return right;
   }

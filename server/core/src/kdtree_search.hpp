@@ -19,14 +19,16 @@
 
 namespace surfeledit::kd {
 
-inline constexpr std::uint32_t kLeaf = 3;  // Node::dim of a leaf
+inline constexpr std::uint32_t kInner = 0x80000000u;  // Node::b flag of an inner node (its low bits: the axis)
 
+// 16 bytes. The cut bounds are floats rounded OUTWARD from the children's extents (lo up, hi down), so a
+// cell bound computed from them never exceeds the true one: pruning stays conservative and exact.
 struct Node {
-  double lo = 0.0;          // inner: largest coordinate along `dim` in the left child
-  double hi = 0.0;          // inner: smallest coordinate along `dim` in the right child
-  std::uint32_t a = 0;      // inner: index of the right child; leaf: first slot
-  std::uint32_t b = 0;      // leaf: one past the last slot
-  std::uint32_t dim = kLeaf;  // cut axis 0..2, or kLeaf
+  float lo = 0.0f;      // inner: >= the largest coordinate along the axis in the left child
+  float hi = 0.0f;      // inner: <= the smallest coordinate along the axis in the right child
+  std::uint32_t a = 0;  // inner: index of the right child; leaf: first slot
+  std::uint32_t b = 0;  // inner: kInner | axis (0..2); leaf: one past the last slot
+  bool leaf() const { return (b & kInner) == 0; }
 };
 
 // The k = 1 result: the (dist2, slot)-smallest point with dist2 <= the initial bound.
@@ -112,7 +114,7 @@ struct Tree {
   template <class Set>
   void descend(std::uint32_t ni, const double* q, double* off, Set& set, double eps_factor) const {
     const Node& nd = nodes[ni];
-    if (nd.dim == kLeaf) {
+    if (nd.leaf()) {
       const double qx = q[0], qy = q[1], qz = q[2];
       const double* p = &xyz[3 * static_cast<std::size_t>(nd.a)];
       for (std::uint32_t s = nd.a; s < nd.b; ++s, p += 3) {
@@ -121,9 +123,9 @@ struct Tree {
       }
       return;
     }
-    const std::uint32_t d = nd.dim;
-    const double to_left = q[d] - nd.lo;   // > 0: q lies beyond the left child's extent
-    const double to_right = nd.hi - q[d];  // > 0: q lies before the right child's extent
+    const std::uint32_t d = nd.b & 3u;
+    const double to_left = q[d] - static_cast<double>(nd.lo);   // > 0: q lies beyond the left child's extent
+    const double to_right = static_cast<double>(nd.hi) - q[d];  // > 0: q lies before the right child's extent
     std::uint32_t near, far;
     double cut;
     if (to_left < to_right) {  // nearer the left child

@@ -67,7 +67,7 @@ class KdTree {
   KnnResult knn(const Points& queries, int k) const;
   RadiusResult radius(const Points& queries, double radius) const;
 
-  // Bytes held by the tree (points copy 24 B, row map 4 B per point, nodes 32 B each).
+  // Bytes held by the tree (points copy 24 B and row map 4 B per point, nodes 16 B each).
   std::size_t memory_bytes() const;
 
  private:
