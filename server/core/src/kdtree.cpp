@@ -53,16 +53,6 @@ void check_k(int k) {
   if (k < 0) throw Error(ErrorCode::InvalidArgument, "k", "k must be >= 0, got " + std::to_string(k));
 }
 
-// Spreads the low 10 bits of v to every third bit (Morton interleave).
-std::uint32_t spread10(std::uint32_t v) {
-  v &= 0x3ffu;
-  v = (v | (v << 16)) & 0x030000ffu;
-  v = (v | (v << 8)) & 0x0300f00fu;
-  v = (v | (v << 4)) & 0x030c30c3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
-
 }  // namespace
 
 struct KdTree::Impl {
@@ -134,29 +124,17 @@ struct KdTree::Impl {
       const double ext = tree.box_hi[d] - tree.box_lo[d];
       scale[d] = ext > 0.0 ? 1023.0 / ext : 0.0;
     }
-    std::vector<std::uint32_t> code(nq), order(nq), tmp_order(nq), tmp_code(nq);
+    std::vector<std::uint32_t> code(nq), order(nq);
     for (std::size_t i = 0; i < nq; ++i) {
       std::uint32_t c = 0;
       for (int d = 0; d < 3; ++d) {
         const double x = (queries(static_cast<Eigen::Index>(i), d) - origin[d] - tree.box_lo[d]) * scale[d];
-        const std::uint32_t cell = static_cast<std::uint32_t>(std::clamp(x, 0.0, 1023.0));
-        c |= spread10(cell) << d;
+        c |= kd::spread10(static_cast<std::uint32_t>(std::clamp(x, 0.0, 1023.0))) << d;
       }
       code[i] = c;
       order[i] = static_cast<std::uint32_t>(i);
     }
-    for (int shift = 0; shift < 30; shift += 10) {
-      std::vector<std::uint32_t> start(1025, 0);
-      for (std::size_t i = 0; i < nq; ++i) ++start[((code[i] >> shift) & 1023u) + 1];
-      for (int b = 0; b < 1024; ++b) start[b + 1] += start[b];
-      for (std::size_t i = 0; i < nq; ++i) {
-        const std::uint32_t at = start[(code[i] >> shift) & 1023u]++;
-        tmp_code[at] = code[i];
-        tmp_order[at] = order[i];
-      }
-      code.swap(tmp_code);
-      order.swap(tmp_order);
-    }
+    kd::radix_sort(code, order);
     return order;
   }
 };

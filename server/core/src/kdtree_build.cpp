@@ -53,49 +53,9 @@ float round_down(double x) {
   return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
 }
 
-// Spreads the low 10 bits of v to every third bit (Morton interleave).
-std::uint32_t spread(std::uint32_t v) {
-  v &= 0x3ffu;
-  v = (v | (v << 16)) & 0x030000ffu;
-  v = (v | (v << 8)) & 0x0300f00fu;
-  v = (v | (v << 4)) & 0x030c30c3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
-
 constexpr int kBits = 10;                                  // Morton code bits per axis (30-bit codes)
 constexpr double kCells = static_cast<double>((1 << kBits) - 1);  // largest cell coordinate
 constexpr int kDigit = 10, kPasses = 3 * kBits / kDigit;          // radix sort: 3 passes of 10 bits
-
-// LSD radix sort of (key, value) pairs on the low 3 * kBits key bits; all digit histograms are counted in
-// one read, and a pass whose digit is the same for every key is skipped.
-void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val) {
-  const std::size_t n = key.size();
-  constexpr std::uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
-  std::vector<std::uint32_t> count(kPasses * kBuckets, 0u);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int p = 0; p < kPasses; ++p) ++count[p * kBuckets + ((key[i] >> (p * kDigit)) & kMask)];
-  std::vector<std::uint32_t> k2(n);
-  std::vector<std::uint32_t> v2(n);
-  for (int p = 0; p < kPasses; ++p) {
-    std::uint32_t* c = &count[p * kBuckets];
-    if (*std::max_element(c, c + kBuckets) == n) continue;
-    std::uint32_t sum = 0;
-    for (std::uint32_t b = 0; b < kBuckets; ++b) {
-      const std::uint32_t here = c[b];
-      c[b] = sum;
-      sum += here;
-    }
-    const int shift = p * kDigit;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t at = c[(key[i] >> shift) & kMask]++;
-      k2[at] = key[i];
-      v2[at] = val[i];
-    }
-    key.swap(k2);
-    val.swap(v2);
-  }
-}
 
 // Builds over points sorted along a Morton curve: a range of equal code prefix is one cell; it splits
 // at its highest differing code bit (the cell's midpoint on that bit's axis), found by binary search.
@@ -168,6 +128,36 @@ class MortonBuilder {
 
 }  // namespace
 
+// LSD radix sort of (key, value) pairs on the low 3 * kBits key bits; all digit histograms are counted in
+// one read, and a pass whose digit is the same for every key is skipped.
+void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val) {
+  const std::size_t n = key.size();
+  constexpr std::uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
+  std::vector<std::uint32_t> count(kPasses * kBuckets, 0u);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int p = 0; p < kPasses; ++p) ++count[p * kBuckets + ((key[i] >> (p * kDigit)) & kMask)];
+  std::vector<std::uint32_t> k2(n);
+  std::vector<std::uint32_t> v2(n);
+  for (int p = 0; p < kPasses; ++p) {
+    std::uint32_t* c = &count[p * kBuckets];
+    if (*std::max_element(c, c + kBuckets) == n) continue;
+    std::uint32_t sum = 0;
+    for (std::uint32_t b = 0; b < kBuckets; ++b) {
+      const std::uint32_t here = c[b];
+      c[b] = sum;
+      sum += here;
+    }
+    const int shift = p * kDigit;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t at = c[(key[i] >> shift) & kMask]++;
+      k2[at] = key[i];
+      v2[at] = val[i];
+    }
+    key.swap(k2);
+    val.swap(v2);
+  }
+}
+
 void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const double* origin, const double* lo,
            const double* hi, std::uint32_t leaf) {
   const std::size_t n = rows.size();
@@ -185,7 +175,7 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
     std::uint32_t c = 0;
     for (int d = 0; d < 3; ++d) {
       const double x = std::min(kCells, std::max(0.0, (p[d] - origin[d] - lo[d]) * scale));
-      c |= spread(static_cast<std::uint32_t>(x)) << d;
+      c |= spread10(static_cast<std::uint32_t>(x)) << d;
     }
     code[i] = c;
   }

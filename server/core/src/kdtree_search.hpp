@@ -149,6 +149,19 @@ struct Tree {
   }
 };
 
+// Spreads the low 10 bits of v to every third bit (Morton interleave: x, y, z codes -> one 30-bit code).
+inline std::uint32_t spread10(std::uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+// Sorts (key, value) pairs by the low 30 key bits, stable (LSD radix, 3 passes of 10 bits; kdtree_build.cpp).
+void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val);
+
 // Builds `t` over the listed `rows` of `points` (row-major #P by 3, world units), stored relative to
 // `origin`; lo / hi: their bounding box in that local frame (3 each). Points are sorted along a Morton
 // curve and every cell is cut at its midpoint (kdtree_build.cpp). Leaves hold at most `leaf` points (more

@@ -18,7 +18,7 @@ namespace surfeledit {
 struct KdTreeParams {
   int leaf_size = 10;  // max points per leaf ("bucket size"; the thesis found ~10 best for small k)
   int threads = 0;     // worker threads for batch queries; 0 = all hardware threads
-  double eps = 0.0;    // approximate kNN / nearest (nanoflann's eps, >= 0): a returned neighbour's squared
+  double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
 };
 
