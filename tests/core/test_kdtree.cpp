@@ -382,12 +382,15 @@ TEST(KdTree, BatchKnnExactAtMillionOffsets) {
 }
 
 // Exact ties everywhere (integer grid, queries on grid points and cell centres): batches in any query order
-// and thread count return the same rows as single queries (the smaller-slot tie rule), ascending.
+// and thread count return the same rows as single queries (the smaller-slot tie rule), ascending, and the
+// distances of brute force.
 TEST(KdTree, TiesGiveTheSameRowsInAnyOrderAndThreadCount) {
-  Points grid(10 * 10 * 10, 3);
-  for (int i = 0; i < 1000; ++i) grid.row(i) << i % 10, (i / 10) % 10, i / 100;
+  // 41^3 = 68,921 points: above the size from which batches are answered along the Morton curve.
+  constexpr int m = 41;
+  Points grid(m * m * m, 3);
+  for (int i = 0; i < m * m * m; ++i) grid.row(i) << i % m, (i / m) % m, i / (m * m);
   std::mt19937_64 rng(81);
-  std::uniform_int_distribution<int> cell(0, 8);
+  std::uniform_int_distribution<int> cell(0, m - 2);
   Points queries(600, 3);
   for (int i = 0; i < 600; ++i) {
     const double half = i % 2 ? 0.5 : 0.0;

@@ -55,6 +55,10 @@ void check_k(int k) {
 
 }  // namespace
 
+// Trees of at least this many points (about 2 MB of points and nodes, a core's L2 here) answer batches
+// along a Morton curve.
+constexpr std::size_t kCurveMinPoints = 1 << 16;
+
 struct KdTree::Impl {
   KdTreeParams params;
   Vec3 origin = Vec3::Zero();  // centroid of the tree's points, world units
@@ -114,6 +118,16 @@ struct KdTree::Impl {
   double eps_factor() const { return 1.0 + params.eps; }
   void local(const Vec3& q, double* out) const {
     for (int d = 0; d < 3; ++d) out[d] = q[d] - origin[d];
+  }
+
+  // The order a batch is answered in: along the curve for a tree larger than the caches (scene 300k,
+  // random order: 2x faster), else the caller's (bunny 35k: the scattered reads and writes of a curve
+  // order cost 25% more than the tree's cache misses they save; RESULTS §14.1).
+  std::vector<std::uint32_t> order_for(const Points& queries) const {
+    if (tree.size() >= kCurveMinPoints) return curve_order(queries);
+    std::vector<std::uint32_t> order(static_cast<std::size_t>(queries.rows()));
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+    return order;
   }
 
   // Queries' order along a Morton curve over the tree's box (10 bits per axis), by a 3-pass radix sort.
@@ -219,10 +233,10 @@ KnnResult KdTree::knn(const Points& queries, int k) const {
   const Impl& impl = *impl_;
   const std::size_t kk = std::min<std::size_t>(static_cast<std::size_t>(k), impl.tree.size());
   if (kk == 0 || nq == 0) return result;
-  // Answered along a Morton curve (neighbouring queries reuse cached nodes and leaves), written back in
-  // the caller's order. Exact search starts from the previous query's answer: its distances to this
+  // Answered along a Morton curve for large trees (neighbouring queries reuse cached nodes and leaves),
+  // written back in the caller's order. Exact search starts from the previous query's answer: its distances to this
   // query bound the answer from above, and the tie rule makes the result independent of that start.
-  const std::vector<std::uint32_t> order = impl.curve_order(queries);
+  const std::vector<std::uint32_t> order = impl.order_for(queries);
   const bool warm = impl.params.eps == 0.0;
   const double eps_factor = impl.eps_factor();
 #pragma omp parallel num_threads(resolve_threads(impl.params.threads))
@@ -270,7 +284,7 @@ RadiusResult KdTree::radius(const Points& queries, double radius) const {
   result.offsets.assign(static_cast<std::size_t>(nq) + 1, 0);
   if (nq == 0) return result;
   const Impl& impl = *impl_;
-  const std::vector<std::uint32_t> order = impl.curve_order(queries);
+  const std::vector<std::uint32_t> order = impl.order_for(queries);
   // Per-query hit lists (answered along the curve), then a prefix sum into CSR form.
   std::vector<std::vector<std::pair<std::uint32_t, double>>> hits(static_cast<std::size_t>(nq));
 #pragma omp parallel for schedule(dynamic, 64) num_threads(resolve_threads(impl.params.threads))
