@@ -1,5 +1,6 @@
-// k-d tree over 3-D points (docs/algorithms.md §kd): sliding-midpoint build straight into leaf order,
-// exact descent (kdtree_search.hpp), batches answered along a space-filling curve with a warm start.
+// k-d tree over 3-D points (docs/algorithms.md §3): API, input checks and batches. The build (Morton sort,
+// midpoint cuts, leaf order) is in kdtree_build.cpp, the exact descent in kdtree_search.hpp; batches on
+// large trees are answered along a Morton curve, each query warm-started from the previous answer.
 #include "surfeledit/core/kdtree.hpp"
 
 #include <omp.h>

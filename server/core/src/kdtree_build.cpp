@@ -1,4 +1,4 @@
-// Build of the k-d tree's flat layout (kdtree_search.hpp; docs/algorithms.md §kd).
+// Build of the k-d tree's flat layout (kdtree_search.hpp; docs/algorithms.md §3).
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -1,4 +1,4 @@
-// k-d tree over 3-D points for kNN and radius queries (docs/algorithms.md §kd).
+// k-d tree over 3-D points for kNN and radius queries (docs/algorithms.md §3).
 //
 // The tree keeps its own copy of the points in a local frame (relative to their
 // centroid) so that precision does not depend on where the model sits in space,
