@@ -63,7 +63,8 @@ class KdTree {
   void radius(const Vec3& q, double radius, IndexList& indices, std::vector<double>& dist2) const;
 
   // Batch versions, multithreaded over queries (`params().threads`); thread-safe, const. The queries
-  // are answered in Morton-curve order (cache reuse) and written back in the caller's order.
+  // are answered in Morton-curve order when the tree holds >= 2^16 points (cache reuse), and written back in
+  // the caller's order.
   KnnResult knn(const Points& queries, int k) const;
   RadiusResult radius(const Points& queries, double radius) const;
 
