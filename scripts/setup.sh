@@ -15,7 +15,7 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
 
 # 1. Debian packages.
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev
-  libeigen3-dev libpcl-dev libnanoflann-dev cyclonedds-dev cyclonedds-tools
+  libeigen3-dev libpcl-dev cyclonedds-dev cyclonedds-tools
   libgtest-dev libspdlog-dev libcli11-dev libbenchmark-dev libcgal-dev ccache)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

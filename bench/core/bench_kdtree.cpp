@@ -1,4 +1,4 @@
-// k-d tree benchmark: surfeledit::KdTree (nanoflann inside) vs pcl::KdTreeFLANN<pcl::PointXYZ>,
+// k-d tree benchmark: surfeledit::KdTree (our own tree, docs/algorithms.md §3) vs pcl::KdTreeFLANN<pcl::PointXYZ>,
 // both on ONE thread, on the same points and the same query points.
 //
 // Normally run through bench/core/bench_kdtree.py, which writes the inputs and runs scipy and the
@@ -9,10 +9,11 @@
 // P.f64 / Q.f64: raw little-endian float64, x y z per point (file size = 24 bytes * count).
 //
 // Benchmarks (times in ms; items/s = queries per second for the knn ones):
-//   build/ours/leaf:10   KdTree constructor (copy into the local frame + nanoflann build)
+//   build/ours/leaf:10   KdTree constructor (Morton sort + build into leaf order)
 //   build/pcl            KdTreeFLANN::setInputCloud (float copy + FLANN single-tree build, leaf 15)
 //   knn/ours/k:K         KdTree::knn(queries, K), batch API, threads = 1
 //   knn/pcl/k:K          KdTreeFLANN::nearestKSearch per query, result vectors reused
+//   single/ours/k:1      KdTree::nearest per query in the given order (the detectors' pattern)
 //   sweep/{build,knn1,knn10}/leaf:L   ours with leaf size L
 // Every benchmark repeats --repetitions times; the Python driver reads the median aggregate.
 #include <benchmark/benchmark.h>
@@ -87,6 +88,18 @@ void ours_knn(benchmark::State& state, int leaf, int k) {
   for (auto _ : state) {
     auto result = tree.knn(g_queries, k);
     benchmark::DoNotOptimize(result.indices.data());
+  }
+  state.SetItemsProcessed(state.iterations() * g_queries.rows());
+}
+
+// One KdTree::nearest call per query, in the file's order: what the detectors do (no batch sorting, no warm
+// start), to separate the tree's own speed from the batch path's.
+void ours_single(benchmark::State& state, int leaf) {
+  const KdTree tree(g_points, one_thread(leaf));
+  for (auto _ : state) {
+    for (Eigen::Index q = 0; q < g_queries.rows(); ++q) {
+      benchmark::DoNotOptimize(tree.nearest(g_queries.row(q).transpose()));
+    }
   }
   state.SetItemsProcessed(state.iterations() * g_queries.rows());
 }
@@ -166,6 +179,7 @@ int main(int argc, char** argv) {
     setup(benchmark::RegisterBenchmark(("knn/ours/k:" + std::to_string(k)).c_str(), ours_knn, kDefaultLeaf, k));
     setup(benchmark::RegisterBenchmark(("knn/pcl/k:" + std::to_string(k)).c_str(), pcl_knn, k));
   }
+  setup(benchmark::RegisterBenchmark("single/ours/k:1", ours_single, kDefaultLeaf));
   for (int leaf : parse_list(sweep)) {
     const std::string l = std::to_string(leaf);
     setup(benchmark::RegisterBenchmark(("sweep/build/leaf:" + l).c_str(), ours_build, leaf));

@@ -5,7 +5,7 @@
 namespace surfeledit::py {
 
 void bind_kdtree(pyb::module_& m) {
-  pyb::class_<KdTree>(m, "KdTree", R"(k-d tree over (P, 3) float64 points (nanoflann).
+  pyb::class_<KdTree>(m, "KdTree", R"(k-d tree over (P, 3) float64 points (exact; docs/algorithms.md §3).
 
 knn(queries, k) -> (indices (Q, k) int32, dist2 (Q, k) float64): squared distances,
 ascending; rows padded with -1 / inf when the tree has fewer than k points.

@@ -85,3 +85,25 @@ def test_bad_input_is_typed() -> None:
     assert e.value.field == "leaf_size"
     with pytest.raises(InvalidArgumentError):
         core.KdTree(np.zeros((4, 3))).knn(np.zeros((1, 3)), 0)
+
+
+@pytest.mark.parametrize("scale", [1e-4, 1.0, 1e4])
+def test_batch_knn_at_million_offset_matches_scipy(scale: float) -> None:
+    """A cloud at 1e6 from the origin, queries in random order: the batch (answered internally along a
+    space-filling curve) comes back in the caller's order with scipy's distances. Rounding bound: each world
+    coordinate is off by <= delta = 1e6 * 2**-52, so a distance is off by <= sqrt(3) * 2 * delta."""
+    rng = np.random.default_rng(11)
+    offset = np.array([1e6, -1e6, 1e6])
+    local = scale * rng.random((70_000, 3))  # above 2**16 points: batches go along the Morton curve
+    queries_local = scale * (1.2 * rng.random((3_000, 3)) - 0.1)
+    pts, queries = local + offset, queries_local + offset
+    tree = core.KdTree(pts, threads=2)
+    ref = cKDTree(local)  # scipy on the exact local offsets: the truth
+    delta = 1e6 * 2.0**-52
+    for k in (1, 10):
+        idx, dist2 = tree.knn(queries, k)
+        ref_d, _ = ref.query(queries_local, k)
+        ref_d = np.asarray(ref_d).reshape(len(queries), k)
+        np.testing.assert_allclose(np.sqrt(dist2), ref_d, rtol=0, atol=4 * delta)
+        recomputed = np.linalg.norm(local[idx] - queries_local[:, None, :], axis=2)
+        np.testing.assert_allclose(recomputed, ref_d, rtol=0, atol=4 * delta)

@@ -1,7 +1,10 @@
-// k-d tree over 3-D points for kNN and radius queries (nanoflann inside, hidden here).
+// k-d tree over 3-D points for kNN and radius queries (docs/algorithms.md §3).
 //
 // The tree keeps its own copy of the points in a local frame (relative to their
-// centroid) so that precision does not depend on where the model sits in space.
+// centroid) so that precision does not depend on where the model sits in space,
+// stored in leaf order (each leaf one contiguous run). Results are exact (eps = 0);
+// among points at equal distance the one stored first in the tree wins, so batch and
+// single queries return the same rows whatever the thread count or query order.
 // Results are row indices into the point array it was built from (or, when built
 // over a subset, into that same full array).
 #pragma once
@@ -15,7 +18,7 @@ namespace surfeledit {
 struct KdTreeParams {
   int leaf_size = 10;  // max points per leaf ("bucket size"; the thesis found ~10 best for small k)
   int threads = 0;     // worker threads for batch queries; 0 = all hardware threads
-  double eps = 0.0;    // approximate kNN / nearest (nanoflann's eps, >= 0): a returned neighbour's squared
+  double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
 };
 
@@ -49,16 +52,23 @@ class KdTree {
 
   // Nearest point to q; returns -1 when the tree is empty. `dist2` gets the squared distance.
   Index nearest(const Vec3& q, double* dist2 = nullptr) const;
+  // Nearest point to q among those with dist2 <= max_dist2 (inclusive); -1 (dist2 = +inf) when there is
+  // none. A warm start: a caller that knows some point at squared distance D from q (e.g. the previous
+  // step's nearest) passes D and gets the same answer as nearest(q), with less of the tree visited.
+  // Throws InvalidArgument for a NaN or negative max_dist2.
+  Index nearest_within(const Vec3& q, double max_dist2, double* dist2 = nullptr) const;
   // k nearest to q (fewer if the tree holds fewer), ascending by distance.
   void knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const;
   // All points within real distance `radius` (inclusive) of q, ascending by distance.
   void radius(const Vec3& q, double radius, IndexList& indices, std::vector<double>& dist2) const;
 
-  // Batch versions, multithreaded over queries (`params().threads`); thread-safe, const.
+  // Batch versions, multithreaded over queries (`params().threads`); thread-safe, const. The queries
+  // are answered in Morton-curve order when the tree holds >= 2^16 points (cache reuse), and written back in
+  // the caller's order.
   KnnResult knn(const Points& queries, int k) const;
   RadiusResult radius(const Points& queries, double radius) const;
 
-  // Bytes held by the tree (points copy, index map, nodes).
+  // Bytes held by the tree (points copy 24 B and row map 4 B per point, nodes 16 B each).
   std::size_t memory_bytes() const;
 
  private:

@@ -1,7 +1,7 @@
 // Basic vocabulary of the geometric core: array types, ids and the typed error.
 //
 // Eigen is the core's public vocabulary (as in libigl); no other third-party type
-// (nanoflann, PCL, DDS) appears in a public header.
+// (PCL, DDS) appears in a public header.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,0 +1,194 @@
+// Build of the k-d tree's flat layout (kdtree_search.hpp; docs/algorithms.md §3).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <utility>
+
+#include "kdtree_search.hpp"
+
+namespace surfeledit::kd {
+
+namespace {
+
+struct Box {
+  double lo[3], hi[3];
+  static Box empty() {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    return {{inf, inf, inf}, {-inf, -inf, -inf}};
+  }
+  void add(const double* p) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+  }
+  void add(const Box& o) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], o.lo[d]);
+      hi[d] = std::max(hi[d], o.hi[d]);
+    }
+  }
+  int widest() const {
+    int dim = 0;
+    for (int d = 1; d < 3; ++d)
+      if (hi[d] - lo[d] > hi[dim] - lo[dim]) dim = d;
+    return dim;
+  }
+};
+
+Box box_of(const double* xyz, std::uint32_t b, std::uint32_t e) {
+  Box box = Box::empty();
+  for (std::uint32_t i = b; i < e; ++i) box.add(xyz + 3 * static_cast<std::size_t>(i));
+  return box;
+}
+
+// The nearest float >= x / <= x (+-inf beyond float range, which only weakens a bound).
+float round_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+float round_down(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+
+constexpr int kBits = 10;                                  // Morton code bits per axis (30-bit codes)
+constexpr double kCells = static_cast<double>((1 << kBits) - 1);  // largest cell coordinate
+constexpr int kDigit = 10, kPasses = 3 * kBits / kDigit;          // radix sort: 3 passes of 10 bits
+
+// Builds over points sorted along a Morton curve: a range of equal code prefix is one cell; it splits
+// at its highest differing code bit (the cell's midpoint on that bit's axis), found by binary search.
+// Ranges of equal codes (points within one cell of 2^-16 of the box) split at their median on the widest axis.
+class MortonBuilder {
+ public:
+  MortonBuilder(Tree& t, std::vector<std::uint32_t>& code, std::uint32_t leaf) : t_(t), code_(code), leaf_(leaf) {}
+
+  Box build(std::uint32_t b, std::uint32_t e) {
+    const std::uint32_t ni = static_cast<std::uint32_t>(t_.nodes.size());
+    t_.nodes.emplace_back();
+    const std::uint32_t diff = code_[b] ^ code_[e - 1];
+    std::uint32_t m;
+    int dim;
+    if (e - b <= leaf_) return leaf(ni, b, e);
+    if (diff != 0) {
+      const int bit = 31 - __builtin_clz(diff);
+      dim = bit % 3;
+      m = static_cast<std::uint32_t>(
+          std::partition_point(code_.begin() + b, code_.begin() + e,
+                               [bit](std::uint32_t c) { return ((c >> bit) & 1u) == 0; }) -
+          code_.begin());
+    } else {
+      const Box box = box_of(t_.xyz.data(), b, e);
+      dim = box.widest();
+      if (!(box.hi[dim] > box.lo[dim])) return leaf(ni, b, e);  // all points equal
+      m = b + (e - b) / 2;
+      median_split(b, e, m, dim);
+    }
+    const Box left = build(b, m);
+    t_.nodes[ni].a = static_cast<std::uint32_t>(t_.nodes.size());
+    Box right = build(m, e);
+    Node& nd = t_.nodes[ni];
+    nd.b = kInner | static_cast<std::uint32_t>(dim);
+    nd.lo = round_up(left.hi[dim]);
+    nd.hi = round_down(right.lo[dim]);
+    right.add(left);
+    return right;
+  }
+
+ private:
+  Box leaf(std::uint32_t ni, std::uint32_t b, std::uint32_t e) {
+    t_.nodes[ni].a = b;
+    t_.nodes[ni].b = e;
+    return box_of(t_.xyz.data(), b, e);
+  }
+
+  // Reorders slots [b, e) so those before m are <= those after along `dim` (all codes in the range are equal).
+  void median_split(std::uint32_t b, std::uint32_t e, std::uint32_t m, int dim) {
+    std::vector<std::uint32_t> perm(e - b);
+    std::iota(perm.begin(), perm.end(), b);
+    const double* xyz = t_.xyz.data();
+    std::nth_element(perm.begin(), perm.begin() + (m - b), perm.end(), [&](std::uint32_t x, std::uint32_t y) {
+      return xyz[3 * static_cast<std::size_t>(x) + dim] < xyz[3 * static_cast<std::size_t>(y) + dim];
+    });
+    std::vector<double> p(3 * perm.size());
+    std::vector<std::uint32_t> r(perm.size());
+    for (std::size_t i = 0; i < perm.size(); ++i) {
+      std::copy_n(&t_.xyz[3 * static_cast<std::size_t>(perm[i])], 3, &p[3 * i]);
+      r[i] = t_.rows[perm[i]];
+    }
+    std::copy(p.begin(), p.end(), t_.xyz.begin() + 3 * static_cast<std::ptrdiff_t>(b));
+    std::copy(r.begin(), r.end(), t_.rows.begin() + b);
+  }
+
+  Tree& t_;
+  std::vector<std::uint32_t>& code_;
+  std::uint32_t leaf_;
+};
+
+}  // namespace
+
+// LSD radix sort of (key, value) pairs on the low 3 * kBits key bits; all digit histograms are counted in
+// one read, and a pass whose digit is the same for every key is skipped.
+void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val) {
+  const std::size_t n = key.size();
+  constexpr std::uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
+  std::vector<std::uint32_t> count(kPasses * kBuckets, 0u);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int p = 0; p < kPasses; ++p) ++count[p * kBuckets + ((key[i] >> (p * kDigit)) & kMask)];
+  std::vector<std::uint32_t> k2(n);
+  std::vector<std::uint32_t> v2(n);
+  for (int p = 0; p < kPasses; ++p) {
+    std::uint32_t* c = &count[p * kBuckets];
+    if (*std::max_element(c, c + kBuckets) == n) continue;
+    std::uint32_t sum = 0;
+    for (std::uint32_t b = 0; b < kBuckets; ++b) {
+      const std::uint32_t here = c[b];
+      c[b] = sum;
+      sum += here;
+    }
+    const int shift = p * kDigit;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t at = c[(key[i] >> shift) & kMask]++;
+      k2[at] = key[i];
+      v2[at] = val[i];
+    }
+    key.swap(k2);
+    val.swap(v2);
+  }
+}
+
+void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const double* origin, const double* lo,
+           const double* hi, std::uint32_t leaf) {
+  const std::size_t n = rows.size();
+  t = Tree();
+  if (n == 0) return;
+  std::copy_n(lo, 3, t.box_lo);
+  std::copy_n(hi, 3, t.box_hi);
+  // Cubic cells over the box (one scale for all axes, so a cut halves a cell's longest side), kBits per axis.
+  double ext = 0.0;
+  for (int d = 0; d < 3; ++d) ext = std::max(ext, hi[d] - lo[d]);
+  const double scale = ext > 0.0 ? kCells / ext : 0.0;
+  std::vector<std::uint32_t> code(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* p = points + 3 * static_cast<std::size_t>(rows[i]);
+    std::uint32_t c = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double x = std::min(kCells, std::max(0.0, (p[d] - origin[d] - lo[d]) * scale));
+      c |= spread10(static_cast<std::uint32_t>(x)) << d;
+    }
+    code[i] = c;
+  }
+  radix_sort(code, rows);
+  t.xyz.resize(3 * n);
+  t.rows = std::move(rows);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* p = points + 3 * static_cast<std::size_t>(t.rows[i]);
+    for (int d = 0; d < 3; ++d) t.xyz[3 * i + d] = p[d] - origin[d];
+  }
+  t.nodes.reserve(n / std::max<std::uint32_t>(1, leaf / 2) + 16);
+  MortonBuilder(t, code, leaf).build(0, static_cast<std::uint32_t>(n));
+  t.nodes.shrink_to_fit();
+}
+
+}  // namespace surfeledit::kd
