@@ -77,6 +77,7 @@ using B = bvh::BvhParams;
 using P = SimplifyParams;
 using E = ResponseParams;
 using Y = HistoryParams;
+using L = BlendSettings;
 
 std::vector<SettingSpec> make_table() {
   return {
@@ -128,6 +129,13 @@ std::vector<SettingSpec> make_table() {
                                              at_least(0)),
       row<&S::response, &E::backoff_max_iterations>("backoff_max_iterations", "back-off stops after this many "
                                                                               "re-tests", at_least(1)),
+      row<&S::blend, &L::neighbour_factor>("blend_neighbour_factor", "blend: particle neighbourhood radius, "
+                                                                     "in mean surfel radii (§12.3.3)", above(0)),
+      row<&S::blend, &L::gamma>("blend_gamma", "blend: region scaling exponent (Eq. 12.28)", at_least(0)),
+      row<&S::blend, &L::open_region>("blend_open_region", "blend after a boolean (open region, §12.4.1): the "
+                                                           "requested repulsion, an attracting spring, or none"),
+      row<&S::blend, &L::spring_r0>("blend_spring_r0", "blend: equilibrium distance of that spring, mean surfel "
+                                                       "radii", above(0)),
   };
 }
 

@@ -18,6 +18,10 @@ enum class NeighbourMode : std::uint8_t {
   RecomputeGrid = 1,    // a uniform-grid range query every iteration
   RecomputeKdTree = 2,  // a k-d tree built and queried every iteration
 };
+constexpr EnumNames<NeighbourMode, 3> names_of(NeighbourMode) {
+  return {{{NeighbourMode::Cached, "cached"}, {NeighbourMode::RecomputeGrid, "grid"},
+           {NeighbourMode::RecomputeKdTree, "kdtree"}}};
+}
 
 enum class StepPolicy : std::uint8_t {
   SubStep = 0,  // a dt above the stable step is split into equal sub-steps below it
