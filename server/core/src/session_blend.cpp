@@ -129,13 +129,19 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   std::vector<Eigen::Index> particle_of(rows.size(), -1);
   IndexList parents;
   std::vector<Eigen::Index> split_particles;
+  // Pass 1: the particles that are the surfels themselves; pass 2: a copy takes over its surfel's id when
+  // the surfel's own particle was killed, else it is a new surfel.
+  for (std::size_t q = 0; q < run.origin.size(); ++q)
+    if (run.origin[q] >= 0) particle_of[static_cast<std::size_t>(run.origin[q])] = static_cast<Eigen::Index>(q);
   for (std::size_t q = 0; q < run.origin.size(); ++q) {
-    const std::int64_t o = run.origin[q];
-    if (o >= 0 && particle_of[static_cast<std::size_t>(o)] < 0) particle_of[static_cast<std::size_t>(o)] = static_cast<Eigen::Index>(q);
-    else {
-      split_particles.push_back(static_cast<Eigen::Index>(q));
-      parents.push_back(rows[static_cast<std::size_t>(o >= 0 ? o : -1 - o)]);
+    if (run.origin[q] >= 0) continue;
+    const std::size_t k = static_cast<std::size_t>(-1 - run.origin[q]);
+    if (particle_of[k] < 0) {
+      particle_of[k] = static_cast<Eigen::Index>(q);
+      continue;
     }
+    split_particles.push_back(static_cast<Eigen::Index>(q));
+    parents.push_back(rows[k]);
   }
   for (std::size_t k = 0; k < rows.size(); ++k) {
     if (particle_of[k] < 0) removed.push_back(m.ids()[rows[k]]);
@@ -183,7 +189,8 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   if (!removed.empty()) remove_rows(removed, keep);
   out.inserted = model_.insert(std::move(added));
   IndexList parent_rows;
-  for (Index r : parents) parent_rows.push_back(remap_rows(keep)[r]);
+  const IndexList new_row = remap_rows(keep);
+  for (Index r : parents) parent_rows.push_back(new_row[r]);
   extend_any(parent_rows);
   out.removed = removed;
   if (fields_) {
@@ -263,6 +270,9 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   }
   if (m.has_colors()) added.colors = Colors::Constant(nb, 3, 200);
 
+  IdList features_a;  // A's ids stay (read before the model changes: `m` is the live model)
+  for (Index r : c.features_a) features_a.push_back(m.ids()[r]);
+
   // Apply: B's surfels appended, A's dropped ones removed, regions cleared.
   SessionImage before = capture_whole(false);
   ++version_;
@@ -274,7 +284,7 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   row_version_.resize(static_cast<std::size_t>(model_.size()), version_);
   keep.resize(static_cast<std::size_t>(model_.size()), true);
   if (!out.removed.empty()) remove_rows(out.removed, keep);
-  for (Index r : c.features_a) out.features.push_back(m.ids()[r]);  // A's ids are unchanged
+  out.features = std::move(features_a);
   std::vector<Index> b_new(static_cast<std::size_t>(bm.size()), -1);
   for (std::size_t k = 0; k < b_rows.size(); ++k) b_new[b_rows[k]] = static_cast<Index>(k);
   for (Index r : c.features_b) out.features.push_back(out.inserted[b_new[r]]);
