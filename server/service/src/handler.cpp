@@ -37,6 +37,9 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::History, {"OP_HISTORY", serve_history, true, T::Version, false});
   row(Op::Merge, {"OP_MERGE", serve_merge, true, T::VersionAndSessionInfo, true});
   row(Op::Curves, {"OP_CURVES", serve_curves, true, T::Version, false});
+  row(Op::Blend, {"OP_BLEND", serve_blend, true, T::VersionAndSessionInfo, true});
+  row(Op::Boolean, {"OP_BOOLEAN", serve_boolean, true, T::VersionAndSessionInfo, true});
+  row(Op::FillHoles, {"OP_FILL_HOLES", serve_fill_holes, true, T::VersionAndSessionInfo, true});
   return t;
 }
 

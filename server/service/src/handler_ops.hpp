@@ -87,6 +87,10 @@ void serve_redo(OpContext& c);
 void serve_history(OpContext& c);
 void serve_merge(OpContext& c);
 void serve_curves(OpContext& c);
+// blend_ops.cpp
+void serve_blend(OpContext& c);
+void serve_boolean(OpContext& c);
+void serve_fill_holes(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

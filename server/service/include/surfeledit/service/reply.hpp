@@ -118,6 +118,30 @@ struct MergeInfo {
   double merge_ms = 0.0, crease_ms = 0.0, curves_ms = 0.0;
 };
 
+// What OP_BLEND did (proto BlendResult; see EditSession::blend).
+struct BlendInfo {
+  std::uint32_t particles = 0;
+  std::vector<std::uint64_t> moved, inserted, removed;
+  std::vector<double> energy;  // per iteration
+  std::uint32_t substeps = 0;
+  double ms = 0.0;
+};
+
+// One filled hole (proto Hole).
+struct HoleInfo {
+  std::vector<std::uint64_t> boundary;
+  double diameter = 0.0;
+  std::vector<std::uint64_t> inserted;
+};
+
+// What OP_FILL_HOLES did (proto FillResult).
+struct FillInfo {
+  std::vector<HoleInfo> holes;
+  std::uint32_t skipped = 0;
+  std::vector<std::uint64_t> inserted;
+  double ms = 0.0;
+};
+
 struct Reply {
   std::string client_id;
   std::uint64_t request_id = 0;
@@ -133,6 +157,8 @@ struct Reply {
   std::vector<HistoryInfo> history;  // OP_HISTORY
   std::optional<MergeInfo> merge;    // OP_MERGE
   std::vector<CurveInfo> curves;     // OP_CURVES
+  std::optional<BlendInfo> blend;    // OP_BLEND
+  std::optional<FillInfo> fill;      // OP_FILL_HOLES
 };
 
 }  // namespace surfeledit::service
