@@ -3,8 +3,8 @@
 // surfels, the session op with its history entry and typed errors.
 #include <gtest/gtest.h>
 
-#include <functional>
 
+#include "expect_error.hpp"
 #include "particles/blend_scenes.hpp"
 #include "session_fixture.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -114,15 +114,6 @@ TEST(Boolean, TorusAndCylinderAgainstExactSdfs) {
   for (BooleanOp op : {BooleanOp::Union, BooleanOp::Intersection, BooleanOp::Difference}) check_op(s, op);
 }
 
-int code_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return static_cast<int>(e.code());
-  }
-  return 0;
-}
-
 TEST(Boolean, OneHistoryEntryThenBlendThenUndoExactly) {
   const Pair s = sphere_and_box();
   const SampledSurfels sa = test::sample_solid(*s.a, s.spacing, 1), sb = test::sample_solid(*s.b, s.spacing, 2);
@@ -153,22 +144,21 @@ TEST(Boolean, BadArgumentsAreTypedAndChangeNothing) {
   const std::uint64_t v = session.version();
   SurfelArrays bad = test::arrays_of(sb);
   bad.normals.row(3).setZero();
-  EXPECT_EQ(code_of([&] { session.boolean(BooleanOp::Union, bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.boolean(BooleanOp::Union, bad); }, ErrorCode::InvalidArgument, "normals");
   bad = test::arrays_of(sb);
   bad.positions(5, 1) = std::nan("");
-  EXPECT_EQ(code_of([&] { session.boolean(BooleanOp::Union, bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.boolean(BooleanOp::Union, bad); }, ErrorCode::InvalidArgument, "positions");
   bad = test::arrays_of(sb);
   bad.radii.conservativeResize(3);
-  EXPECT_EQ(code_of([&] { session.boolean(BooleanOp::Union, bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.boolean(BooleanOp::Union, bad); }, ErrorCode::InvalidArgument, "radii");
   BooleanParams bp;
   bp.feature_factor = -1;
-  EXPECT_EQ(code_of([&] { session.boolean(BooleanOp::Union, test::arrays_of(sb), bp); }),
-            static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.boolean(BooleanOp::Union, test::arrays_of(sb), bp); }, ErrorCode::InvalidArgument,
+                             "feature_factor");
   // Disjoint solids: their intersection is empty.
   SampledSurfels far = sb;
   far.positions.col(0).array() += 10.0;
-  EXPECT_EQ(code_of([&] { session.boolean(BooleanOp::Intersection, test::arrays_of(far)); }),
-            static_cast<int>(ErrorCode::Conflict));
+  testing_util::expect_error([&] { session.boolean(BooleanOp::Intersection, test::arrays_of(far)); }, ErrorCode::Conflict, "op");
   EXPECT_EQ(session.version(), v);
   expect_same(Snapshot(session), before, "refused");
 }

@@ -3,8 +3,8 @@
 // and typed errors.
 #include <gtest/gtest.h>
 
-#include <functional>
 
+#include "expect_error.hpp"
 #include "particles/blend_scenes.hpp"
 #include "session_fixture.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -117,15 +117,6 @@ TEST(Holes, ClosedSurfaceHasNoBoundary) {
   EXPECT_TRUE(group_loops(m, boundary_rows(m, p), p).empty());
 }
 
-int code_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return static_cast<int>(e.code());
-  }
-  return 0;
-}
-
 TEST(Holes, OneHistoryEntryAndTypedErrors) {
   const auto sphere = make_sphere(0.5);
   Points removed;
@@ -134,14 +125,14 @@ TEST(Holes, OneHistoryEntryAndTypedErrors) {
   const Snapshot before(session);
   const std::uint64_t v = session.version();
   HoleParams bad;
-  EXPECT_EQ(code_of([&] { session.fill_holes(bad); }), static_cast<int>(ErrorCode::InvalidArgument));  // 0
+  testing_util::expect_error([&] { session.fill_holes(bad); }, ErrorCode::InvalidArgument, "max_diameter");  // 0
   bad.max_diameter = 1.0;
   bad.iterations = -2;
-  EXPECT_EQ(code_of([&] { session.fill_holes(bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.fill_holes(bad); }, ErrorCode::InvalidArgument, "iterations");
   HoleParams p;
   p.max_diameter = 1.0;
-  EXPECT_EQ(code_of([&] { session.fill_holes(p, IdList{12345678}); }), static_cast<int>(ErrorCode::NotFound));
-  EXPECT_EQ(code_of([&] { session.fill_holes(p, IdList{}); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { session.fill_holes(p, IdList{12345678}); }, ErrorCode::NotFound, "boundary");
+  testing_util::expect_error([&] { session.fill_holes(p, IdList{}); }, ErrorCode::InvalidArgument, "boundary");
   EXPECT_EQ(session.version(), v);
   expect_same(Snapshot(session), before, "refused");
   const FillOutcome out = session.fill_holes(p, std::nullopt, "fay");

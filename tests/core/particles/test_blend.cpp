@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 
+#include "../expect_error.hpp"
 #include "../session_fixture.hpp"
 #include "blend_scenes.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -34,15 +34,6 @@ double deepest(const CapsuleIntoSphere& s, const IdList& ids) {
   double d = 0.0;
   for (SurfelId id : ids) d = std::min(d, s.sdf_union(s.session.model().positions().row(s.session.model().row_of(id)).transpose()));
   return d;
-}
-
-int code_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return static_cast<int>(e.code());
-  }
-  return 0;
 }
 
 TEST(Blend, SmoothsTheCreaseInsideItsBandWithoutGaps) {
@@ -145,20 +136,20 @@ TEST(Blend, BadArgumentsAreTypedAndChangeNothing) {
   const std::uint64_t v = s.session.version();
   BlendParams bad;
   bad.iterations = -1;
-  EXPECT_EQ(code_of([&] { s.session.blend(bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { s.session.blend(bad); }, ErrorCode::InvalidArgument, "iterations");
   bad = BlendParams{};
   bad.dt = std::nan("");
-  EXPECT_EQ(code_of([&] { s.session.blend(bad); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { s.session.blend(bad); }, ErrorCode::InvalidArgument, "dt");
   bad = BlendParams{};
   bad.range_factor = 0.0;
-  EXPECT_EQ(code_of([&] { s.session.blend(bad); }), static_cast<int>(ErrorCode::InvalidArgument));
-  EXPECT_EQ(code_of([&] { s.session.blend({}, IdList{999999}); }), static_cast<int>(ErrorCode::NotFound));
-  EXPECT_EQ(code_of([&] { s.session.blend({}, IdList{}); }), static_cast<int>(ErrorCode::InvalidArgument));
+  testing_util::expect_error([&] { s.session.blend(bad); }, ErrorCode::InvalidArgument, "range_factor");
+  testing_util::expect_error([&] { s.session.blend({}, IdList{999999}); }, ErrorCode::NotFound, "features");
+  testing_util::expect_error([&] { s.session.blend({}, IdList{}); }, ErrorCode::InvalidArgument, "features");
   EXPECT_EQ(s.session.version(), v);
   expect_same(Snapshot(s.session), before, "refused");
   EditSession fresh("fresh");
   fresh.load(s.session.model());
-  EXPECT_EQ(code_of([&] { fresh.blend({}); }), static_cast<int>(ErrorCode::Conflict));  // no merge yet
+  testing_util::expect_error([&] { fresh.blend({}); }, ErrorCode::Conflict, "features");  // no merge yet
 }
 
 }  // namespace
