@@ -78,7 +78,8 @@ def test_struct_fields_and_types(proto: pytypes.ModuleType) -> None:
     assert sinfo["structures"].startswith("sequence[") and "Structure" in sinfo["structures"]
     req = field_types(proto.Request)
     assert list(req) == ["client_id", "request_id", "session", "op", "load_begin", "load_chunk",
-                         "load_file", "set_regions", "deform", "get_state", "configure", "remove", "merge", "curves"]
+                         "load_file", "set_regions", "deform", "get_state", "configure", "remove", "merge", "curves",
+                         "blend", "boolean_op", "fill_holes"]
     assert req["client_id"] == "str" and req["op"] == "Op"
     assert field_types(proto.Update)["ids"] == "sequence[uint64]"
     assert field_types(proto.Update)["part"] == "uint32"
