@@ -1,6 +1,6 @@
 // Particle engine benchmark in the thesis Table 12.1 configuration: 2,067 particles on a curved patch
 // (39 x 53 jittered grid, spacing 1, bent on a cylinder of radius 20), neighbourhood radius 3.6 (~40
-// neighbours), 50 iterations, one thread. Cases: neighbourhood cached (one k-d tree query), recomputed every
+// neighbours), 50 iterations, one thread. Cases: neighbourhood cached (one range query: grid builder), recomputed every
 // iteration with the uniform grid, recomputed with the k-d tree. Scaling: the same patch (density, radius,
 // bend angle) at ~2k, ~20k and ~200k particles, iterations only (engine construction untimed), 5 per run
 // at 20k and 200k: per-iteration time and pair interactions per second (unordered neighbour pairs

@@ -24,7 +24,8 @@ import logging
 from . import errors
 from ._protocol import proto
 from .connection import Client, connect
-from .results import Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, State, StepResult, UpdateEvent
+from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, Hole, HistoryEntry, MergeResult,
+                      State, StepResult, UpdateEvent)
 from .server_process import find_server_executable
 from .session import Session
 from .session_api import EditingSession
@@ -50,7 +51,7 @@ __version__ = "0.1.0"
 __all__ = [
     "connect", "Client", "Session", "EditingSession", "LocalSession", "StepResult", "CollisionStats", "State",
     "Backoff", "HistoryEntry",
-    "Changes", "UpdateEvent", "MergeResult", "Curve", "Watcher", "proto",
+    "Changes", "UpdateEvent", "MergeResult", "Curve", "Watcher", "proto", "BlendResult", "FillResult", "Hole",
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
     "ServerStartError", "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError",

@@ -1,9 +1,10 @@
 """Scripted demo: load the default scene, pin the slab, push the sphere down until it collides.
 
 Runs twice: once with the back-off response (the sphere stops where it touches the slab) and once
-with the merge response (the sphere is merged into the slab with a sharp crease). Each step line
-prints the colliding count and what the response did (back-off: fraction kept; merge: feature surfels
-and the length of the intersection curves).
+with the merge response (the sphere is merged into the slab with a sharp crease), which ends with one
+blend of the crease (the oriented particle blend tool). Each step line prints the colliding count and
+what the response did (back-off: fraction kept; merge: feature surfels and the length of the
+intersection curves); the blend prints its particles, energy and how the crease's normals changed.
 
 Run with ``python -m surfeledit.demo [--domain D] [--steps N]``. Connects with ``spawn=True`` (a
 local ``surfeledit-server`` is started if none answers) and prints one line per step to stdout.
@@ -52,6 +53,35 @@ def response_text(r: StepResult, session: object) -> str:
     return r.response
 
 
+def crease_angle(session: object, ids: np.ndarray, spacing: float) -> float:
+    """95th percentile of the angles (degrees) between the normals of two of `ids`' surfels closer than 1.5
+    spacings (the largest is a single outlier at the region's corners)."""
+    st = session.state()  # type: ignore[attr-defined]
+    rows = np.flatnonzero(np.isin(st.ids, ids))
+    p, n = st.positions[rows], st.normals[rows]
+    close = np.linalg.norm(p[:, None] - p[None], axis=2) < 1.5 * spacing
+    np.fill_diagonal(close, False)
+    cos = np.clip((n @ n.T)[close], -1.0, 1.0)
+    return float(np.degrees(np.percentile(np.arccos(cos), 95))) if cos.size else 0.0
+
+
+def blend_once(session: object, iterations: int = 30) -> None:
+    """One blend of the last merge's crease (only along the normals, so the blend adds material), and a
+    few lines on what it did."""
+    spacing = float(np.median(session.state().radii))  # type: ignore[attr-defined]
+    t0 = time.perf_counter()
+    b = session.blend(iterations=iterations, only_grow=True)  # type: ignore[attr-defined]
+    rt = (time.perf_counter() - t0) * 1e3
+    after = crease_angle(session, b.moved, spacing)
+    session.undo()  # type: ignore[attr-defined]
+    before = crease_angle(session, b.moved, spacing)
+    session.redo()  # type: ignore[attr-defined]
+    print(f"blend: {b.particles} particles, {iterations} iterations ({b.substeps} sub-steps) in {b.ms:.1f} ms "
+          f"(round trip {rt:.1f} ms); {b.removed.size} crease copies removed, {b.inserted.size} inserted")
+    print(f"blend: energy {b.energy[0]:.1f} -> {b.energy[-1]:.1f}; 95th percentile of the normal angles between neighbours "
+          f"in the blend region {before:.0f} -> {after:.0f} degrees")
+
+
 def run(client: object, response: str, pos: np.ndarray, nrm: np.ndarray, rad: np.ndarray, part: np.ndarray,
         steps: int, drop: float) -> None:
     """One session with ``response``: the sphere pushed ``steps`` x ``drop`` down, one line per step."""
@@ -67,6 +97,8 @@ def run(client: object, response: str, pos: np.ndarray, nrm: np.ndarray, rad: np
             r = session.deform(translation=(0.0, 0.0, -drop))
             print(f"{r.seq:>4} {r.version:>8} {r.moved:>8} {r.colliding.size:>9} "
                   f"{r.timings.get('total', float('nan')):>9.2f} {r.round_trip_ms:>9.2f}  {response_text(r, session)}")
+        if response == "merge":
+            blend_once(session)
         st = session.state()
         sphere = np.isin(st.ids, ids[part == 1])
         clipped = 0 if st.clips is None else int(np.any(st.clips[:, 3:] != 0, axis=1).sum())

@@ -14,9 +14,9 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 
-from .arrays import ArrayLike, Vec3Like, readonly
-from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
-                      StepResult, clips_or_none)
+from .arrays import ArrayLike, Vec3Like, as_ids, as_points, as_radii, readonly
+from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, HistoryEntry, MergeResult,
+                      SettingValue, State, StepResult, blend_result, clips_or_none, fill_result)
 from .session_api import StateArrays, settings_doc
 
 __all__ = ["LocalSession"]
@@ -137,12 +137,39 @@ class LocalSession(StateArrays):
 
     def merge(self, crease: bool = True) -> MergeResult:
         """Merges the regions now (see :meth:`surfeledit.session_api.EditingSession.merge`)."""
-        m = self.core.merge(crease=bool(crease))
+        return self._merge_result(self.core.merge(crease=bool(crease)))
+
+    def _merge_result(self, m: Dict[str, Any]) -> MergeResult:
+        """The :class:`MergeResult` of the core's merge / boolean dict."""
         ids = [np.asarray(m[k], np.uint64) for k in ("removed", "features", "moved", "inserted")]
         readonly(ids)
         return MergeResult(*ids, curves=_curves(m["curves"]), version=self.version,
                            timings={"merge": float(m["merge_ms"]), "crease": float(m["crease_ms"]),
                                     "curves": float(m["curves_ms"])})
+
+    def blend(self, iterations: int = 50, range_factor: float = 4.0, dt: float = 0.1, repulsion: str = "weight",
+              weight: str = "compact", only_grow: bool = False, adaptive: bool = False,
+              neighbourhood: str = "cached", features: Optional[ArrayLike] = None) -> BlendResult:
+        """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
+        f = None if features is None else np.asarray(as_ids(features, "features"), np.int64)
+        raw = self.core.blend(iterations=int(iterations), range_factor=float(range_factor), dt=float(dt),
+                              repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
+                              adaptive=bool(adaptive), neighbourhood=str(neighbourhood), features=f)
+        return blend_result(raw, self.version)
+
+    def boolean(self, op: str, positions: ArrayLike, normals: ArrayLike,
+                radii: Optional[ArrayLike] = None) -> MergeResult:
+        """Boolean with model B (see :meth:`surfeledit.session_api.EditingSession.boolean`)."""
+        pos = as_points(positions, "positions")
+        nrm = as_points(normals, "normals", pos.shape[0])
+        return self._merge_result(self.core.boolean(str(op), pos, nrm, as_radii(radii, pos.shape[0])))
+
+    def fill_holes(self, max_diameter: float, iterations: int = 10,
+                   boundary: Optional[ArrayLike] = None) -> FillResult:
+        """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
+        b = None if boundary is None else np.asarray(as_ids(boundary, "boundary"), np.int64)
+        raw = self.core.fill_holes(float(max_diameter), iterations=int(iterations), boundary=b)
+        return fill_result(raw, self.version)
 
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
         """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""

@@ -8,14 +8,15 @@ Conventions: ids ``(P,) uint64`` ascending; positions / normals ``(P, 3) float64
 from __future__ import annotations
 
 import dataclasses
-from typing import Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Optional, Union
 
 import numpy as np
 
 from .arrays import NO_IDS
 
 __all__ = ["CollisionStats", "Backoff", "StepResult", "HistoryEntry", "Curve", "MergeResult", "State", "Changes",
-           "UpdateEvent", "SettingValue", "merge", "clips_or_none"]
+           "UpdateEvent", "SettingValue", "merge", "clips_or_none", "BlendResult", "Hole", "FillResult",
+           "blend_result", "fill_result"]
 
 #: A session setting's value: a flag, an integer, a number or a text.
 SettingValue = Union[bool, int, float, str]
@@ -292,3 +293,83 @@ def merge(cache: State, ch: Changes) -> State:
             order = np.argsort(ids, kind="stable")
             ids, pos, nrm, rad, clp = ids[order], pos[order], nrm[order], rad[order], clp[order]
     return State(ch.version, ids, pos, nrm, rad, clips_or_none(clp) if with_clips else None)
+
+
+@dataclasses.dataclass(frozen=True)
+class BlendResult:
+    """What a blend did (``session.blend()``, docs/particles.md "Blend").
+
+    Attributes:
+        particles: particles the blend started with (the blend region; the crease's copies are not particles).
+        moved: (M,) uint64 ids of region surfels that became particles again (same ids), ascending.
+        inserted: (I,) uint64 ids of surfels made from split-off particles (``adaptive``).
+        removed: (R,) uint64 ids removed: killed particles and the crease's gap-covering copies, ascending.
+        energy: (iterations,) float64 energy of the particle system before each iteration (spacing units).
+        substeps: sub-steps over all iterations (a dt above the stable step is split).
+        ms: time of the whole blend on the server / in the core.
+        version: session version after the blend.
+    """
+
+    particles: int
+    moved: np.ndarray
+    inserted: np.ndarray
+    removed: np.ndarray
+    energy: np.ndarray
+    substeps: int
+    ms: float
+    version: int
+
+
+@dataclasses.dataclass(frozen=True)
+class Hole:
+    """One hole ``fill_holes()`` filled: ``boundary`` (B,) uint64 ids of its boundary surfels (ascending),
+    ``diameter`` (model units), ``inserted`` (I,) uint64 ids of the surfels that fill it."""
+
+    boundary: np.ndarray
+    diameter: float
+    inserted: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class FillResult:
+    """What ``fill_holes()`` did: ``holes`` (the filled ones), ``skipped`` (loops wider than max_diameter,
+    left alone), ``inserted`` (every inserted id, ascending), ``ms``, ``version`` (unchanged when nothing
+    was inserted)."""
+
+    holes: List[Hole]
+    skipped: int
+    inserted: np.ndarray
+    ms: float
+    version: int
+
+
+def _field(raw: Any) -> Callable[[str], Any]:
+    """Reads a field of a core dict or of a wire struct by name."""
+    return raw.__getitem__ if isinstance(raw, dict) else lambda name: getattr(raw, name)
+
+
+def _ids(values: Any) -> np.ndarray:
+    a = np.asarray(values, np.uint64).reshape(-1)
+    a.setflags(write=False)
+    return a
+
+
+def blend_result(raw: Any, version: int) -> BlendResult:
+    """The :class:`BlendResult` of the core's dict or the wire's BlendResult (same field names)."""
+    f = _field(raw)
+    energy = np.asarray(f("energy"), np.float64).reshape(-1)
+    energy.setflags(write=False)
+    return BlendResult(particles=int(f("particles")), moved=_ids(f("moved")), inserted=_ids(f("inserted")),
+                       removed=_ids(f("removed")), energy=energy, substeps=int(f("substeps")), ms=float(f("ms")),
+                       version=version)
+
+
+def fill_result(raw: Any, version: int) -> FillResult:
+    """The :class:`FillResult` of the core's dict or the wire's FillResult (same field names)."""
+    f = _field(raw)
+    holes = []
+    for h in f("holes"):
+        g = _field(h)
+        holes.append(Hole(boundary=_ids(g("boundary")), diameter=float(g("diameter")), inserted=_ids(g("inserted"))))
+    return FillResult(holes=holes, skipped=int(f("skipped")), inserted=_ids(f("inserted")), ms=float(f("ms")),
+                      version=version)

@@ -20,6 +20,7 @@ from .arrays import (ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_ra
                      vec3)
 from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
                       StepResult, clips_or_none, merge)
+from .session_blend import BlendOps
 from .session_api import StateArrays, settings_doc
 from .watcher import Watcher
 
@@ -97,7 +98,7 @@ def _curves(wire: Any) -> List[Curve]:
     return out
 
 
-class Session(StateArrays):
+class Session(BlendOps, StateArrays):
     """An opened or joined editing session; close it (or use ``with``) to detach.
 
     Attributes:
@@ -194,6 +195,14 @@ class Session(StateArrays):
         (finite, non-zero normals, positive radii) at commit and raises the typed error.
         Returns the session info.
         """
+        self._upload(positions, normals, radii)
+        self._request(proto.Op.OP_LOAD_COMMIT)
+        self._cache = None
+        return self._info
+
+    def _upload(self, positions: ArrayLike, normals: ArrayLike, radii: Optional[ArrayLike]) -> None:
+        """Sends surfels as the client's upload into this session (LOAD_BEGIN and the chunks; the op
+        that consumes it follows: LOAD_COMMIT, or BOOLEAN for model B)."""
         pos = as_points(positions, "positions")
         nrm = as_points(normals, "normals", pos.shape[0])
         rad = as_radii(radii, pos.shape[0])
@@ -207,9 +216,6 @@ class Session(StateArrays):
                 positions=pos[off:end].ravel().tolist(),
                 normals=nrm[off:end].ravel().tolist(),
                 radii=rad[off:end].tolist() if rad is not None else []))
-        self._request(proto.Op.OP_LOAD_COMMIT)
-        self._cache = None
-        return self._info
 
     def load_file(self, path: Union[str, Path]) -> "proto.SessionInfo":
         """Loads a file on the server (.ply, .pcd, .obj) as the new model: a path below the server's
@@ -325,9 +331,12 @@ class Session(StateArrays):
     def merge(self, crease: bool = True) -> MergeResult:
         """Merges the regions now (see :meth:`surfeledit.session_api.EditingSession.merge`); watchers
         get cause ``"merge"`` with the clip lines."""
-        reply = self._request(proto.Op.OP_MERGE, merge=proto.Merge(crease=bool(crease)))
+        return self._merge_result(self._request(proto.Op.OP_MERGE, merge=proto.Merge(crease=bool(crease))), "MERGE")
+
+    def _merge_result(self, reply: "proto.Reply", op: str) -> MergeResult:
+        """The :class:`MergeResult` a MERGE / BOOLEAN reply carries."""
         if not reply.merge:
-            raise errors.InternalServerError("MERGE reply without a merge result", "merge")
+            raise errors.InternalServerError(f"{op} reply without a merge result", "merge")
         m = reply.merge[0]
         ids = [np.asarray(a, np.uint64) for a in (m.removed, m.features, m.moved, m.inserted)]
         readonly(ids)

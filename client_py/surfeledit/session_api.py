@@ -17,7 +17,7 @@ from typing import Any, Dict, List, Optional, Protocol, runtime_checkable
 import numpy as np
 
 from .arrays import ArrayLike, Vec3Like
-from .results import Changes, Curve, HistoryEntry, MergeResult, SettingValue, State, StepResult
+from .results import BlendResult, Changes, Curve, FillResult, HistoryEntry, MergeResult, SettingValue, State, StepResult
 
 __all__ = ["EditingSession", "StateArrays", "settings_doc"]
 
@@ -92,6 +92,33 @@ class EditingSession(Protocol):
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
         """The intersection curves of the last merge with a crease, refined where an edge bends more
         than ``refine_angle`` radians (> 0; InvalidArgumentError otherwise); ConflictError before one."""
+        ...
+
+    def blend(self, iterations: int = 50, range_factor: float = 4.0, dt: float = 0.1, repulsion: str = "weight",
+              weight: str = "compact", only_grow: bool = False, adaptive: bool = False,
+              neighbourhood: str = "cached", features: Optional[ArrayLike] = None) -> BlendResult:
+        """Blend tool (thesis §12.3, docs/particles.md): the surfels within ``range_factor`` x mean radius of
+        the feature surfels (``features`` ids, or those of the last merge / boolean) become oriented particles
+        (the crease undone there), run ``iterations`` steps of ``dt`` and become surfels again. ``repulsion``:
+        none | spring | gaussian | weight; ``weight``: compact | gaussian; ``neighbourhood``: cached | grid |
+        kdtree; ``only_grow``: move along +n only; ``adaptive``: split / kill by neighbour count. Calling it
+        again continues. One history entry. InvalidArgumentError / NotFoundError naming the argument,
+        ConflictError before any merge or boolean (nothing changes)."""
+        ...
+
+    def boolean(self, op: str, positions: ArrayLike, normals: ArrayLike,
+                radii: Optional[ArrayLike] = None) -> MergeResult:
+        """Boolean ``op`` (union | intersection | difference) of the model (A) with the closed model B
+        (positions / normals (Q, 3), radii (Q,) or None to estimate) (thesis §12.4.1): ``removed`` A's dropped
+        ids, ``inserted`` B's kept surfels' new ids (normals flipped for difference), ``features`` for blend().
+        The regions are cleared. One history entry; ConflictError when the result would be empty."""
+        ...
+
+    def fill_holes(self, max_diameter: float, iterations: int = 10,
+                   boundary: Optional[ArrayLike] = None) -> FillResult:
+        """Fills every hole (a loop of boundary surfels, detected or the ``boundary`` ids) no wider than
+        ``max_diameter`` (model units) with surfels on the surface around it (thesis §12.4.2); wider loops
+        (a scan's border) are left alone. One history entry when it inserted surfels."""
         ...
 
     def report(self) -> Dict[str, Any]:

@@ -65,6 +65,21 @@ pyb::list curves_list(const std::vector<Curve>& curves) {
   return out;
 }
 
+// A MergeOutcome (merge, boolean) as a dict.
+pyb::dict merge_dict(const MergeOutcome& m) {
+  pyb::dict d;
+  d["removed"] = ids_array(m.removed);
+  d["features"] = ids_array(m.features);
+  d["moved"] = ids_array(m.moved);
+  d["inserted"] = ids_array(m.inserted);
+  d["curves"] = curves_list(m.curves);
+  d["merge_ms"] = m.merge_ms;
+  d["crease_ms"] = m.crease_ms;
+  d["curves_ms"] = m.curves_ms;
+  d["total_ms"] = m.total_ms;
+  return d;
+}
+
 // A setting value as Python bool, int, float or str.
 pyb::object py_value(const SettingValue& v) {
   return std::visit([](const auto& x) -> pyb::object { return pyb::cast(x); }, v);
@@ -246,17 +261,7 @@ void bind_edit_session(pyb::module_& m) {
               pyb::gil_scoped_release release;
               m = s.merge(crease);
             }
-            pyb::dict d;
-            d["removed"] = ids_array(m.removed);
-            d["features"] = ids_array(m.features);
-            d["moved"] = ids_array(m.moved);
-            d["inserted"] = ids_array(m.inserted);
-            d["curves"] = curves_list(m.curves);
-            d["merge_ms"] = m.merge_ms;
-            d["crease_ms"] = m.crease_ms;
-            d["curves_ms"] = m.curves_ms;
-            d["total_ms"] = m.total_ms;
-            return d;
+            return merge_dict(m);
           },
           pyb::arg("crease") = true,
           "Merges the regions (§7 d): removed, features, moved, inserted (ids), curves, merge/crease/curves/total_ms")
@@ -293,6 +298,91 @@ void bind_edit_session(pyb::module_& m) {
       }, "History entries, oldest first: version, op, client, touched (ids), undone")
       .def_property_readonly("version", &EditSession::version)
       .def_property_readonly("state_hash", &EditSession::state_hash)
+      .def(
+          "blend",
+          [](EditSession& s, int iterations, double range_factor, double dt, const std::string& repulsion,
+             const std::string& weight, bool only_grow, bool adaptive, const std::string& neighbourhood,
+             const pyb::handle& features) {
+            BlendParams p;
+            p.iterations = iterations;
+            p.range_factor = range_factor;
+            p.dt = dt;
+            p.repulsion = parse_enum<RepulsionKind>(repulsion, "repulsion");
+            p.weight = parse_enum<WeightKind>(weight, "weight");
+            p.only_grow = only_grow;
+            p.adaptive = adaptive;
+            p.neighbours = parse_enum<NeighbourMode>(neighbourhood, "neighbourhood");
+            std::optional<IdList> f;
+            if (!features.is_none()) f = to_ids(features, "features");
+            BlendOutcome b;
+            {
+              pyb::gil_scoped_release release;
+              b = s.blend(p, f);
+            }
+            pyb::dict d;
+            d["particles"] = b.particles;
+            d["moved"] = ids_array(b.moved);
+            d["inserted"] = ids_array(b.inserted);
+            d["removed"] = ids_array(b.removed);
+            d["energy"] = pyb::array_t<double>(b.energy.size(), b.energy.data());
+            d["substeps"] = b.substeps;
+            d["ms"] = b.ms;
+            return d;
+          },
+          pyb::kw_only(), pyb::arg("iterations") = BlendParams{}.iterations,
+          pyb::arg("range_factor") = BlendParams{}.range_factor, pyb::arg("dt") = BlendParams{}.dt,
+          pyb::arg("repulsion") = "weight", pyb::arg("weight") = "compact", pyb::arg("only_grow") = false,
+          pyb::arg("adaptive") = false, pyb::arg("neighbourhood") = "cached", pyb::arg("features") = pyb::none(),
+          "Blend tool (§12.3): particles, moved, inserted, removed (ids), energy per iteration, substeps, ms")
+      .def(
+          "boolean",
+          [](EditSession& s, const std::string& op, const pyb::handle& positions, const pyb::handle& normals,
+             const pyb::handle& radii) {
+            const BooleanOp o = parse_enum<BooleanOp>(op, "op");
+            SurfelArrays a;
+            a.positions = to_points(positions, "positions");
+            a.normals = to_points(normals, "normals");
+            if (!radii.is_none()) a.radii = to_values(radii, "radii");
+            MergeOutcome m;
+            {
+              pyb::gil_scoped_release release;
+              m = s.boolean(o, std::move(a));
+            }
+            return merge_dict(m);
+          },
+          pyb::arg("op"), pyb::arg("positions"), pyb::arg("normals"), pyb::arg("radii") = pyb::none(),
+          "Boolean of the model (A) with B (§12.4.1): as merge(); removed = A's dropped ids, inserted = B's new ids")
+      .def(
+          "fill_holes",
+          [](EditSession& s, double max_diameter, int iterations, const pyb::handle& boundary) {
+            HoleParams p;
+            p.max_diameter = max_diameter;
+            p.iterations = iterations;
+            std::optional<IdList> b;
+            if (!boundary.is_none()) b = to_ids(boundary, "boundary");
+            FillOutcome f;
+            {
+              pyb::gil_scoped_release release;
+              f = s.fill_holes(p, b);
+            }
+            pyb::list holes;
+            for (const HoleOutcome& h : f.holes) {
+              pyb::dict d;
+              d["boundary"] = ids_array(h.boundary);
+              d["diameter"] = h.diameter;
+              d["inserted"] = ids_array(h.inserted);
+              holes.append(d);
+            }
+            pyb::dict d;
+            d["holes"] = holes;
+            d["skipped"] = f.skipped;
+            d["inserted"] = ids_array(f.inserted);
+            d["ms"] = f.ms;
+            return d;
+          },
+          pyb::arg("max_diameter"), pyb::kw_only(), pyb::arg("iterations") = HoleParams{}.iterations,
+          pyb::arg("boundary") = pyb::none(),
+          "Hole filling (§12.4.2): holes [{boundary, diameter, inserted}], skipped, inserted (ids), ms")
       .def("ids", [](const EditSession& s) { return ids_array(s.model().ids()); })
       .def("positions", [](const EditSession& s) { return s.model().positions(); })
       .def("normals", [](const EditSession& s) { return s.model().normals(); })

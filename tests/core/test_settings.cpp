@@ -39,8 +39,12 @@ TEST(Settings, DefaultsAndListingOrder) {
                                              "cluster_size", "max_variation", "member_margin",
                                              // issue 9: responses and history
                                              "response", "history_mb", "backoff_epsilon",
-                                             "backoff_max_iterations", "inside", "winding_beta", "vote_k",
-                                             "swept"}));
+                                             "backoff_max_iterations",
+                                             // issue 13: inside modes and the swept test
+                                             "inside", "winding_beta", "vote_k", "swept",
+                                             // issue 10: the blend tool
+                                             "blend_neighbour_factor", "blend_gamma", "blend_open_region",
+                                             "blend_spring_r0"}));
   EXPECT_EQ(std::get<std::string>(d[0].value), "robust");
   EXPECT_EQ(std::get<std::int64_t>(d[3].value), 10);  // integers are listed as integers
   // The listing applied to defaults is the identity.
@@ -188,8 +192,9 @@ TEST(Settings, IntegersAndNumbers) {
 // The table: unique names, every text setting with its names, defaults = SessionSettings{}.
 TEST(Settings, TableDescribesEverySetting) {
   const auto& specs = setting_specs();
-  EXPECT_EQ(specs.size(), 34u);  // 26 + issue 9's response, history_mb, backoff_epsilon, backoff_max_iterations
+  EXPECT_EQ(specs.size(), 38u);  // 26 + issue 9's response, history_mb, backoff_epsilon, backoff_max_iterations
                                  // + issue 13's inside, winding_beta, vote_k, swept
+                                 // + issue 10's blend_neighbour_factor, blend_gamma, blend_open_region, blend_spring_r0
   const auto listed = describe(SessionSettings{});
   ASSERT_EQ(listed.size(), specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i) {

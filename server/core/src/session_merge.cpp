@@ -74,6 +74,9 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   t = std::chrono::steady_clock::now();
   CreaseResult c;
   if (crease_on) c = crease(model_, m.features_deformable, m.features_zero);
+  Points crease_from(static_cast<Eigen::Index>(c.moved.size()), 3);
+  for (std::size_t k = 0; k < c.moved.size(); ++k)
+    crease_from.row(static_cast<Eigen::Index>(k)) = model_.positions().row(model_.row_of(c.moved[k]));
   out.removed = m.removed;
   std::set_union(m.features_deformable.begin(), m.features_deformable.end(), m.features_zero.begin(),
                  m.features_zero.end(), std::back_inserter(out.features));
@@ -89,6 +92,11 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   take_origins();
   colliding_.clear();
   merge_.crease_positions = c.positions;
+  merge_.features = out.features;
+  merge_.crease_moved = c.moved;
+  merge_.crease_from = std::move(crease_from);
+  merge_.crease_copies = out.inserted;
+  merge_.open_region = false;
   merge_.crease_radii.resize(static_cast<Eigen::Index>(c.moved.size()));
   const IndexList moved_rows = model_.rows_of(c.moved, "moved");
   for (std::size_t k = 0; k < moved_rows.size(); ++k)

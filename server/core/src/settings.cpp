@@ -25,6 +25,7 @@ struct Range {
 };
 Range at_least(double lo) { return {lo, kInf, false}; }
 Range within(double lo, double hi) { return {lo, hi, false}; }
+Range above(double lo, double hi) { return {lo, hi, true}; }  // lo itself refused
 
 // Upper bounds of the settings that size allocations, thread teams or loops (docs/hardening.md), so that
 // no client number becomes an unbounded one.
@@ -33,6 +34,7 @@ constexpr double kMaxLeafSurfels = 1 << 20;     // leaf sizes and cluster_size
 constexpr double kMaxFactor = 1e6;              // dimensionless multipliers (margins, split ratio, knn_eps)
 constexpr double kMaxHistoryMb = 1 << 20;       // 1 TiB: beyond any machine, far below overflow
 constexpr double kMaxBackoffIterations = 1000;  // back-off re-tests per step
+constexpr double kMaxBlendNeighbourFactor = 16;  // blend neighbourhood radius in mean radii (~800 neighbours)
 
 // threads: 0 (all) up to the hardware threads (more only oversubscribes; 2^31 made libgomp abort).
 double hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
@@ -89,6 +91,7 @@ using B = bvh::BvhParams;
 using P = SimplifyParams;
 using E = ResponseParams;
 using Y = HistoryParams;
+using L = BlendSettings;
 
 std::vector<SettingSpec> make_table() {
   return {
@@ -149,6 +152,13 @@ std::vector<SettingSpec> make_table() {
       row<&S::collision, &C::vote_k>("vote_k", "vote: zero surfels that vote", within(1, 256)),
       row<&S::collision, &C::swept>("swept", "temporal/robust: report points whose step passed through the "
                                              "rigid solid (no tunnelling, docs/algorithms.md §4.7)"),
+      row<&S::blend, &L::neighbour_factor>("blend_neighbour_factor", "blend: particle neighbourhood radius, "
+                                                                     "in mean surfel radii (§12.3.3)", above(0, kMaxBlendNeighbourFactor)),
+      row<&S::blend, &L::gamma>("blend_gamma", "blend: region scaling exponent (Eq. 12.28)", within(0, 100)),
+      row<&S::blend, &L::open_region>("blend_open_region", "blend after a boolean (open region, §12.4.1): the "
+                                                           "requested repulsion, an attracting spring, or none"),
+      row<&S::blend, &L::spring_r0>("blend_spring_r0", "blend: equilibrium distance of that spring, mean surfel "
+                                                       "radii", above(0, kMaxFactor)),
   };
 }
 

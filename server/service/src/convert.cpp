@@ -64,7 +64,10 @@ static_assert(static_cast<std::uint32_t>(Op::History) == surfeledit_proto_OP_HIS
 static_assert(static_cast<std::uint32_t>(Op::Merge) == surfeledit_proto_OP_MERGE, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Curves) == surfeledit_proto_OP_CURVES, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Invite) == surfeledit_proto_OP_INVITE, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_INVITE + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Blend) == surfeledit_proto_OP_BLEND, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::Boolean) == surfeledit_proto_OP_BOOLEAN, "Op numbers");
+static_assert(static_cast<std::uint32_t>(Op::FillHoles) == surfeledit_proto_OP_FILL_HOLES, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_FILL_HOLES + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>
@@ -294,6 +297,34 @@ Command decode(const surfeledit_proto_Request& r) {
         return InviteArgs{*role};
       });
       break;
+    case Op::Blend:
+      decode_argument(c, r.blend, "blend", [](const surfeledit_proto_Blend& a) {
+        BlendArgs args;
+        args.params.iterations = a.iterations;
+        args.params.range_factor = a.range_factor;
+        args.params.dt = a.dt;
+        args.params.only_grow = a.only_grow;
+        args.params.adaptive = a.adaptive;
+        args.repulsion = str(a.repulsion);
+        args.weight = str(a.weight);
+        args.neighbourhood = str(a.neighbourhood);
+        if (a.has_features) args.features = IdList(a.features._buffer, a.features._buffer + a.features._length);
+        return args;
+      });
+      break;
+    case Op::Boolean:
+      decode_argument(c, r.boolean_op, "boolean_op",
+                      [](const surfeledit_proto_BooleanOperation& a) { return BooleanArgs{str(a.op)}; });
+      break;
+    case Op::FillHoles:
+      decode_argument(c, r.fill_holes, "fill_holes", [](const surfeledit_proto_FillHoles& a) {
+        FillHolesArgs args;
+        args.params.max_diameter = a.max_diameter;
+        args.params.iterations = a.iterations;
+        if (a.has_boundary) args.boundary = IdList(a.boundary._buffer, a.boundary._buffer + a.boundary._length);
+        return args;
+      });
+      break;
     default: break;  // no argument (or an op outside the list, rejected by the handler)
   }
   return c;
@@ -457,6 +488,28 @@ ReplyView::ReplyView(const Reply& reply) {
   msg_.merge = borrow_one<dds_sequence_surfeledit_proto_MergeResult>(&merge_, reply.merge.has_value());
   msg_.token = cstr(reply.token);
   msg_.request_op = static_cast<std::int32_t>(reply.request_op);
+  if (reply.blend) {
+    const BlendInfo& b = *reply.blend;
+    blend_.particles = b.particles;
+    blend_.moved = borrow<dds_sequence_unsigned_long_long>(b.moved);
+    blend_.inserted = borrow<dds_sequence_unsigned_long_long>(b.inserted);
+    blend_.removed = borrow<dds_sequence_unsigned_long_long>(b.removed);
+    blend_.energy = borrow<dds_sequence_double>(b.energy);
+    blend_.substeps = b.substeps;
+    blend_.ms = b.ms;
+  }
+  msg_.blend = borrow_one<dds_sequence_surfeledit_proto_BlendResult>(&blend_, reply.blend.has_value());
+  if (reply.fill) {
+    const FillInfo& f = *reply.fill;
+    for (const HoleInfo& h : f.holes)
+      holes_.push_back(surfeledit_proto_Hole{borrow<dds_sequence_unsigned_long_long>(h.boundary), h.diameter,
+                                             borrow<dds_sequence_unsigned_long_long>(h.inserted)});
+    fill_.holes = borrow<dds_sequence_surfeledit_proto_Hole>(holes_);
+    fill_.skipped = f.skipped;
+    fill_.inserted = borrow<dds_sequence_unsigned_long_long>(f.inserted);
+    fill_.ms = f.ms;
+  }
+  msg_.fill = borrow_one<dds_sequence_surfeledit_proto_FillResult>(&fill_, reply.fill.has_value());
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {

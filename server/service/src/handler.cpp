@@ -39,6 +39,9 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::Merge, {"OP_MERGE", serve_merge, true, T::VersionAndSessionInfo, true});
   row(Op::Curves, {"OP_CURVES", serve_curves, true, T::Version, false});
   row(Op::Invite, {"OP_INVITE", serve_invite, true, T::Version, true});
+  row(Op::Blend, {"OP_BLEND", serve_blend, true, T::VersionAndSessionInfo, true});
+  row(Op::Boolean, {"OP_BOOLEAN", serve_boolean, true, T::VersionAndSessionInfo, true});
+  row(Op::FillHoles, {"OP_FILL_HOLES", serve_fill_holes, true, T::VersionAndSessionInfo, true});
   return t;
 }
 

@@ -102,6 +102,10 @@ void serve_curves(OpContext& c);
 // the model into the session (the client must still be attached) and fills the reply.
 void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::vector<UpdateEvent>& updates);
 void serve_invite(OpContext& c);
+// blend_ops.cpp
+void serve_blend(OpContext& c);
+void serve_boolean(OpContext& c);
+void serve_fill_holes(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

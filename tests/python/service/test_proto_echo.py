@@ -38,8 +38,8 @@ def random_value(tp: Any, rng: random.Random, depth: int = 0) -> Any:
         return rng.choice([rng.randrange(1, 2**64), 2**64 - 1, 2**63 + rng.randrange(1, 1000)])
     if marker == "uint32":
         return rng.randrange(1, 2**32)
-    if marker == "int32":  # enum numbers carried as long, also outside their enum (PROTOCOL.md)
-        return rng.choice([rng.randrange(1, 2**31), -rng.randrange(1, 2**31), 99])
+    if marker == "int32":  # enum numbers carried as long, also outside their enum (PROTOCOL.md), and signed counts
+        return rng.choice([rng.randrange(1, 2**31), -rng.randrange(1, 2**31), 99, -2**31, 2**31 - 1])
     if marker == "float64":
         return rng.choice([rng.uniform(-1e6, 1e6), rng.uniform(1e-300, 1e-9), 1.0 / 3.0, -2.5e300])
     if tp is bool:

@@ -47,11 +47,30 @@ void ParticleEngine::set_surface(const Points& positions, const Points& normals)
   surface_ = std::make_unique<SurfaceProjector>(positions, normals);
 }
 
+void ParticleEngine::set_constraint(Constraint constraint) {
+  constraint_ = std::move(constraint);
+  if (constraint_) apply_constraint();
+  refresh_neighbours(true);
+}
+
+void ParticleEngine::apply_constraint() {
+  for (Index i = 0; i < state_.size(); ++i) {
+    Vec3 n = state_.normal(i);
+    const Vec3 before = n;
+    state_.x.row(i) = constraint_(state_.x.row(i).transpose(), &n).transpose();
+    if (n != before && n.norm() > 0.0) {
+      state_.q[i] = Eigen::Quaterniond::FromTwoVectors(before, n.normalized()) * state_.q[i];
+      state_.q[i].normalize();
+    }
+  }
+  evaluated_ = false;
+}
+
 void ParticleEngine::refresh_neighbours(bool force) {
   const double r = params_.weight.radius;
   switch (params_.neighbours) {
-    case NeighbourMode::Cached:
-      if (force) nbrs_ = neighbours_kdtree(state_.x, r, params_.threads);
+    case NeighbourMode::Cached:  // the one query by the grid: the same lists, built faster than by the k-d tree
+      if (force) nbrs_ = neighbours_grid(state_.x, r, params_.threads);
       break;
     case NeighbourMode::RecomputeGrid: nbrs_ = neighbours_grid(state_.x, r, params_.threads); break;
     case NeighbourMode::RecomputeKdTree: nbrs_ = neighbours_kdtree(state_.x, r, params_.threads); break;
@@ -98,9 +117,11 @@ StepReport ParticleEngine::step() {
     }
     integrate(state_, forces_, scale_, params_, h);
     if (params_.project_tangent) project_tangent();
+    if (constraint_) apply_constraint();
     evaluated_ = false;
   }
   adapt(report);
+  if (constraint_ && (report.split > 0 || report.killed > 0)) apply_constraint();
   refresh_neighbours(false);
   return report;
 }

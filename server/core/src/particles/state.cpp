@@ -26,6 +26,8 @@ ParticleState ParticleState::from_surfels(const Points& positions, const Points&
     s.q[i] = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), ni.normalized()).normalized();
   }
   s.v = s.w = s.v_prev = s.w_prev = Points::Zero(n, 3);
+  s.origin.resize(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) s.origin[static_cast<std::size_t>(i)] = i;
   return s;
 }
 
@@ -38,11 +40,16 @@ void ParticleState::append_copy(Index i, const Vec3& at) {
   v_prev.row(n).setZero();
   w_prev.row(n).setZero();
   q.push_back(q[i]);
+  if (origin.size() == static_cast<std::size_t>(n)) {
+    const std::int64_t t = origin[static_cast<std::size_t>(i)];
+    origin.push_back(t >= 0 ? -1 - t : t);
+  }
 }
 
 void ParticleState::keep(const std::vector<bool>& flags) {
   for (Points* a : {&x, &v, &w, &v_prev, &w_prev}) compact(*a, flags);
   compact(q, flags);
+  if (origin.size() == flags.size()) compact(origin, flags);
 }
 
 }  // namespace surfeledit

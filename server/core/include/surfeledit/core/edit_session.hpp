@@ -8,11 +8,14 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/boolean.hpp"
 #include "surfeledit/core/history.hpp"
+#include "surfeledit/core/holes.hpp"
 #include "surfeledit/core/response/curves.hpp"
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/settings.hpp"
@@ -87,6 +90,32 @@ struct MergeOutcome {
   double total_ms = 0.0;     // the whole merge, model changes and detector reset included
 };
 
+// What EditSession::blend did (thesis §12.3).
+struct BlendOutcome {
+  Index particles = 0;         // particles the blend started with (the blend region, crease copies excluded)
+  IdList moved;                // ids of blend region surfels that became particles again (same ids), ascending
+  IdList inserted;             // ids of surfels made from particles split off (adaptive)
+  IdList removed;              // ids removed: particles killed (adaptive) and the crease's gap-covering copies
+  std::vector<double> energy;  // per iteration: the particle system's energy before it (spacing units)
+  int substeps = 0;            // sub-steps over all iterations (dt above the stable step is split)
+  double ms = 0.0;             // the whole blend
+};
+
+// One hole fill_holes() filled.
+struct HoleOutcome {
+  IdList boundary;        // ids of its boundary surfels, ascending
+  double diameter = 0.0;  // largest distance between two of them, model units
+  IdList inserted;        // ids of the surfels that fill it
+};
+
+// What EditSession::fill_holes did (thesis §12.4.2).
+struct FillOutcome {
+  std::vector<HoleOutcome> holes;  // the holes filled (loops no wider than max_diameter)
+  Index skipped = 0;               // loops wider than max_diameter (open borders), left alone
+  IdList inserted;                 // every inserted id, ascending
+  double ms = 0.0;
+};
+
 // Region selection: explicit ids and/or selectors, merged.
 struct RegionSpec {
   IdList ids;
@@ -143,6 +172,25 @@ class EditSession {
   // leave the zero or one region empty; nothing colliding: an empty outcome, nothing changes. Bumps
   // the version when it changed something.
   MergeOutcome merge(bool crease = true, const std::string& author = "");
+  // Blend tool (session_blend.cpp, thesis §12.3): the blend region around `features` (ids; none: the feature
+  // surfels of the last merge or boolean, Conflict before one) becomes particles (the crease there undone:
+  // moved surfels back, clips cleared, copies removed), runs `params.iterations` iterations and becomes
+  // surfels again (same ids; split-off particles inserted, killed ones removed). Calling it again continues.
+  // The settings blend_* override params.neighbour_factor and gamma, and choose the repulsion after a boolean.
+  // One history entry ("blend"); validates first (InvalidArgument / NotFound naming the field).
+  BlendOutcome blend(const BlendParams& params, const std::optional<IdList>& features = std::nullopt,
+                     const std::string& author = "");
+  // Boolean operation of the model (A) with `b` (thesis §12.4.1, boolean.hpp): A's dropped surfels are removed
+  // (ids kept for the rest), B's kept surfels inserted (normals flipped for difference), the feature surfels
+  // kept for blend(). The regions are cleared (the model's shape changed as by a load). One history entry
+  // ("boolean"); Conflict when nothing would be left. `removed` A's dropped ids, `inserted` B's new ids.
+  MergeOutcome boolean(BooleanOp op, SurfelArrays b, const BooleanParams& params = {},
+                       const std::string& author = "");
+  // Hole filling (thesis §12.4.2, holes.hpp): loops of boundary surfels (detected, or `boundary` ids) no
+  // wider than params.max_diameter are filled. One history entry ("fill_holes") when it inserted surfels.
+  FillOutcome fill_holes(const HoleParams& params, const std::optional<IdList>& boundary = std::nullopt,
+                         const std::string& author = "");
+
   // Curves through the surfels the last merge moved onto the intersection; Conflict before any merge
   // with a crease. Validates `params` (InvalidArgument naming the field).
   std::vector<Curve> intersection_curves(const CurveParams& params = {}) const;
@@ -170,6 +218,8 @@ class EditSession {
   SessionImage capture_whole(bool clone) const;
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
+  // Appends rows (the last parents.size() rows) as extend_rows does, with or without regions.
+  void extend_any(const IndexList& parents);
   // Appends the entry of an op that just bumped the version; `before` is the image before it.
   void record(const char* op, const std::string& author, IdList touched, SessionImage before);
   std::uint64_t swap_entry(HistoryEntry& entry, const char* what);

@@ -42,6 +42,12 @@ struct MergeMemo {
   Points origin_normals;    // #D by 3, unit
   Points crease_positions;  // #K by 3: surfels the last merge's crease moved, on the intersection
   Values crease_radii;      // #K: their radii
+  // The blend tool's inputs (session_blend.cpp): what blend() starts from and what it restores.
+  IdList features;          // feature surfel ids of the last merge or boolean (blend's default), ascending
+  IdList crease_moved;      // ids the last crease moved and clipped (not yet restored by a blend)
+  Points crease_from;       // #crease_moved by 3: their positions before the crease
+  IdList crease_copies;     // ids of the last crease's gap-covering copies (not yet removed by a blend)
+  bool open_region = false; // the features come from a boolean (open blend region, §12.4.1)
 };
 
 // Everything a session holds, copied.

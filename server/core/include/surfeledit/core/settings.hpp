@@ -16,6 +16,7 @@
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/edit_params.hpp"
 #include "surfeledit/core/enum_names.hpp"
+#include "surfeledit/core/particles/blend.hpp"
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/simplify/params.hpp"
 
@@ -29,6 +30,7 @@ struct SessionSettings {
                                                   // cluster_size / max_variation also shape sphere_* trees)
   ResponseParams response;  // what a colliding step does (report, cancel, backoff)
   HistoryParams history;    // the undo history's memory bound
+  BlendSettings blend;      // the blend tool (particles/blend.hpp)
 
   static SimplifyParams no_simplification() {
     SimplifyParams p;

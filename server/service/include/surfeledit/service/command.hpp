@@ -38,8 +38,11 @@ enum class Op : std::uint32_t {
   Merge = 16,
   Curves = 17,
   Invite = 18,
+  Blend = 19,
+  Boolean = 20,
+  FillHoles = 21,
 };
-constexpr std::size_t kOpCount = 19;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = 22;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {
@@ -91,11 +94,32 @@ struct InviteArgs {
   Role role = Role::Viewer;  // Editor or Viewer
 };
 
+// OP_BLEND: the blend tool (enum names parsed by the op, naming the blend.* field).
+struct BlendArgs {
+  BlendParams params;                  // iterations, range_factor, dt, only_grow, adaptive
+  std::string repulsion = "weight";    // RepulsionKind name
+  std::string weight = "compact";      // WeightKind name
+  std::string neighbourhood = "cached";  // NeighbourMode name
+  std::optional<IdList> features;      // none: the last merge's / boolean's features
+};
+
+// OP_BOOLEAN: B is the client's completed upload.
+struct BooleanArgs {
+  std::string op;  // BooleanOp name
+};
+
+// OP_FILL_HOLES.
+struct FillHolesArgs {
+  HoleParams params;                // max_diameter, iterations
+  std::optional<IdList> boundary;   // none: detected
+};
+
 // The op's argument: none (std::monostate), or the struct of that op. OP_LOAD_CHUNK's is a
 // ChunkData pointing into the received sample, which must outlive the Command; OP_DEFORM's is
 // the validated DeformParams.
 using OpArguments = std::variant<std::monostate, LoadBeginArgs, ChunkData, LoadFileArgs, SetRegionsArgs,
-                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs, MergeArgs, CurvesArgs, InviteArgs>;
+                                 DeformParams, GetStateArgs, ConfigureArgs, RemoveArgs, MergeArgs, CurvesArgs,
+                                 InviteArgs, BlendArgs, BooleanArgs, FillHolesArgs>;
 
 struct Command {
   std::string client_id;       // empty: rejected by the handler (field "client_id")

@@ -78,6 +78,9 @@ class ReplyView {
   std::vector<surfeledit_proto_HistoryEntry> history_;
   std::vector<surfeledit_proto_Curve> curves_;  // OP_CURVES's, then the merge's
   surfeledit_proto_MergeResult merge_{};
+  surfeledit_proto_BlendResult blend_{};
+  std::vector<surfeledit_proto_Hole> holes_;
+  surfeledit_proto_FillResult fill_{};
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's

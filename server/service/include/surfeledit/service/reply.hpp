@@ -126,6 +126,30 @@ struct MergeInfo {
   double merge_ms = 0.0, crease_ms = 0.0, curves_ms = 0.0;
 };
 
+// What OP_BLEND did (proto BlendResult; see EditSession::blend).
+struct BlendInfo {
+  std::uint32_t particles = 0;
+  std::vector<std::uint64_t> moved, inserted, removed;
+  std::vector<double> energy;  // per iteration
+  std::uint32_t substeps = 0;
+  double ms = 0.0;
+};
+
+// One filled hole (proto Hole).
+struct HoleInfo {
+  std::vector<std::uint64_t> boundary;
+  double diameter = 0.0;
+  std::vector<std::uint64_t> inserted;
+};
+
+// What OP_FILL_HOLES did (proto FillResult).
+struct FillInfo {
+  std::vector<HoleInfo> holes;
+  std::uint32_t skipped = 0;
+  std::vector<std::uint64_t> inserted;
+  double ms = 0.0;
+};
+
 struct Reply {
   std::string client_id;
   std::uint64_t request_id = 0;
@@ -143,6 +167,8 @@ struct Reply {
   std::vector<CurveInfo> curves;     // OP_CURVES
   std::string token;                 // OP_INVITE: the invitation token
   std::uint32_t request_op = 0;      // the op number of the request answered
+  std::optional<BlendInfo> blend;    // OP_BLEND
+  std::optional<FillInfo> fill;      // OP_FILL_HOLES
 };
 
 }  // namespace surfeledit::service

@@ -2,6 +2,7 @@
 // at a time (forces, stable-step check, integration, projection, local adaptive split / kill).
 #pragma once
 
+#include <functional>
 #include <memory>
 
 #include "surfeledit/core/particles/forces.hpp"
@@ -29,6 +30,11 @@ class ParticleEngine {
   // The original surface for project_tangent and project_mls: #S by 3 positions and unit normals.
   void set_surface(const Points& positions, const Points& normals);
 
+  // A surface the particles are kept on instead of the tangent planes: after every move, each particle's
+  // position x becomes constraint(x, &n) and its normal n (unit) when the function sets it.
+  using Constraint = std::function<Vec3(const Vec3& x, Vec3* normal)>;
+  void set_constraint(Constraint constraint);
+
   // One iteration of params.dt (sub-stepped, or refused with Conflict("dt"), above the stable step).
   StepReport step();
   // Moves every particle onto the MLS surface of the original samples (kernel width h) and sets its normal.
@@ -45,6 +51,7 @@ class ParticleEngine {
   void refresh_neighbours(bool force);
   void evaluate();
   void project_tangent();
+  void apply_constraint();
   void adapt(StepReport& report);
 
   ParticleState state_;
@@ -55,6 +62,7 @@ class ParticleEngine {
   SystemForces forces_;
   bool evaluated_ = false;
   std::unique_ptr<SurfaceProjector> surface_;
+  Constraint constraint_;
 };
 
 }  // namespace surfeledit

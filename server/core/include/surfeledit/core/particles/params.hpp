@@ -14,10 +14,14 @@ enum class ParticleIntegrator : std::uint8_t {
 };
 
 enum class NeighbourMode : std::uint8_t {
-  Cached = 0,           // one k-d tree range query at the start (again only after split / kill)
+  Cached = 0,           // one range query at the start (uniform grid; again only after split / kill)
   RecomputeGrid = 1,    // a uniform-grid range query every iteration
   RecomputeKdTree = 2,  // a k-d tree built and queried every iteration
 };
+constexpr EnumNames<NeighbourMode, 3> names_of(NeighbourMode) {
+  return {{{NeighbourMode::Cached, "cached"}, {NeighbourMode::RecomputeGrid, "grid"},
+           {NeighbourMode::RecomputeKdTree, "kdtree"}}};
+}
 
 enum class StepPolicy : std::uint8_t {
   SubStep = 0,  // a dt above the stable step is split into equal sub-steps below it

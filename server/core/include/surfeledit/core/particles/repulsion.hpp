@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "surfeledit/core/enum_names.hpp"
 #include "surfeledit/core/particles/potentials.hpp"
 
 namespace surfeledit {
@@ -17,6 +18,10 @@ enum class RepulsionKind : std::uint8_t {
   Gaussian = 2,  // Phi = A exp(-|r|^2 / (2 sigma^2)) (Eq. 12.14-12.15)
   Weight = 3,    // Phi = A phi(|r|)^2 (Eq. 12.16-12.17; the thesis found it best)
 };
+constexpr EnumNames<RepulsionKind, 4> names_of(RepulsionKind) {
+  return {{{RepulsionKind::None, "none"}, {RepulsionKind::Spring, "spring"}, {RepulsionKind::Gaussian, "gaussian"},
+           {RepulsionKind::Weight, "weight"}}};
+}
 
 
 struct RepulsionParams {

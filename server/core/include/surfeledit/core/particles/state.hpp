@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <vector>
 
 #include "surfeledit/core/types.hpp"
@@ -18,6 +19,8 @@ struct ParticleState {
   Points v_prev;                         // #P by 3 Leapfrog: the half-step velocity one step earlier
   Points w_prev;                         // #P by 3 (Eq. 12.27 extrapolates the damping velocity from both)
   int steps = 0;                         // integration steps taken (Leapfrog starts with a half kick)
+  std::vector<std::int64_t> origin;      // #P caller's tags: from_surfels gives 0..#P-1; a copy of a particle
+                                         // with tag t gets -1 - t (t >= 0) or t (t < 0): -1 - origin row
 
   Index size() const { return static_cast<Index>(x.rows()); }
   Vec3 normal(Index i) const { return q[i] * Vec3::UnitZ(); }

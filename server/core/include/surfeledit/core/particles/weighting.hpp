@@ -5,12 +5,17 @@
 #include <cmath>
 #include <cstdint>
 
+#include "surfeledit/core/enum_names.hpp"
+
 namespace surfeledit {
 
 enum class WeightKind : std::uint8_t {
   Compact = 0,      // phi(r) = (r^2/d^2 - 1)^2 for r < d, 0 beyond (Eq. 12.20; the thesis prefers it)
   CutGaussian = 1,  // phi(r) = exp(-r^2 / (2 sigma_r^2)), sigma_r^2 = -d^2 / (2 ln eps), 0 for r >= d (Eq. 12.18-12.19)
 };
+constexpr EnumNames<WeightKind, 2> names_of(WeightKind) {
+  return {{{WeightKind::Compact, "compact"}, {WeightKind::CutGaussian, "gaussian"}}};
+}
 
 
 struct WeightParams {
