@@ -42,9 +42,9 @@ def expect_mirror(sess: surfeledit.Session, mirror: Dict[int, Row], what: str) -
         return
     assert sorted(mirror) == [int(i) for i in st.ids], what
     rows = [mirror[int(i)] for i in st.ids]
-    assert np.array_equal(np.array([r[0] for r in rows]), st.positions), what
-    assert np.array_equal(np.array([r[1] for r in rows]), st.normals), what
-    assert np.array_equal(np.array([r[2] for r in rows]), st.radii), what
+    assert np.array_equal(np.array([r[0] for r in rows]).reshape(-1, 3), st.positions), what
+    assert np.array_equal(np.array([r[1] for r in rows]).reshape(-1, 3), st.normals), what
+    assert np.array_equal(np.array([r[2] for r in rows], dtype=np.float64), st.radii), what
 
 
 def test_watcher_stays_exact_through_undo_and_redo_of_every_op(client: surfeledit.Client) -> None:
