@@ -15,19 +15,11 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 import benchlib  # noqa: E402
+from bench_response import open_session  # noqa: E402
 
-from surfeledit import core  # noqa: E402
 from surfeledit import scenario as S  # noqa: E402
-
-
-def open_session(sc: "S.Scenario", **settings: object) -> "core.EditSession":
-    s = sc.scene
-    es = core.EditSession("bench", threads=1)
-    es.load_points(s.positions, s.normals, s.radii)
-    es.set_regions(zero=s.zero, one=s.one)
-    es.configure(threads=1, **settings)
-    return es
 
 
 def main() -> None:

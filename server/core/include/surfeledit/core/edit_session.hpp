@@ -149,8 +149,9 @@ class EditSession {
 
   // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
   // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
-  // returns it. Conflict when there is nothing to undo / redo, or when the entry could not save its
-  // detector (hierarchies, approximate detection).
+  // returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and approximate
+  // detection included) is restored exactly: later steps give the results a session that never took the
+  // undone op gives.
   std::uint64_t undo();
   std::uint64_t redo();
   // The entries, oldest first (undone ones last, flagged).

@@ -5,7 +5,9 @@
 // state *after* it once undone (undo and redo swap the live state with the stored image, so each
 // entry keeps one side at a time). Two kinds of image:
 //  - Rows: a step that neither inserted nor removed rows: the rows it moved (positions, normals,
-//    tangents, per-row versions) and the detector's per-row states (DetectorImage);
+//    tangents, per-row versions as runs) and the detector's per-row states (DetectorImage) -- for row
+//    detectors only the states the step changed (the detector's journal); buffers of dropped entries
+//    are reused. A step whose response merges upgrades its image to a whole one then;
 //  - Whole: every other change (load, set_regions, configure, remove, a step with resampling): the
 //    whole model, regions and fields, settings, and the detector object itself (the live one after
 //    a change that replaced it, else an independent clone()).
@@ -66,8 +68,8 @@ struct SessionImage {
   std::shared_ptr<const DetectorImage> detector;  // Rows: the detector's per-row states (null: no detector)
   IdList colliding;                 // colliding ids
   std::uint64_t steps = 0;          // step counter
-  bool complete = true;             // false when the detector could not be saved (hierarchies, approximate
-                                    // detection): the image cannot be restored
+  bool complete = true;             // false when the detector could not be saved (a detector without
+                                    // save_image): the image cannot be restored
 
   std::size_t bytes() const;
 };
