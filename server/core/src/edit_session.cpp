@@ -101,11 +101,11 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   const bool whole = settings_.resample.enabled;
   // Nothing is kept (history_mb 0) and nothing is taken back (response report): no image at all.
   const bool none = history_limit() == 0 && settings_.response.mode == Response::Report;
-  journaling_ = !whole && detector_ && detector_->start_journal();
+  journaling_ = !whole && !none && detector_ && detector_->start_journal();
   struct EndJournal {
     EditSession& s;
     ~EndJournal() {
-      if (s.journaling_) s.detector_->stop_journal();
+      if (s.detector_) s.detector_->stop_journal();
       s.journaling_ = false;
     }
   } end_journal{*this};

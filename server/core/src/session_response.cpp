@@ -171,7 +171,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
   // stayed inside its empty sphere over the whole step, so over any part of it too (a segment inside a
   // ball): its state is that of before the step, as a step of the kept fraction would leave it.
   std::vector<std::uint8_t> final_rows;
-  const bool quick = partial && !rotation && journaling_ &&
+  const bool quick = partial && !rotation &&
                      (final_rows = candidate, detector_->journal_tested(final_rows));
   auto finish = [&](double f) {
     take_back();

@@ -26,25 +26,28 @@ struct Tally {
 template <typename State>
 struct Journal {
   bool on = false;
+  bool save = false;                     // keep states (else only `tested`)
   std::vector<std::uint8_t> saved;       // #P: 1 = old holds the row's state at the start
   std::vector<std::uint8_t> tested;      // #P: 1 = the kernel made a query for the row since the start
   std::unique_ptr<unsigned char[]> old;  // #P states' bytes (uninitialised until saved)
   std::size_t capacity = 0;              // rows `old` can hold
 
-  void start(std::size_t rows) {
+  void start(std::size_t rows, bool save_states) {
+    on = true;
+    save = save_states;
+    tested.assign(rows, 0);
+    if (!save) return;
     if (rows > capacity) {
       old.reset(new unsigned char[rows * sizeof(State)]);  // left uninitialised on purpose
       capacity = rows;
     }
     saved.assign(rows, 0);
-    tested.assign(rows, 0);
-    on = true;
   }
   // Called with a row's state before and after one update that made `queries` queries; different bytes:
   // the row changed.
   void note(Index r, const State& before, const State& after, Index queries) {
     if (queries > 0) tested[static_cast<std::size_t>(r)] = 1;
-    if (saved[static_cast<std::size_t>(r)] || std::memcmp(&before, &after, sizeof(State)) == 0) return;
+    if (!save || saved[static_cast<std::size_t>(r)] || std::memcmp(&before, &after, sizeof(State)) == 0) return;
     std::memcpy(old.get() + static_cast<std::size_t>(r) * sizeof(State), &before, sizeof(State));
     saved[static_cast<std::size_t>(r)] = 1;
   }
@@ -201,18 +204,22 @@ class RowDetector final : public NarrowDetector {
     return out;
   }
 
-  // The journal (independent points only: an order-dependent sweep saves images before the step).
+  // The journal (independent points only: an order-dependent sweep saves images before the step). When
+  // most rows changed at the last journal (e.g. Robust moves every point's last free position), copying
+  // them twice costs more than one image before the step: the next steps only note the tested rows.
   bool start_journal() override {
     if constexpr (!std::is_same_v<Sweep, ParallelSweep>) {
       return false;
     } else {
-      journal_.start(rows_.states.size());
+      const bool save = dense_skip_ == 0;
+      if (dense_skip_ > 0) --dense_skip_;
+      journal_.start(rows_.states.size(), save);
       journal_sweep_ = sweep_;
-      return true;
+      return save;
     }
   }
   std::shared_ptr<const DetectorImage> journal_image() const override {
-    if (!journal_.on) return nullptr;
+    if (!journal_.on || !journal_.save) return nullptr;
     auto image = std::make_shared<Image>();
     std::size_t n = 0;
     for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
@@ -228,7 +235,7 @@ class RowDetector final : public NarrowDetector {
     return image;
   }
   void restore_journal() override {
-    if (!journal_.on) throw Error(ErrorCode::Internal, "history", "no journal to restore");
+    if (!journal_.on || !journal_.save) throw Error(ErrorCode::Internal, "history", "no journal to restore");
     for (Index r : rows_.deformable)
       if (journal_.saved[static_cast<std::size_t>(r)]) rows_.states[r] = journal_.at(r);
     sweep_ = journal_sweep_;
@@ -238,14 +245,21 @@ class RowDetector final : public NarrowDetector {
     for (std::size_t r = 0; r < flags.size(); ++r) flags[r] |= journal_.tested[r];
     return true;
   }
-  void stop_journal() override { journal_.on = false; }
+  void stop_journal() override {
+    if (journal_.on && journal_.save) {
+      std::size_t n = 0;
+      for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
+      dense_skip_ = 2 * n > rows_.deformable.size() ? kDenseSkip : 0;
+    }
+    journal_.on = false;
+  }
 
  private:
   Tally sweep(const IndexList& rows, const CollisionScene& scene, const Points& previous,
               const std::vector<std::uint8_t>* candidate) {
     const int threads = resolve_threads(params_.threads);
     if constexpr (std::is_same_v<Sweep, ParallelSweep>) {
-      if (journal_.on && journal_.saved.size() == rows_.states.size()) {
+      if (journal_.on && journal_.tested.size() == rows_.states.size()) {
         return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, &journal_);
       }
     }
@@ -258,6 +272,8 @@ class RowDetector final : public NarrowDetector {
   double preprocess_ms_ = 0.0;  // the last reset
   Journal<typename Kernel::State> journal_;  // states before the first change since start_journal()
   Sweep journal_sweep_;                     // the sweep's tallies at start_journal()
+  static constexpr int kDenseSkip = 7;      // steps without saved states after a dense journal
+  int dense_skip_ = 0;                      // steps left before the journal saves states again
 };
 
 }  // namespace surfeledit::detail

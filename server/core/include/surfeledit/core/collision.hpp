@@ -151,9 +151,10 @@ class CollisionDetector {
   virtual std::unique_ptr<CollisionDetector> clone() const;
   // The journal: a cheaper before-image of a step, for the detectors that keep one (row detectors with
   // independent points). start_journal(): from now on, every row whose state a detect() / detect_only()
-  // changes keeps its state from this moment (first change wins); false when not supported (then
-  // save_image() before the step). journal_image(): those rows and states, an image restore_image()
-  // takes (nullptr when no journal runs). stop_journal(): ends it. Reset, removal and insertion end it.
+  // changes keeps its state from this moment (first change wins), and rows re-evaluated with a query are
+  // noted; false when states are not kept this time (then save_image() before the step; the tested rows
+  // may still be noted). journal_image(): those rows and states, an image restore_image() takes (nullptr
+  // when no states are kept). stop_journal(): ends it. Reset, removal and insertion end it.
   virtual bool start_journal();
   virtual std::shared_ptr<const DetectorImage> journal_image() const;
   // restore_journal(): puts back the journal's states, as restore_image(*journal_image()) would, without
