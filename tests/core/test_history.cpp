@@ -130,18 +130,6 @@ TEST(History, MemoryIsBoundedAndReported) {
   EXPECT_TRUE(listed);
 }
 
-TEST(History, StepsBehindAHierarchyCannotBeUndone) {
-  Fixture f;
-  f.session.configure({{"zero_hierarchy", std::string("aabb")}});
-  f.session.deform(down(0.1));
-  try {
-    f.session.undo();
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::Conflict);
-  }
-}
-
 TEST(Response, CancelRestoresTheStateBitForBit) {
   Fixture f;
   f.session.configure({{"response", std::string("cancel")}});
@@ -160,12 +148,30 @@ TEST(Response, CancelRestoresTheStateBitForBit) {
   EXPECT_EQ(again.depths, r.depths);
 }
 
-TEST(Response, CancelNeedsARowDetector) {
+TEST(Response, BadSettingsAreTypedAndChangeNothing) {
   Fixture f;
-  EXPECT_THROW(f.session.configure({{"response", std::string("cancel")}, {"zero_hierarchy", std::string("aabb")}}),
-               Error);
-  EXPECT_THROW(f.session.configure({{"response", std::string("melt")}}), Error);
-  EXPECT_THROW(f.session.configure({{"backoff_epsilon", -1.0}}), Error);
+  f.session.deform(down(0.1));
+  const Snapshot b(f.session);
+  const std::uint64_t v = f.session.version();
+  const std::size_t entries = f.session.history().size();
+  const std::pair<NamedSetting, const char*> bad[] = {
+      {{"response", std::string("melt")}, "response"},
+      {{"backoff_epsilon", -1.0}, "backoff_epsilon"},
+      {{"backoff_max_iterations", 0}, "backoff_max_iterations"},
+      {{"history_mb", -2.0}, "history_mb"},
+  };
+  for (const auto& [setting, field] : bad) {
+    try {
+      f.session.configure({setting});
+      ADD_FAILURE() << field << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::InvalidArgument) << field;
+      EXPECT_EQ(e.field(), field);
+    }
+    expect_same(Snapshot(f.session), b, field);
+    EXPECT_EQ(f.session.version(), v);
+    EXPECT_EQ(f.session.history().size(), entries);
+  }
 }
 
 }  // namespace

@@ -90,6 +90,18 @@ void CollisionDetector::restore_image(const DetectorImage&) {
 
 std::unique_ptr<CollisionDetector> CollisionDetector::clone() const { return nullptr; }
 
+bool CollisionDetector::start_journal() { return false; }
+
+std::shared_ptr<const DetectorImage> CollisionDetector::journal_image() const { return nullptr; }
+
+void CollisionDetector::restore_journal() {
+  throw Error(ErrorCode::Internal, "history", "this detector keeps no journal");
+}
+
+bool CollisionDetector::journal_tested(std::vector<std::uint8_t>&) const { return false; }
+
+void CollisionDetector::stop_journal() {}
+
 std::unique_ptr<CollisionDetector> make_detector(const SessionSettings& settings) {
   SimplifyParams clusters = settings.simplify;
   clusters.threads = settings.collision.threads;

@@ -276,7 +276,86 @@ class HierarchicalDetector final : public CollisionDetector {
     return info;
   }
 
+  // Undo (history.hpp). A step changes the narrow phase's states (or the extended narrow phase), the
+  // deformable tree (refit, adopted rebuilds), the balls' reach and the step counters; the zero tree
+  // changes only at reset, removal and insertion. The broad phase does not restrict detect_only(), so an
+  // image always holds every deformable row (`rows` is ignored).
+  std::shared_ptr<const DetectorImage> save_image(const IndexList*) const override {
+    auto image = std::make_shared<Image>();
+    if (extended_) {
+      image->extended = std::make_shared<const bvh::ExtendedNarrow>(*extended_);
+    } else {
+      image->narrow = narrow_->save_image(nullptr);
+      if (!image->narrow) return nullptr;
+    }
+    if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
+    image->reach.reserve(deformable_.size());
+    for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    image->rows = rows_;
+    image->step = step_;
+    image->evaluations = evaluations_;
+    image->inserted_nu = inserted_nu_;
+    image->rebuilds_adopted = rebuilds_adopted_;
+    return image;
+  }
+  void restore_image(const DetectorImage& image) override {
+    const auto* mine = dynamic_cast<const Image*>(&image);
+    if (!mine || mine->rows != rows_ || mine->reach.size() != deformable_.size() || !mine->extended != !extended_ ||
+        !mine->def != !def_) {
+      throw Error(ErrorCode::Internal, "history", "detector image does not fit this hierarchical detector");
+    }
+    if (extended_) *extended_ = *mine->extended;
+    else narrow_->restore_image(*mine->narrow);
+    if (def_) *def_ = *mine->def;
+    for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
+    step_ = mine->step;
+    evaluations_ = mine->evaluations;
+    inserted_nu_ = mine->inserted_nu;
+    rebuilds_adopted_ = mine->rebuilds_adopted;
+  }
+  // A deep copy (trees included); a background rebuild under way is not copied.
+  std::unique_ptr<CollisionDetector> clone() const override {
+    std::unique_ptr<CollisionDetector> narrow = narrow_->clone();
+    if (!narrow) return nullptr;
+    auto out = std::make_unique<HierarchicalDetector>(
+        params_, h_, std::unique_ptr<NarrowDetector>(static_cast<NarrowDetector*>(narrow.release())));
+    if (extended_) out->extended_ = std::make_unique<bvh::ExtendedNarrow>(*extended_);
+    out->extended_bytes_ = extended_bytes_;
+    out->zero_ = zero_;
+    if (def_) out->def_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*def_);
+    out->deformable_ = deformable_;
+    out->rows_ = rows_;
+    out->reach_ = reach_;
+    out->candidate_ = candidate_;
+    out->topology_ = topology_;
+    out->step_ = step_;
+    out->evaluations_ = evaluations_;
+    out->inserted_nu_ = inserted_nu_;
+    out->preprocess_ms_ = preprocess_ms_;
+    out->zero_build_ms_ = zero_build_ms_;
+    out->def_build_ms_ = def_build_ms_;
+    out->last_rebuild_ms_ = last_rebuild_ms_;
+    out->rebuilds_adopted_ = rebuilds_adopted_;
+    return out;
+  }
+
  private:
+  // What detect() changes (save_image / restore_image); trees and the extended state are copies.
+  struct Image final : DetectorImage {
+    std::shared_ptr<const DetectorImage> narrow;             // narrow phase's image (without extended)
+    std::shared_ptr<const bvh::ExtendedNarrow> extended;     // extended narrow phase (with it)
+    std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;          // the deformable tree (with one)
+    std::vector<double> reach;                               // per deformable row
+    Index rows = 0;
+    std::int64_t step = 0, evaluations = 0;
+    Index inserted_nu = 0, rebuilds_adopted = 0;
+    std::size_t bytes() const override {
+      return sizeof(*this) + (narrow ? narrow->bytes() : 0) + (def ? def->memory_bytes() : 0) +
+             reach.capacity() * sizeof(double) +
+             (extended ? extended->colliding().capacity() * (1 + 2 * sizeof(std::int64_t)) : 0);
+    }
+  };
+
   ZeroTree build_zero(const CollisionScene& scene, const IndexList& zero_rows) const {
     switch (h_.zero) {
       case ZeroHierarchy::Obb: return ZeroTree(std::in_place_index<1>, scene.positions, scene.radii, zero_rows, h_.tree);

@@ -204,11 +204,47 @@ class SimplifiedDetector final : public ApproximateDetector {
     return rows_.memory_bytes() + (rows_.kernel.zero_set() ? 0 : own_zero_.memory_bytes()) + cluster_bytes();
   }
 
+  // Undo (history.hpp): a step changes the deformable rows' states, the simplified surfels' states and
+  // proximities and the step's tallies; the clusters and the kernel's references change only at reset,
+  // removal and insertion. detect() may re-test any member, so an image always holds every deformable row
+  // (`rows` is ignored).
+  std::shared_ptr<const DetectorImage> save_image(const IndexList*) const override {
+    auto image = std::make_shared<Image>();
+    image->states.reserve(rows_.deformable.size());
+    for (Index r : rows_.deformable) image->states.push_back(rows_.states[r]);
+    image->cluster_state = cluster_state_;
+    image->prox = prox_;
+    image->approx = approx_;
+    return image;
+  }
+  void restore_image(const DetectorImage& image) override {
+    const auto* mine = dynamic_cast<const Image*>(&image);
+    if (!mine || mine->states.size() != rows_.deformable.size() || mine->cluster_state.size() != cluster_state_.size()) {
+      throw Error(ErrorCode::Internal, "history", "detector image does not fit this approximate detector");
+    }
+    for (std::size_t q = 0; q < mine->states.size(); ++q) rows_.states[rows_.deformable[q]] = mine->states[q];
+    cluster_state_ = mine->cluster_state;
+    prox_ = mine->prox;
+    approx_ = mine->approx;
+  }
+  std::unique_ptr<CollisionDetector> clone() const override { return std::make_unique<SimplifiedDetector>(*this); }
+
  private:
   // Distance of a simplified surfel to the zero region at its last proximity query.
   struct ProximityState {
     Vec3 center = Vec3::Zero();  // where it was measured
     double dist = 0.0;           // distance to the nearest zero surfel there, model units (0 = measure now)
+  };
+  // What detect() changes (save_image / restore_image).
+  struct Image final : DetectorImage {
+    std::vector<State> states;                // one per deformable row, in rows_.deformable order
+    std::vector<State> cluster_state;         // #C
+    std::vector<ProximityState> prox;         // #C
+    ApproximateStats approx;
+    std::size_t bytes() const override {
+      return sizeof(*this) + (states.capacity() + cluster_state.capacity()) * sizeof(State) +
+             prox.capacity() * sizeof(ProximityState);
+    }
   };
 
   static Vec3 centroid(const Points& positions, const IndexList& rows) {

@@ -94,11 +94,24 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
   validate(params, *fields_);
   const std::uint64_t version_before = version_;
-  // Resampling may add tangents, rest radii and rows: the whole session is the before-image.
+  // Resampling may add tangents, rest radii and rows: the whole session is the before-image. Else the
+  // deformable rows, and the detector states the step changes (its journal, when it keeps one); a merge
+  // after the step (response "merge") upgrades it to a whole image (respond()).
   const auto t_capture = std::chrono::steady_clock::now();
-  // So may a merge (response "merge"), which also removes rows.
-  const bool whole = settings_.resample.enabled || settings_.response.mode == Response::Merge;
-  SessionImage before = whole ? capture_whole(true) : capture_rows(fields_->deformable);
+  const bool whole = settings_.resample.enabled;
+  // Nothing is kept (history_mb 0) and nothing is taken back (response report): no image at all.
+  const bool none = history_limit() == 0 && settings_.response.mode == Response::Report;
+  journaling_ = !whole && !none && detector_ && detector_->start_journal();
+  struct EndJournal {
+    EditSession& s;
+    ~EndJournal() {
+      if (s.detector_) s.detector_->stop_journal();
+      s.journaling_ = false;
+    }
+  } end_journal{*this};
+  SessionImage before = none    ? SessionImage()
+                        : whole ? capture_whole(true)
+                                : capture_rows(fields_->deformable, false, !journaling_);
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   try {
@@ -111,7 +124,8 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
     throw;
   }
   const auto t_record = std::chrono::steady_clock::now();
-  if (out.response != "cancelled") {
+  if (journaling_ && before.rows) before.detector = detector_->journal_image();
+  if (out.response != "cancelled" && !none) {
     IdList touched;
     touched.reserve(out.moved.size());
     for (Index r : out.moved) touched.push_back(model_.ids()[r]);
@@ -143,8 +157,9 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     if (!model_.has_tangents()) make_tangent_frames(a.normals, a.radii, a.tangent_u, a.tangent_v);
     if (rest_radius_.size() != model_.size()) rest_radius_ = a.radii;
   }
-  Points previous;  // positions before the step, for each surfel's own displacement
-  if (detector_) previous = a.positions;
+  Points& previous = previous_;  // positions before the step, for each surfel's own displacement
+  if (detector_) previous = a.positions;  // same size as the last step's: no allocation
+  else previous.resize(0, 3);
   const bool tangents = model_.has_tangents();
   out = StepResult();
   const auto t_deform = std::chrono::steady_clock::now();
@@ -333,6 +348,9 @@ SessionReport EditSession::report() const {
   if (detector_) {
     for (auto& [name, bytes] : detector_->structures()) rep.structures.push_back({name, bytes});
     rep.hierarchy_status = detector_->hierarchy_info().status;
+  }
+  if (previous_.size() > 0) {
+    rep.structures.push_back({"step_scratch", static_cast<std::size_t>(previous_.size()) * sizeof(double)});
   }
   if (rest_radius_.size() > 0) {
     rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});

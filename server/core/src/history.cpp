@@ -1,5 +1,7 @@
 #include "surfeledit/core/history.hpp"
 
+#include <algorithm>
+
 namespace surfeledit {
 
 namespace {
@@ -14,9 +16,11 @@ std::size_t array_bytes(const M& m) {
 std::size_t SessionImage::bytes() const {
   std::size_t b = sizeof(*this) + colliding.capacity() * sizeof(SurfelId) + (detector ? detector->bytes() : 0);
   if (rows) {
-    b += rows->rows.capacity() * sizeof(Index) + array_bytes(rows->positions) + array_bytes(rows->normals) +
-         array_bytes(rows->tangent_u) + array_bytes(rows->tangent_v) +
-         rows->row_version.capacity() * sizeof(std::uint64_t);
+    // A shared row list counts for its share.
+    const std::size_t owners = static_cast<std::size_t>(std::max<long>(1, rows->rows.use_count()));
+    b += (rows->rows ? rows->rows->capacity() * sizeof(Index) / owners : 0) + array_bytes(rows->positions) +
+         array_bytes(rows->normals) + array_bytes(rows->tangent_u) + array_bytes(rows->tangent_v) +
+         rows->version_runs.capacity() * sizeof(rows->version_runs[0]);
   }
   if (whole) {
     b += whole->model.memory_bytes() + whole->row_version.capacity() * sizeof(std::uint64_t) +
@@ -27,6 +31,7 @@ std::size_t SessionImage::bytes() const {
 }
 
 void History::push(HistoryEntry entry, std::size_t limit_bytes) {
+  for (std::size_t k = applied_; k < entries_.size(); ++k) keep_spare(entries_[k]);
   entries_.resize(applied_);
   entries_.push_back(std::move(entry));
   applied_ = entries_.size();
@@ -44,6 +49,7 @@ void History::trim(std::size_t limit_bytes) {
       return;
     }
     bytes_ -= entries_.front().bytes;
+    keep_spare(entries_.front());
     entries_.pop_front();
     if (applied_ > 0) --applied_;
   }
@@ -52,6 +58,17 @@ void History::trim(std::size_t limit_bytes) {
 HistoryEntry* History::undo_target() { return applied_ > 0 ? &entries_[applied_ - 1] : nullptr; }
 
 HistoryEntry* History::redo_target() { return applied_ < entries_.size() ? &entries_[applied_] : nullptr; }
+
+void History::keep_spare(HistoryEntry& entry) {
+  if (entry.image.rows && spare_.size() < 2) spare_.push_back(std::move(*entry.image.rows));
+}
+
+RowsImage History::take_spare() {
+  if (spare_.empty()) return RowsImage();
+  RowsImage r = std::move(spare_.back());
+  spare_.pop_back();
+  return r;
+}
 
 void History::clear() {
   entries_.clear();

@@ -10,15 +10,25 @@ namespace surfeledit {
 
 namespace {
 
-// Rows `rows` of `a` (#rows by 3); empty when `a` is empty.
+// Rows `rows` of `a` into `out` (#rows by 3, its buffer reused when the size fits); empty when `a` is empty.
 // (Points are row-major: row r is the 3 doubles at data() + 3 r.)
-Points take_rows(const Points& a, const IndexList& rows) {
-  if (a.rows() == 0) return Points();
-  Points out(static_cast<Eigen::Index>(rows.size()), 3);
+void take_rows(const Points& a, const IndexList& rows, Points& out) {
+  if (a.rows() == 0) {
+    out.resize(0, 3);
+    return;
+  }
+  out.resize(static_cast<Eigen::Index>(rows.size()), 3);
   const double* from = a.data();
   double* to = out.data();
   for (std::size_t k = 0; k < rows.size(); ++k) std::memcpy(to + 3 * k, from + 3 * rows[k], 3 * sizeof(double));
-  return out;
+}
+
+// Row versions of `rows` from their runs.
+void put_versions(std::vector<std::uint64_t>& row_version, const IndexList& rows,
+                  const std::vector<std::pair<std::uint64_t, std::uint32_t>>& runs) {
+  std::size_t k = 0;
+  for (const auto& [v, n] : runs)
+    for (std::uint32_t j = 0; j < n; ++j) row_version[rows[k++]] = v;
 }
 
 void put_rows(Points& a, const IndexList& rows, const Points& values) {
@@ -30,27 +40,59 @@ void put_rows(Points& a, const IndexList& rows, const Points& values) {
 
 }  // namespace
 
-SessionImage EditSession::capture_rows(const IndexList& rows, bool subset) const {
+SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool detector) {
   SessionImage image;
-  RowsImage r;
-  r.rows = rows;
+  RowsImage r = history_.take_spare();
+  // The row list is shared while it does not change (the deformable rows, step after step).
+  if (!shared_rows_ || *shared_rows_ != rows) shared_rows_ = std::make_shared<const IndexList>(rows);
+  r.rows = shared_rows_;
   const SurfelArrays& a = model_.arrays();
-  r.positions = take_rows(a.positions, rows);
-  r.normals = take_rows(a.normals, rows);
-  if (model_.has_tangents()) {
-    r.tangent_u = take_rows(a.tangent_u, rows);
-    r.tangent_v = take_rows(a.tangent_v, rows);
+  take_rows(a.positions, rows, r.positions);
+  take_rows(a.normals, rows, r.normals);
+  take_rows(model_.has_tangents() ? a.tangent_u : Points(), rows, r.tangent_u);
+  take_rows(model_.has_tangents() ? a.tangent_v : Points(), rows, r.tangent_v);
+  r.version_runs.clear();
+  for (Index row : rows) {
+    const std::uint64_t v = row_version_[row];
+    if (!r.version_runs.empty() && r.version_runs.back().first == v) ++r.version_runs.back().second;
+    else r.version_runs.emplace_back(v, 1u);
   }
-  r.row_version.reserve(rows.size());
-  for (Index row : rows) r.row_version.push_back(row_version_[row]);
   image.rows = std::move(r);
-  if (detector_) {
+  if (detector_ && detector) {
     image.detector = detector_->save_image(subset ? &rows : nullptr);
     image.complete = image.detector != nullptr;
   }
   image.colliding = colliding_;
   image.steps = steps_;
   return image;
+}
+
+SessionImage EditSession::whole_before_step(const SessionImage& before) const {
+  SessionImage image;
+  WholeImage w;
+  w.model = model_;
+  const RowsImage& r = *before.rows;
+  SurfelArrays& a = w.model.arrays();
+  put_rows(a.positions, *r.rows, r.positions);
+  put_rows(a.normals, *r.rows, r.normals);
+  put_rows(a.tangent_u, *r.rows, r.tangent_u);
+  put_rows(a.tangent_v, *r.rows, r.tangent_v);
+  w.model_version = model_version_;
+  w.row_version = row_version_;
+  put_versions(w.row_version, *r.rows, r.version_runs);
+  if (fields_) w.fields = *fields_;
+  w.settings = settings_;
+  w.rest_radius = rest_radius_;
+  w.merge = merge_;
+  w.detector = detector_;  // the caller puts its state back once it is no longer the live one
+  image.whole = std::move(w);
+  image.colliding = before.colliding;
+  image.steps = before.steps;
+  return image;
+}
+
+std::shared_ptr<const DetectorImage> EditSession::step_detector_image(const SessionImage& before) const {
+  return journaling_ ? detector_->journal_image() : before.detector;
 }
 
 SessionImage EditSession::capture_whole(bool clone) const {
@@ -78,12 +120,14 @@ void EditSession::restore(const SessionImage& image, bool clone) {
   if (image.rows) {
     const RowsImage& r = *image.rows;
     SurfelArrays& a = model_.arrays();
-    put_rows(a.positions, r.rows, r.positions);
-    put_rows(a.normals, r.rows, r.normals);
-    put_rows(a.tangent_u, r.rows, r.tangent_u);
-    put_rows(a.tangent_v, r.rows, r.tangent_v);
-    for (std::size_t k = 0; k < r.rows.size(); ++k) row_version_[r.rows[k]] = r.row_version[k];
+    put_rows(a.positions, *r.rows, r.positions);
+    put_rows(a.normals, *r.rows, r.normals);
+    put_rows(a.tangent_u, *r.rows, r.tangent_u);
+    put_rows(a.tangent_v, *r.rows, r.tangent_v);
+    put_versions(row_version_, *r.rows, r.version_runs);
+    // A step's image without detector states while the journal runs: the journal holds them.
     if (image.detector) detector_->restore_image(*image.detector);
+    else if (detector_ && journaling_) detector_->restore_journal();
   } else {
     const WholeImage& w = *image.whole;
     model_ = w.model;
@@ -119,7 +163,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
                 std::string("cannot ") + what + " '" + entry.item.op +
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
-  SessionImage now = entry.image.rows ? capture_rows(entry.image.rows->rows) : capture_whole(false);
+  SessionImage now = entry.image.rows ? capture_rows(*entry.image.rows->rows) : capture_whole(false);
   const IdList ids_before = model_.ids();
   restore(entry.image, false);
   history_.replace_image(entry, std::move(now));

@@ -18,14 +18,15 @@ double largest(const std::vector<double>& depths) {
 // Largest displacement of a deformable row between `before` and `now` (#P by 3 each over `rows`).
 double largest_move(const RowsImage& before, const Points& now) {
   double d2 = 0.0;
-  for (std::size_t k = 0; k < before.rows.size(); ++k)
-    d2 = std::max(d2, (now.row(before.rows[k]) - before.positions.row(static_cast<Eigen::Index>(k))).squaredNorm());
+  const IndexList& rows = *before.rows;
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    d2 = std::max(d2, (now.row(rows[k]) - before.positions.row(static_cast<Eigen::Index>(k))).squaredNorm());
   return std::sqrt(d2);
 }
 
 }  // namespace
 
-void EditSession::respond(const DeformParams& params, const SessionImage& before, std::uint64_t version_before,
+void EditSession::respond(const DeformParams& params, SessionImage& before, std::uint64_t version_before,
                           StepResult& out) {
   if (!out.detected || out.colliding.empty()) return;  // response "none"
   const ResponseParams& rp = settings_.response;
@@ -42,7 +43,23 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
   if (rp.mode == Response::Merge) {
     // The step is kept; `colliding` keeps the ids that collided (the merge removed them). The rows
     // moved are renumbered: `moved` becomes every row changed by the step or the merge.
-    const MergeOutcome m = merge_now(true);
+    // The history needs the whole session before the step: built now (a merge is rare), from the rows
+    // image; the detector after the step is replaced by the merge and becomes the image's once its
+    // states before the step are back. A refused merge takes the step back.
+    SessionImage whole = before.rows ? whole_before_step(before) : SessionImage();
+    const std::shared_ptr<const DetectorImage> states = before.rows && detector_ ? step_detector_image(before) : nullptr;
+    MergeOutcome m;
+    try {
+      m = merge_now(true);
+    } catch (...) {
+      take_back();
+      throw;
+    }
+    if (before.rows) {
+      if (states) whole.whole->detector->restore_image(*states);
+      if (whole.whole->detector) whole.whole->detector->stop_journal();
+      before = std::move(whole);
+    }
     out.features = m.features;
     out.inserted.insert(out.inserted.end(), m.inserted.begin(), m.inserted.end());
     out.moved = model_.rows_of(changes_since(version_before).changed, "changed");
@@ -71,7 +88,7 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
   // detection of the kept fraction ends the response, so the result is exactly a step of that fraction.
   std::vector<std::uint8_t> candidate(static_cast<std::size_t>(model_.size()), 0);
   const IdList& collided = out.colliding;
-  for (const IdList* ids : {&collided, &before.colliding})  // those colliding before keep that state otherwise
+  for (const IdList* ids : {&collided, static_cast<const IdList*>(&before.colliding)})  // those colliding before keep that state otherwise
     for (SurfelId id : *ids) candidate[static_cast<std::size_t>(model_.row_of(id))] = 1;
   const bool partial = before.rows.has_value();  // resampling (whole images) may add rows: full re-tests
   double depth = largest(out.depths);
@@ -91,7 +108,7 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
   // positions before it (`previous`); only they move (fraction f) and are tested.
   IndexList rows;
   SessionImage small;
-  Points previous;
+  const Points& previous = previous_;  // step_once() left the positions before the step there
   auto prepare = [&] {
     take_back();
     applied = 0.0;
@@ -99,7 +116,6 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
     for (Index r : fields_->deformable)
       if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
     small = capture_rows(rows, true);
-    previous = model_.positions();
   };
   auto retest = [&](double f) {
     if (!partial) return apply(f);
@@ -150,9 +166,38 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
     // Bisection ends on the last fraction that did not collide when the last one tried still did.
     if (rotation && !out.colliding.empty() && depth >= eps) kept = lo;
   };
-  // Re-testing only the candidates can miss a surfel that did not collide after the whole step but
-  // does after part of it (e.g. one that crossed a thin zero part): the full detection of the kept
-  // fraction then finds it, and it joins the candidates for another round.
+  // Translation with a journal: the kept fraction is applied to every row, and the detector re-tests the
+  // candidates and the rows its detection of the whole step re-evaluated with a query. Every other row
+  // stayed inside its empty sphere over the whole step, so over any part of it too (a segment inside a
+  // ball): its state is that of before the step, as a step of the kept fraction would leave it.
+  std::vector<std::uint8_t> final_rows;
+  const bool quick = partial && !rotation &&
+                     (final_rows = candidate, detector_->journal_tested(final_rows));
+  auto finish = [&](double f) {
+    take_back();
+    applied = f;
+    p.translation = params.translation * f;
+    p.angle = 0.0;
+    SurfelArrays& a = model_.arrays();
+    const bool tangents = model_.has_tangents();
+    const DeformResult r = apply_step(*fields_, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+                                      tangents ? &a.tangent_v : nullptr, params_.threads);
+    ++version_;
+    touch_rows(r.moved);
+    out.seq = ++steps_;
+    out.moved = r.moved;
+    const CollisionResult c = detector_->detect_only(
+        CollisionScene{model_.positions(), model_.normals(), model_.radii(), fields_->regions}, previous, final_rows);
+    out.colliding.clear();
+    for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
+    out.depths = c.depths;
+    out.stats = c.stats;
+    colliding_ = out.colliding;
+    depth = largest(out.depths);
+  };
+  // Re-testing only the candidates can miss a surfel that did not collide after the whole step but does
+  // after part of it (e.g. one that crossed a thin zero part): the detection of the kept fraction then
+  // finds it, and it joins the candidates for another round.
   for (;;) {
     if (partial) prepare();
     round();
@@ -161,7 +206,8 @@ void EditSession::respond(const DeformParams& params, const SessionImage& before
       break;
     }
     if (iterations == 0 || (!partial && applied == kept)) break;
-    apply(kept);
+    if (quick) finish(kept);
+    else apply(kept);
     bool grew = false;
     for (SurfelId id : out.colliding) {
       std::uint8_t& c = candidate[static_cast<std::size_t>(model_.row_of(id))];

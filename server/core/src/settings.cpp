@@ -241,12 +241,6 @@ void validate_combination(const SessionSettings& s) {
   validate(s.resample);
   validate(s.hierarchy, s.collision);  // leaf sizes, deformable needs zero, extended needs robust, ...
   validate(s.simplify);
-  // Cancel and back-off restore the detector's state (history.hpp): only the row detectors save it.
-  if (s.response.mode != Response::Report && (s.hierarchy.any() || s.simplify.method != SimplifyMethod::None)) {
-    throw Error(ErrorCode::InvalidArgument, "response",
-                std::string("response=") + to_string(s.response.mode) +
-                    " needs a detector whose state can be restored: set zero_hierarchy and simplify to none");
-  }
   // Approximate detection runs the algorithm's own per-surfel test on clusters, without a broad phase.
   const CollisionAlgorithm algorithm = s.collision.algorithm;
   if (s.simplify.method == SimplifyMethod::None || algorithm == CollisionAlgorithm::None) return;

@@ -31,7 +31,11 @@ void append_rows(IndexList& rows, const SurfelModel& model, const IdList& ids, c
 
 UpdateEvent changes_event(const EditSession& s, const std::string& session, std::uint64_t since) {
   UpdateEvent event = make_update_event(session, s.version(), "");
-  if (!s.has_model()) return event;
+  if (!s.has_model()) {  // e.g. the first load undone: a new, empty model
+    event.full = since < s.version();
+    event.all_rows = event.full;
+    return event;
+  }
   const Changes changes = s.changes_since(since);
   event.full = changes.full;
   event.all_rows = changes.full;
@@ -56,7 +60,7 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   p.colliding = event.colliding;
 
   const bool has_surfels = event.all_rows || !event.rows.empty();
-  if (!has_surfels) return p;
+  if (!has_surfels || (event.all_rows && !model)) return p;  // a full update without a model: it is empty
   if (!model) throw std::out_of_range("update of session '" + event.session + "' has surfels but no model");
   const std::size_t n = event.all_rows ? static_cast<std::size_t>(model->size()) : event.rows.size();
   p.ids.resize(n);

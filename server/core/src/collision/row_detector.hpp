@@ -6,6 +6,9 @@
 #pragma once
 
 #include <chrono>
+#include <cstring>
+#include <memory>
+#include <type_traits>
 
 #include "kernel_rows.hpp"
 
@@ -17,6 +20,42 @@ struct Tally {
   Index queries = 0;  // nearest-neighbour queries made
 };
 
+// Undo support (history.hpp): the state every row had when the journal started, for the rows a sweep
+// changed since (first change wins). Rows are model rows; `old` is raw storage, so only the pages of
+// rows that changed are ever touched.
+template <typename State>
+struct Journal {
+  bool on = false;
+  bool save = false;                     // keep states (else only `tested`)
+  std::vector<std::uint8_t> saved;       // #P: 1 = old holds the row's state at the start
+  std::vector<std::uint8_t> tested;      // #P: 1 = the kernel made a query for the row since the start
+  std::unique_ptr<unsigned char[]> old;  // #P states' bytes (uninitialised until saved)
+  std::size_t capacity = 0;              // rows `old` can hold
+
+  void start(std::size_t rows, bool save_states) {
+    on = true;
+    save = save_states;
+    tested.assign(rows, 0);
+    if (!save) return;
+    if (rows > capacity) {
+      old.reset(new unsigned char[rows * sizeof(State)]);  // left uninitialised on purpose
+      capacity = rows;
+    }
+    saved.assign(rows, 0);
+  }
+  // Called with a row's state before and after one update that made `queries` queries; different bytes:
+  // the row changed.
+  void note(Index r, const State& before, const State& after, Index queries) {
+    if (queries > 0) tested[static_cast<std::size_t>(r)] = 1;
+    if (!save || saved[static_cast<std::size_t>(r)] || std::memcmp(&before, &after, sizeof(State)) == 0) return;
+    std::memcpy(old.get() + static_cast<std::size_t>(r) * sizeof(State), &before, sizeof(State));
+    saved[static_cast<std::size_t>(r)] = 1;
+  }
+  const State& at(Index r) const {
+    return *reinterpret_cast<const State*>(old.get() + static_cast<std::size_t>(r) * sizeof(State));
+  }
+};
+
 // The points of a step are independent: each row goes through update() (not_candidate() when the
 // broad phase ruled it out), serially below 2048 rows or with one thread, else in OpenMP dynamic
 // chunks of Kernel::kChunk rows. Results do not depend on the thread count.
@@ -24,16 +63,24 @@ struct Tally {
 struct ParallelSweep {
   void reset() {}
 
+  // `journal` (may be null): notes each row's state before its update.
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, std::vector<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads, std::vector<std::uint8_t>& hit) const {
+            int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) const {
     const Index n = static_cast<Index>(rows.size());
     Index tested = 0, queries = 0;
     auto one = [&](Index q) -> Index {
       const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
       auto& s = states[r];
+      if (journal) {
+        const typename Kernel::State before = s;
+        const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
+        journal->note(r, before, s, made);
+        hit[q] = s.colliding();
+        return made;
+      }
       const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
       hit[q] = s.colliding();  // read while the state is in cache
       return made;
@@ -69,6 +116,7 @@ class RowDetector final : public NarrowDetector {
     rows.kernel.seed(scene, rows.deformable, zero_rows, threads, rows.states);
     rows_ = std::move(rows);
     sweep_.reset();
+    journal_.on = false;
     preprocess_ms_ = ms_since(start);
   }
 
@@ -77,8 +125,7 @@ class RowDetector final : public NarrowDetector {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
     hit_.resize(rows_.deformable.size());
-    const Tally tally = sweep_.run(rows_.kernel, rows_.deformable, rows_.states, scene, previous, candidate,
-                                   resolve_threads(params_.threads), hit_);
+    const Tally tally = sweep(rows_.deformable, scene, previous, candidate);
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
@@ -89,15 +136,25 @@ class RowDetector final : public NarrowDetector {
     return result;
   }
 
-  void on_removed(const std::vector<bool>& keep) override { rows_.on_removed(keep); }
-  void on_inserted(const CollisionScene& scene, const IndexList& parents) override { rows_.on_inserted(scene, parents); }
-  std::size_t memory_bytes() const override { return rows_.memory_bytes() + hit_.capacity(); }
+  // Rows renumbered or added: the journal (by row) ends.
+  void on_removed(const std::vector<bool>& keep) override {
+    journal_.on = false;
+    rows_.on_removed(keep);
+  }
+  void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
+    journal_.on = false;
+    rows_.on_inserted(scene, parents);
+  }
+  std::size_t memory_bytes() const override {
+    return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
+  }
 
   // A step changes only the deformable rows' states and the sweep's tallies (hit_ is scratch); the
   // kernel's references change at reset, removal and insertion only (clone() copies them; their
   // trees are immutable and shared).
   struct Image final : DetectorImage {
-    IndexList rows;                              // the rows saved; empty = rows_.deformable
+    IndexList rows;                              // the rows saved; empty = rows_.deformable unless `listed`
+    bool listed = false;                         // `rows` are exactly the rows saved (even when empty)
     std::vector<typename Kernel::State> states;  // one per saved row, in that order
     Sweep sweep;
     std::size_t bytes() const override { return states.capacity() * sizeof(typename Kernel::State) + sizeof(*this); }
@@ -105,6 +162,7 @@ class RowDetector final : public NarrowDetector {
   std::shared_ptr<const DetectorImage> save_image(const IndexList* rows) const override {
     auto image = std::make_shared<Image>();
     if (rows) image->rows = *rows;
+    image->listed = rows != nullptr;
     const IndexList& saved = rows ? *rows : rows_.deformable;
     image->states.reserve(saved.size());
     for (Index r : saved) image->states.push_back(rows_.states[r]);
@@ -113,7 +171,7 @@ class RowDetector final : public NarrowDetector {
   }
   void restore_image(const DetectorImage& image) override {
     const auto* mine = dynamic_cast<const Image*>(&image);
-    const IndexList* saved = mine && !mine->rows.empty() ? &mine->rows : &rows_.deformable;
+    const IndexList* saved = mine && (mine->listed || !mine->rows.empty()) ? &mine->rows : &rows_.deformable;
     if (!mine || mine->states.size() != saved->size() || (!saved->empty() && saved->back() >= rows_.rows())) {
       throw Error(ErrorCode::Internal, "history", "detector image does not fit this detector");
     }
@@ -128,8 +186,7 @@ class RowDetector final : public NarrowDetector {
     for (Index r : rows_.deformable)
       if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
     hit_.resize(rows.size());
-    const Tally tally = sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, nullptr,
-                                   resolve_threads(params_.threads), hit_);
+    const Tally tally = sweep(rows, scene, previous, nullptr);
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
@@ -139,13 +196,84 @@ class RowDetector final : public NarrowDetector {
         preprocess_ms_, start);
     return result;
   }
-  std::unique_ptr<CollisionDetector> clone() const override { return std::make_unique<RowDetector>(*this); }
+  std::unique_ptr<CollisionDetector> clone() const override {
+    auto out = std::make_unique<RowDetector>(params_);
+    out->rows_ = rows_;
+    out->sweep_ = sweep_;
+    out->preprocess_ms_ = preprocess_ms_;
+    return out;
+  }
+
+  // The journal (independent points only: an order-dependent sweep saves images before the step). When
+  // most rows changed at the last journal (e.g. Robust moves every point's last free position), copying
+  // them twice costs more than one image before the step: the next steps only note the tested rows.
+  bool start_journal() override {
+    if constexpr (!std::is_same_v<Sweep, ParallelSweep>) {
+      return false;
+    } else {
+      const bool save = dense_skip_ == 0;
+      if (dense_skip_ > 0) --dense_skip_;
+      journal_.start(rows_.states.size(), save);
+      journal_sweep_ = sweep_;
+      return save;
+    }
+  }
+  std::shared_ptr<const DetectorImage> journal_image() const override {
+    if (!journal_.on || !journal_.save) return nullptr;
+    auto image = std::make_shared<Image>();
+    std::size_t n = 0;
+    for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
+    image->rows.reserve(n);
+    image->states.reserve(n);
+    for (Index r : rows_.deformable) {
+      if (!journal_.saved[static_cast<std::size_t>(r)]) continue;
+      image->rows.push_back(r);
+      image->states.push_back(journal_.at(r));
+    }
+    image->sweep = journal_sweep_;
+    image->listed = true;
+    return image;
+  }
+  void restore_journal() override {
+    if (!journal_.on || !journal_.save) throw Error(ErrorCode::Internal, "history", "no journal to restore");
+    for (Index r : rows_.deformable)
+      if (journal_.saved[static_cast<std::size_t>(r)]) rows_.states[r] = journal_.at(r);
+    sweep_ = journal_sweep_;
+  }
+  bool journal_tested(std::vector<std::uint8_t>& flags) const override {
+    if (!journal_.on || flags.size() != journal_.tested.size()) return false;
+    for (std::size_t r = 0; r < flags.size(); ++r) flags[r] |= journal_.tested[r];
+    return true;
+  }
+  void stop_journal() override {
+    if (journal_.on && journal_.save) {
+      std::size_t n = 0;
+      for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
+      dense_skip_ = 2 * n > rows_.deformable.size() ? kDenseSkip : 0;
+    }
+    journal_.on = false;
+  }
 
  private:
+  Tally sweep(const IndexList& rows, const CollisionScene& scene, const Points& previous,
+              const std::vector<std::uint8_t>* candidate) {
+    const int threads = resolve_threads(params_.threads);
+    if constexpr (std::is_same_v<Sweep, ParallelSweep>) {
+      if (journal_.on && journal_.tested.size() == rows_.states.size()) {
+        return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, &journal_);
+      }
+    }
+    return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
+  }
+
   KernelRows<Kernel> rows_;
   Sweep sweep_;
   std::vector<std::uint8_t> hit_;  // #deformable: colliding after the last step (filled by the sweep)
   double preprocess_ms_ = 0.0;  // the last reset
+  Journal<typename Kernel::State> journal_;  // states before the first change since start_journal()
+  Sweep journal_sweep_;                     // the sweep's tallies at start_journal()
+  static constexpr int kDenseSkip = 7;      // steps without saved states after a dense journal
+  int dense_skip_ = 0;                      // steps left before the journal saves states again
 };
 
 }  // namespace surfeledit::detail

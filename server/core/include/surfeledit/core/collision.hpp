@@ -156,14 +156,30 @@ class CollisionDetector {
   // State of the hierarchies (all empty / zero without one).
   virtual HierarchyInfo hierarchy_info() const;
 
-  // Undo support. save_image(): what detect() may change, nullptr when this detector cannot save it
-  // (hierarchies, approximate detection). restore_image(): puts back an image this detector saved,
+  // Undo support. save_image(): what detect() may change, nullptr when this detector cannot save it.
+  // restore_image(): puts back an image this detector saved,
   // with the rows it had then (Internal otherwise). clone(): an independent deep copy whose every
   // later result equals this one's, nullptr when not supported.
   // `rows` (ascending deformable rows): save only those (nullptr: every deformable row).
   virtual std::shared_ptr<const DetectorImage> save_image(const IndexList* rows = nullptr) const;
   virtual void restore_image(const DetectorImage& image);
   virtual std::unique_ptr<CollisionDetector> clone() const;
+  // The journal: a cheaper before-image of a step, for the detectors that keep one (row detectors with
+  // independent points). start_journal(): from now on, every row whose state a detect() / detect_only()
+  // changes keeps its state from this moment (first change wins), and rows re-evaluated with a query are
+  // noted; false when states are not kept this time (then save_image() before the step; the tested rows
+  // may still be noted). journal_image(): those rows and states, an image restore_image() takes (nullptr
+  // when no states are kept). stop_journal(): ends it. Reset, removal and insertion end it.
+  virtual bool start_journal();
+  virtual std::shared_ptr<const DetectorImage> journal_image() const;
+  // restore_journal(): puts back the journal's states, as restore_image(*journal_image()) would, without
+  // building the image (Internal when no journal runs).
+  virtual void restore_journal();
+  // journal_tested(): sets flags[r] (one per row) for every row whose state a detection since
+  // start_journal() re-evaluated with a query (the others stayed inside their empty spheres); false
+  // (flags untouched) without a journal.
+  virtual bool journal_tested(std::vector<std::uint8_t>& flags) const;
+  virtual void stop_journal();
 
  protected:
   explicit CollisionDetector(CollisionParams params) : params_(params) {}

@@ -197,8 +197,9 @@ class EditSession {
 
   // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
   // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
-  // returns it. Conflict when there is nothing to undo / redo, or when the entry could not save its
-  // detector (hierarchies, approximate detection).
+  // returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and approximate
+  // detection included) is restored exactly: later steps give the results a session that never took the
+  // undone op gives.
   std::uint64_t undo();
   std::uint64_t redo();
   // The entries, oldest first (undone ones last, flagged).
@@ -214,7 +215,14 @@ class EditSession {
   // History (session_history.cpp). An image of the rows a step may move (the deformable rows), or of
   // everything (`clone`: the detector is cloned, else the live object is shared).
   // `subset`: the detector saves only `rows` too (else every deformable row).
-  SessionImage capture_rows(const IndexList& rows, bool subset = false) const;
+  // `detector` false: no detector states (the step's journal holds them, see journaling_).
+  SessionImage capture_rows(const IndexList& rows, bool subset = false, bool detector = true);
+  // A step took `before` (a rows image) and has not changed rows, fields or settings otherwise: the whole
+  // session as it was before the step, but for the detector, which is the live object (its state is the
+  // caller's to put back); for a merge after the step (response "merge").
+  SessionImage whole_before_step(const SessionImage& before) const;
+  // The detector states of a step's rows image: the journal's while it runs, else the image's own.
+  std::shared_ptr<const DetectorImage> step_detector_image(const SessionImage& before) const;
   SessionImage capture_whole(bool clone) const;
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
@@ -225,8 +233,8 @@ class EditSession {
   std::uint64_t swap_entry(HistoryEntry& entry, const char* what);
   std::size_t history_limit() const;
   // Responses (session_response.cpp): the step is applied and detected; `before` is its image.
-  void respond(const DeformParams& params, const SessionImage& before, std::uint64_t version_before,
-               StepResult& out);
+  // A merge makes `before` a whole image.
+  void respond(const DeformParams& params, SessionImage& before, std::uint64_t version_before, StepResult& out);
   // Applies `params` (restored state) and detects; the core of deform() and of back-off.
   void step_once(const DeformParams& params, StepResult& out);
   // Puts `before` back after a step failed part-way (an unsaved detector is rebuilt from the restored
@@ -262,6 +270,9 @@ class EditSession {
   std::uint64_t steps_ = 0;
   MergeMemo merge_;  // origins and last crease (session_merge.cpp)
   History history_;
+  bool journaling_ = false;  // during deform(): the detector's journal holds the step's before-states
+  Points previous_;          // #P by 3: positions before the current step (reused between steps)
+  std::shared_ptr<const IndexList> shared_rows_;  // the row list of the last rows image (shared by images)
 };
 
 }  // namespace surfeledit

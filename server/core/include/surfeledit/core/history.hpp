@@ -5,7 +5,9 @@
 // state *after* it once undone (undo and redo swap the live state with the stored image, so each
 // entry keeps one side at a time). Two kinds of image:
 //  - Rows: a step that neither inserted nor removed rows: the rows it moved (positions, normals,
-//    tangents, per-row versions) and the detector's per-row states (DetectorImage);
+//    tangents, per-row versions as runs) and the detector's per-row states (DetectorImage) -- for row
+//    detectors only the states the step changed (the detector's journal); buffers of dropped entries
+//    are reused. A step whose response merges upgrades its image to a whole one then;
 //  - Whole: every other change (load, set_regions, configure, remove, a step with resampling): the
 //    whole model, regions and fields, settings, and the detector object itself (the live one after
 //    a change that replaced it, else an independent clone()).
@@ -29,10 +31,13 @@ namespace surfeledit {
 
 // The rows one step moved, and what the step changes in them.
 struct RowsImage {
-  IndexList rows;                          // rows moved by the step, ascending
+  std::shared_ptr<const IndexList> rows;   // rows moved by the step, ascending (shared by the images of
+                                           // steps over the same deformable rows)
   Points positions, normals;               // #rows by 3
   Points tangent_u, tangent_v;             // #rows by 3, or empty when the model has no tangents
-  std::vector<std::uint64_t> row_version;  // #rows
+  // Per-row versions as runs (version, count), in the order of `rows`: after a step every moved row has
+  // the step's version, so there are few runs.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> version_runs;
 };
 
 // What the session keeps for merges: the deformable surfels when the detector was last reset (the
@@ -69,8 +74,8 @@ struct SessionImage {
   std::shared_ptr<const DetectorImage> detector;  // Rows: the detector's per-row states (null: no detector)
   IdList colliding;                 // colliding ids
   std::uint64_t steps = 0;          // step counter
-  bool complete = true;             // false when the detector could not be saved (hierarchies, approximate
-                                    // detection): the image cannot be restored
+  bool complete = true;             // false when the detector could not be saved (a detector without
+                                    // save_image): the image cannot be restored
 
   std::size_t bytes() const;
 };
@@ -109,14 +114,21 @@ class History {
   std::size_t bytes() const { return bytes_; }
   // Replaces an entry's image (undo / redo swap), keeping the byte count.
   void replace_image(HistoryEntry& entry, SessionImage image);
+  // A rows image of a dropped entry, whose buffers a new image can reuse (empty when there is none):
+  // memory already touched costs no page faults.
+  RowsImage take_spare();
 
  private:
+  // Keeps the rows image of an entry about to be dropped (at most two are kept).
+  void keep_spare(HistoryEntry& entry);
+
   // Sums the entries' bytes (after entries were dropped).
   void recount();
 
   std::deque<HistoryEntry> entries_;
   std::size_t applied_ = 0;  // entries_[0, applied_) are applied; the rest is the redo tail
   std::size_t bytes_ = 0;
+  std::vector<RowsImage> spare_;  // buffers of dropped entries
 };
 
 }  // namespace surfeledit
