@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-reply-cache-mb", reply_cache_mb, "Replies kept for repeated requests, MiB (estimated)")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 20));
+  app.add_option("--security", config.security,
+                 "DDS Security configuration file (identity, CAs, signed governance and permissions; "
+                 "scripts/make_security.py writes one per user): participants must authenticate and hold "
+                 "permissions, discovery and data are encrypted; without it, security is off")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   config.max_client_upload_bytes = client_upload_mb << 20;
   config.max_upload_bytes = upload_mb << 20;
@@ -116,6 +121,8 @@ int main(int argc, char** argv) {
     });
     if (config.data_root.empty()) log->info("file loading is off (no --data-root)");
     else log->info("file loading reads below '{}' (files up to {} MiB)", config.data_root, max_file_mb);
+    if (config.security.empty()) log->info("DDS Security is off (no --security)");
+    else log->info("DDS Security on: '{}'", config.security);
     log->info("surfeledit-server ready on domain {}", config.domain);
     try {
       service.run();

@@ -53,6 +53,11 @@ Qos& Qos::partition(const std::string& name) {
   return *this;
 }
 
+Qos& Qos::property(const std::string& name, const std::string& value) {
+  dds_qset_prop(qos_, name.c_str(), value.c_str());
+  return *this;
+}
+
 Qos protocol_qos() {
   Qos qos;
   qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();
@@ -66,8 +71,13 @@ dds_topic_descriptor_t without_type_info(const dds_topic_descriptor_t& d) {
                                 {nullptr, 0}, {nullptr, 0}, d.restrict_data_representation};
 }
 
-Entity make_participant(dds_domainid_t domain) {
-  return Entity(dds_create_participant(domain, nullptr, nullptr), "dds_create_participant");
+Entity make_participant(dds_domainid_t domain, const std::vector<SecurityProperty>& properties) {
+  if (properties.empty()) return Entity(dds_create_participant(domain, nullptr, nullptr), "dds_create_participant");
+  Qos qos;
+  for (const auto& p : properties) qos.property(p.name, p.value);
+  return Entity(dds_create_participant(domain, qos.get(), nullptr),
+                "dds_create_participant with DDS Security (is the identity valid, signed by identity_ca, its "
+                "permissions signed by permissions_ca and granting this domain?)");
 }
 
 Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type, const std::string& name,

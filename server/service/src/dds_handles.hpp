@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "surfeledit/service/security.hpp"
+
 namespace surfeledit::service::dds {
 
 // Returns `rc` when it is not an error, throws std::runtime_error naming `what` otherwise.
@@ -61,6 +63,8 @@ class Qos {
   Qos& transient_local(int32_t depth);
   // The one partition of a publisher or subscriber.
   Qos& partition(const std::string& name);
+  // One participant property (e.g. a "dds.sec.*" DDS Security setting).
+  Qos& property(const std::string& name, const std::string& value);
 
  private:
   dds_qos_t* qos_;
@@ -77,7 +81,9 @@ Qos protocol_qos();
 // The result refers to the original's ops and keys (static, generated data).
 dds_topic_descriptor_t without_type_info(const dds_topic_descriptor_t& d);
 
-Entity make_participant(dds_domainid_t domain);
+// A participant on `domain`; with `properties` (surfeledit/service/security.hpp), a secured one
+// (DDS Security plugins loaded, identity authenticated, permissions checked).
+Entity make_participant(dds_domainid_t domain, const std::vector<SecurityProperty>& properties = {});
 Entity make_topic(const Entity& participant, const dds_topic_descriptor_t* type, const std::string& name,
                   const Qos& qos);
 Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qos);

@@ -77,7 +77,9 @@ struct Service::Impl {
   explicit Impl(const ServiceConfig& c)
       : config(c),
         handler(handler_config(c)),
-        participant(dds::make_participant(static_cast<dds_domainid_t>(c.domain))),
+        participant(dds::make_participant(static_cast<dds_domainid_t>(c.domain),
+                                          c.security.empty() ? std::vector<SecurityProperty>{}
+                                                             : security_properties(c.security))),
         qos(dds::protocol_qos()),
         request_topic(dds::make_topic(participant, &kRequestType, kRequestTopic, qos)),
         reply_topic(dds::make_topic(participant, &kReplyType, kReplyTopic, qos)),

@@ -35,6 +35,9 @@ struct ServiceConfig {
   std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
   std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
   std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeated requests
+  // DDS Security configuration file (surfeledit/service/security.hpp; PROTOCOL.md, "Security");
+  // empty: security off (any participant on the domain may match).
+  std::string security;
 };
 
 class Service {

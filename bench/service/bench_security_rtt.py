@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""Step round trip with DDS Security on vs off, in one run, interleaved.
+
+Run (after scripts/setup.sh; needs build/server/app/surfeledit-server, build/tests/surfeledit-secure-probe
+and openssl):
+    .venv/bin/python bench/service/bench_security_rtt.py [--build-dir build] [--rounds 6] [--steps 60]
+                                                         [--warmup 10] [--surfels 10000] [--json-out r.json]
+
+Two servers run side by side on two private DDS domains: one with `--security` (certificates and
+signed documents made by scripts/make_security.py in a temp dir: discovery, liveliness and every
+topic encrypted, access control on), one without. Each round runs surfeledit-secure-probe as a client
+of each server, in alternating order (A B, then B A, ...): it opens a session, uploads a slab + sphere of
+about --surfels surfels, sets the regions, configures algorithm "none" (the step is the deformation
+alone) and makes --warmup + --steps deform steps back to back, each timed in the probe from dds_write of
+the Request to the taken Reply (steady clock). The warm-up steps are dropped. The probe is a C++
+participant because the Python client's cyclonedds wheel has no security plugins; both arms use the
+same probe, so the difference is the security (encryption and signing of every sample, secured discovery).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Dict, List, Optional
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
+
+def start_server(exe: Path, domain: int, security: Optional[Path], log: Path) -> subprocess.Popen:
+    args = [str(exe), "--domain", str(domain)] + (["--security", str(security)] if security else [])
+    with log.open("w") as f:
+        srv = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
+    deadline = time.monotonic() + 60
+    while "ready on domain" not in log.read_text():
+        if srv.poll() is not None or time.monotonic() > deadline:
+            raise RuntimeError(f"surfeledit-server did not start:\n{log.read_text()[-2000:]}")
+        time.sleep(0.05)
+    return srv
+
+
+def run_probe(probe: Path, domain: int, security: Optional[Path], args: argparse.Namespace, tag: str) -> List[float]:
+    cmd = [str(probe), "client", "--domain", str(domain), "--client-id", tag, "--session", tag,
+           "--surfels", str(args.surfels), "--steps", str(args.warmup + args.steps), "--timeout-s", "30"]
+    if security:
+        cmd += ["--security", str(security)]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    if r.returncode != 0:
+        raise RuntimeError(f"probe failed ({r.returncode}):\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}")
+    ms = [float(line.split("=", 1)[1]) for line in r.stdout.splitlines() if line.startswith("step_ms=")]
+    return ms[args.warmup:]
+
+
+def stats(values: List[float]) -> Dict[str, float]:
+    return {"n": len(values), "p50": benchlib.median(values), "p90": benchlib.percentile(values, 0.9),
+            "p99": benchlib.percentile(values, 0.99), "max": max(values)}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build-dir")
+    ap.add_argument("--rounds", type=int, default=6)
+    ap.add_argument("--steps", type=int, default=60)
+    ap.add_argument("--warmup", type=int, default=10)
+    ap.add_argument("--surfels", type=int, default=10_000)
+    ap.add_argument("--json-out")
+    args = ap.parse_args()
+    build = benchlib.build_dir(args.build_dir)
+    server = build / "server" / "app" / "surfeledit-server"
+    probe = build / "tests" / "surfeledit-secure-probe"
+    if not server.is_file() or not probe.is_file():
+        print(f"missing {server} or {probe}: build first")
+        return 2
+    print(benchlib.machine_line())
+    base = 100 + os.getpid() % 60
+    domains = {"security on": base, "security off": base + 61}
+    with tempfile.TemporaryDirectory(prefix="surfeledit-bench-security-") as tmp:
+        tmpdir = Path(tmp)
+        subprocess.run([sys.executable, str(benchlib.REPO / "scripts" / "make_security.py"), str(tmpdir / "sec"),
+                        "--clients", "alice", "--denied", "", "--rogue", ""], check=True, capture_output=True)
+        confs = {"security on": (tmpdir / "sec" / "server" / "security.conf", tmpdir / "sec" / "alice" / "security.conf"),
+                 "security off": (None, None)}
+        servers = {k: start_server(server, domains[k], confs[k][0], tmpdir / f"server-{domains[k]}.log") for k in domains}
+        samples: Dict[str, List[float]] = {k: [] for k in domains}
+        try:
+            order = list(domains)
+            for r in range(args.rounds):
+                for k in (order if r % 2 == 0 else order[::-1]):
+                    got = run_probe(probe, domains[k], confs[k][1], args, f"bench-{r}")
+                    samples[k] += got
+                    print(f"round {r} {k}: median {benchlib.median(got):.3f} ms over {len(got)} steps", flush=True)
+        finally:
+            for s in servers.values():
+                s.terminate()
+                s.wait(timeout=20)
+    results = {k: stats(v) for k, v in samples.items()}
+    rows = [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
+            for k, st in results.items()]
+    print()
+    print(benchlib.table(["step round trip", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"], rows))
+    on, off = results["security on"]["p50"], results["security off"]["p50"]
+    print(f"security on / off at p50: {on / off:.2f}x ({on - off:+.3f} ms); {args.surfels:,} surfels requested, "
+          f"{args.rounds} rounds x {args.steps} steps per arm (after {args.warmup} warm-up steps)")
+    print(benchlib.machine_line())
+    if args.json_out:
+        Path(args.json_out).write_text(json.dumps(results, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

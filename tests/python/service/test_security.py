@@ -1,0 +1,181 @@
+"""DDS Security on (`surfeledit-server --security`, proto/PROTOCOL.md "Security"), against real
+server processes and C++ participants (surfeledit-secure-probe links Debian's libddsc, which has the
+security plugins; the Python client's wheel does not).
+
+Certificates and signed documents are made once per module by scripts/make_security.py in a temp
+dir: server, alice (permitted client), mallory (valid identity, permissions without surfeledit's
+topics), eve (valid identity, permissions signed by her own CA). An "outsider" participant has no
+security at all. The control test runs the same outsider against a server without security, where
+it does get in: the probe can see what security prevents.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Dict, Iterator, List, Optional
+
+import pytest
+
+from .conftest import REPO, ManagedProcess, find_executable, free_domain, server_executable
+from surfeledit.server_process import server_args
+
+PLUGIN_DIRS = ("/usr/lib/x86_64-linux-gnu/libddsc0debian", "/usr/lib/aarch64-linux-gnu/libddsc0debian")
+
+
+def probe_executable() -> str:
+    exe = find_executable("SURFELEDIT_SECURE_PROBE", "build/tests/surfeledit-secure-probe",
+                          "build*/tests/surfeledit-secure-probe")
+    if exe is None:
+        pytest.skip("surfeledit-secure-probe not built (set SURFELEDIT_SECURE_PROBE)")
+    return exe
+
+
+@pytest.fixture(scope="module")
+def security_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    if shutil.which("openssl") is None:
+        pytest.skip("openssl not installed (Debian package openssl)")
+    out = tmp_path_factory.mktemp("security")
+    subprocess.run([sys.executable, str(REPO / "scripts" / "make_security.py"), str(out),
+                    "--clients", "alice", "--denied", "mallory", "--rogue", "eve"],
+                   check=True, capture_output=True, text=True, timeout=120)
+    return out
+
+
+class SecuredServer(ManagedProcess):
+    def __init__(self, domain: int, log: Path, security: Optional[Path]) -> None:
+        self.domain = domain
+        extra = ["--security", str(security)] if security else []
+        super().__init__([server_executable()] + server_args(domain, None) + extra, log)
+
+    def wait_ready(self, timeout: float = 30.0) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if not self.alive:
+                pytest.fail(f"surfeledit-server exited with {self.proc.returncode}:\n{self.log_tail()}")
+            if "ready on domain" in self.log_tail(100_000):
+                return
+            time.sleep(0.05)
+        pytest.fail(f"surfeledit-server not ready within {timeout} s:\n{self.log_tail()}")
+
+
+def start_server(request: pytest.FixtureRequest, tmp_path: Path, security: Optional[Path]) -> SecuredServer:
+    srv = SecuredServer(free_domain(), tmp_path / "server.log", security)
+    request.addfinalizer(srv.stop)
+    srv.wait_ready()
+    return srv
+
+
+def parse(out: str) -> Dict[str, List[str]]:
+    values: Dict[str, List[str]] = {}
+    for line in out.splitlines():
+        key, sep, value = line.partition("=")
+        if sep:
+            values.setdefault(key, []).append(value)
+    return values
+
+
+def start_probe(args: List[str], log: Path) -> ManagedProcess:
+    return ManagedProcess([probe_executable()] + args, log)
+
+
+def finish(p: ManagedProcess, timeout: float) -> Dict[str, List[str]]:
+    try:
+        p.proc.wait(timeout=timeout)
+    finally:
+        p.stop()
+    return parse(p.log.read_text(errors="replace"))
+
+
+def client_args(domain: int, conf: Optional[Path], client_id: str, session: str, steps: int = 3) -> List[str]:
+    args = ["client", "--domain", str(domain), "--client-id", client_id, "--session", session,
+            "--surfels", "2000", "--steps", str(steps), "--timeout-s", "15"]
+    return args + (["--security", str(conf)] if conf else [])
+
+
+def intruder_args(domain: int, conf: Optional[Path], victim: str, session: str, seconds: float) -> List[str]:
+    args = ["intruder", "--domain", str(domain), "--victim", victim, "--session", session, "--seconds", str(seconds)]
+    return args + (["--security", str(conf)] if conf else [])
+
+
+def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_path: Path,
+                                           security_dir: Path) -> None:
+    srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
+    p = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", "alice-1", "secured"),
+                    tmp_path / "alice.log")
+    out = finish(p, 60)
+    assert p.proc.returncode == 0, p.log_tail()
+    for op in ("open", "load_begin", "load_chunk", "load_commit", "set_regions", "configure", "close"):
+        assert out[op] == ["0"], (op, p.log_tail())
+    assert out["deform"] == ["0"] * 3 and len(out["step_ms"]) == 3
+    # The commit's full update and one per step reached alice's update reader.
+    assert int(out["updates"][0]) >= 4, p.log_tail()
+    assert srv.alive, srv.log_tail()
+
+
+def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pytest.FixtureRequest, tmp_path: Path,
+                                                                   security_dir: Path) -> None:
+    srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
+    victim, session = "victim-1", "taken"
+    intruders = {
+        "outsider": None,  # no security at all
+        "mallory": security_dir / "mallory" / "security.conf",  # identity ok, no surfeledit permission
+        "eve": security_dir / "eve" / "security.conf",  # identity ok, permissions signed by her own CA
+    }
+    procs = {name: start_probe(intruder_args(srv.domain, conf, victim, session, 8.0), tmp_path / f"{name}.log")
+             for name, conf in intruders.items()}
+    for p in procs.values():
+        request.addfinalizer(p.stop)
+    time.sleep(3.0)  # the intruders have been writing as the victim and reading for 3 s
+    # Had any intruder request reached the server, the victim's id would be bound to that writer (its
+    # requests then get no reply) and the session name taken (OPEN: STATUS_CONFLICT).
+    alice = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", victim, session),
+                        tmp_path / "alice.log")
+    out = finish(alice, 60)
+    assert alice.proc.returncode == 0 and out["open"] == ["0"], alice.log_tail()
+    assert out["deform"] == ["0"] * 3
+    for name, p in procs.items():
+        got = finish(p, 30)
+        assert p.proc.returncode == 0, (name, p.log_tail())
+        # Nothing read: no reply of the victim's or its own partition, no update of alice's session.
+        assert got["replies_read"] == ["0"] and got["updates_read"] == ["0"], (name, p.log_tail())
+        # Nothing written: no server endpoint ever matched its writer or readers.
+        assert got["matched_servers"] == ["0"], (name, p.log_tail())
+    outsider, mallory, eve = (parse(procs[n].log.read_text()) for n in ("outsider", "mallory", "eve"))
+    # The outsider and eve did write (to nobody); mallory could not even create the request writer.
+    assert int(outsider["written"][0]) > 0 and int(eve["written"][0]) > 0
+    assert mallory["writer"] != ["created"], procs["mallory"].log_tail()
+    assert srv.alive, srv.log_tail()
+
+
+def test_control_without_security_the_outsider_gets_in(request: pytest.FixtureRequest, tmp_path: Path) -> None:
+    """The same outsider against a server without --security: it binds the victim's id and reads
+    replies, so the shut-out test above measures what security prevents."""
+    srv = start_server(request, tmp_path, None)
+    victim, session = "victim-1", "taken"
+    outsider = start_probe(intruder_args(srv.domain, None, victim, session, 6.0), tmp_path / "outsider.log")
+    request.addfinalizer(outsider.stop)
+    time.sleep(3.0)
+    alice = start_probe(client_args(srv.domain, None, victim, session) + ["--timeout-s", "3"], tmp_path / "alice.log")
+    out = finish(alice, 60)
+    got = finish(outsider, 30)
+    assert int(got["matched_servers"][0]) > 0 and int(got["replies_read"][0]) > 0, outsider.log_tail()
+    # The victim's id is bound to the outsider's writer: its OPEN gets no reply.
+    assert alice.proc.returncode == 2 and out["open"] == ["-1"], alice.log_tail()
+
+
+def test_bad_security_config_is_refused_at_start(tmp_path: Path, security_dir: Path) -> None:
+    conf = tmp_path / "bad.conf"
+    lines = (security_dir / "server" / "security.conf").read_text().splitlines()
+    base = security_dir / "server"
+    # Same files by absolute path, minus the permissions: the server names the missing key and exits.
+    text = "\n".join(l if l.startswith("#") else l.split("=")[0] + "= " + str((base / l.split("=")[1].strip()).resolve())
+                     for l in lines if l and not l.startswith("permissions "))
+    conf.write_text(text + "\n")
+    r = subprocess.run([server_executable(), "--domain", "0", "--security", str(conf)], capture_output=True,
+                       text=True, timeout=30)
+    assert r.returncode != 0
+    assert "missing key 'permissions'" in r.stdout + r.stderr
