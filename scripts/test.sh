@@ -8,6 +8,7 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
 BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
+export SURFELEDIT_SECURE_PROBE="$BUILD/tests/surfeledit-secure-probe"
 echo "== C++ tests"
 ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)"
 # sanitizer_build NAME DIR CMAKE_OPTION [EXTRA_CMAKE_ARGS...] TARGETS: a separate instrumented build (no Python

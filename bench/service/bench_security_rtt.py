@@ -3,16 +3,18 @@
 
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server, build/tests/surfeledit-secure-probe
 and openssl):
-    .venv/bin/python bench/service/bench_security_rtt.py [--build-dir build] [--rounds 6] [--steps 60]
-                                                         [--warmup 10] [--surfels 10000] [--json-out r.json]
+    .venv/bin/python bench/service/bench_security_rtt.py [--build-dir build] [--rounds 3] [--steps 200]
+                                                         [--warmup 20] [--surfels 10000] [--json-out r.json]
 
 Two servers run side by side on two private DDS domains: one with `--security` (certificates and
 signed documents made by scripts/make_security.py in a temp dir: discovery, liveliness and every
-topic encrypted, access control on), one without. Each round runs surfeledit-secure-probe as a client
-of each server, in alternating order (A B, then B A, ...): it opens a session, uploads a slab + sphere of
-about --surfels surfels, sets the regions, configures algorithm "none" (the step is the deformation
-alone) and makes --warmup + --steps deform steps back to back, each timed in the probe from dds_write of
-the Request to the taken Reply (steady clock). The warm-up steps are dropped. The probe is a C++
+topic encrypted, access control on), one without. Each round runs one `surfeledit-secure-probe bench`
+process holding a client of each server (a secured participant and a plain one): each opens a session,
+uploads a slab + sphere of about --surfels surfels, sets the regions and configures algorithm "none"
+(the step is the deformation alone); then the two make --warmup + --steps deform steps, alternating
+(on, off, off, on, ...), each timed in the probe from dds_write of the Request to the taken Reply (steady
+clock). The warm-up pairs are dropped. Besides each arm's percentiles, the median of the paired
+differences (on - off of the same step index) is reported: it cancels load that drifts between pairs. The probe is a C++
 participant because the Python client's cyclonedds wheel has no security plugins; both arms use the
 same probe, so the difference is the security (encryption and signing of every sample, secured discovery).
 """
@@ -45,16 +47,19 @@ def start_server(exe: Path, domain: int, security: Optional[Path], log: Path) ->
     return srv
 
 
-def run_probe(probe: Path, domain: int, security: Optional[Path], args: argparse.Namespace, tag: str) -> List[float]:
-    cmd = [str(probe), "client", "--domain", str(domain), "--client-id", tag, "--session", tag,
+def run_probe(probe: Path, domains: Dict[str, int], alice: Path, args: argparse.Namespace, tag: str) -> Dict[str, List[float]]:
+    cmd = [str(probe), "bench", "--domain", str(domains["security on"]), "--security", str(alice),
+           "--plain-domain", str(domains["security off"]), "--client-id", tag, "--session", tag,
            "--surfels", str(args.surfels), "--steps", str(args.warmup + args.steps), "--timeout-s", "30"]
-    if security:
-        cmd += ["--security", str(security)]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     if r.returncode != 0:
         raise RuntimeError(f"probe failed ({r.returncode}):\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}")
-    ms = [float(line.split("=", 1)[1]) for line in r.stdout.splitlines() if line.startswith("step_ms=")]
-    return ms[args.warmup:]
+    out: Dict[str, List[float]] = {"security on": [], "security off": []}
+    for line in r.stdout.splitlines():
+        key, _, value = line.partition("=")
+        if key in ("on_ms", "off_ms"):
+            out["security on" if key == "on_ms" else "security off"].append(float(value))
+    return {k: v[args.warmup:] for k, v in out.items()}
 
 
 def stats(values: List[float]) -> Dict[str, float]:
@@ -65,9 +70,9 @@ def stats(values: List[float]) -> Dict[str, float]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build-dir")
-    ap.add_argument("--rounds", type=int, default=6)
-    ap.add_argument("--steps", type=int, default=60)
-    ap.add_argument("--warmup", type=int, default=10)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--warmup", type=int, default=20)
     ap.add_argument("--surfels", type=int, default=10_000)
     ap.add_argument("--json-out")
     args = ap.parse_args()
@@ -89,12 +94,13 @@ def main() -> int:
         servers = {k: start_server(server, domains[k], confs[k][0], tmpdir / f"server-{domains[k]}.log") for k in domains}
         samples: Dict[str, List[float]] = {k: [] for k in domains}
         try:
-            order = list(domains)
             for r in range(args.rounds):
-                for k in (order if r % 2 == 0 else order[::-1]):
-                    got = run_probe(probe, domains[k], confs[k][1], args, f"bench-{r}")
-                    samples[k] += got
-                    print(f"round {r} {k}: median {benchlib.median(got):.3f} ms over {len(got)} steps", flush=True)
+                got = run_probe(probe, domains, confs["security on"][1], args, f"bench-{r}")
+                for k in domains:
+                    samples[k] += got[k]
+                print(f"round {r}: median on {benchlib.median(got['security on']):.3f} ms, off "
+                      f"{benchlib.median(got['security off']):.3f} ms over {len(got['security on'])} step pairs",
+                      flush=True)
         finally:
             for s in servers.values():
                 s.terminate()
@@ -105,8 +111,11 @@ def main() -> int:
     print()
     print(benchlib.table(["step round trip", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"], rows))
     on, off = results["security on"]["p50"], results["security off"]["p50"]
-    print(f"security on / off at p50: {on / off:.2f}x ({on - off:+.3f} ms); {args.surfels:,} surfels requested, "
-          f"{args.rounds} rounds x {args.steps} steps per arm (after {args.warmup} warm-up steps)")
+    diffs = [a - b for a, b in zip(samples["security on"], samples["security off"])]
+    results["paired difference"] = stats(diffs)
+    print(f"security on / off at p50: {on / off:.2f}x; median of the paired differences (on - off, same step "
+          f"index): {benchlib.median(diffs):+.3f} ms; {args.surfels:,} surfels requested, {args.rounds} rounds x "
+          f"{args.steps} step pairs (after {args.warmup} warm-up pairs)")
     print(benchlib.machine_line())
     if args.json_out:
         Path(args.json_out).write_text(json.dumps(results, indent=2))

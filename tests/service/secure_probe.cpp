@@ -15,6 +15,10 @@
 //       NAME), and reads the replies of both ids' partitions and every update. Prints
 //       participant=, writer=, readers= (created or the error), written=, matched_servers=,
 //       replies_read=, updates_read=; exit code 0 (the test judges the counts).
+//   surfeledit-secure-probe bench    --domain D --security CONF --plain-domain D2 --client-id ID --session NAME
+//                                    [--surfels N] [--steps K]
+//       The client's work against a secured server (D) and a plain one (D2) from one process, the
+//       steps alternating between them; prints on_ms= and off_ms= per step.
 //
 // The security configuration goes through surfeledit::service::security_properties, as the server's.
 #include <dds/dds.h>
@@ -63,13 +67,16 @@ struct Args {
   int steps = 3;
   double timeout_s = 10;
   double seconds = 5;
+  int plain_domain = -1;
 };
 
 Args parse(int argc, char** argv) {
-  if (argc < 2) throw std::invalid_argument("usage: surfeledit-secure-probe client|intruder [options]");
+  if (argc < 2) throw std::invalid_argument("usage: surfeledit-secure-probe client|intruder|bench [options]");
   Args a;
   a.mode = argv[1];
-  if (a.mode != "client" && a.mode != "intruder") throw std::invalid_argument("mode must be client or intruder");
+  if (a.mode != "client" && a.mode != "intruder" && a.mode != "bench") {
+    throw std::invalid_argument("mode must be client, intruder or bench");
+  }
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--domain") a.domain = std::stoi(v);
@@ -81,6 +88,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--steps") a.steps = std::stoi(v);
     else if (k == "--timeout-s") a.timeout_s = std::stod(v);
     else if (k == "--seconds") a.seconds = std::stod(v);
+    else if (k == "--plain-domain") a.plain_domain = std::stoi(v);
     else throw std::invalid_argument("unknown option " + k);
   }
   if (a.domain < 0 || a.domain > 232) throw std::invalid_argument("--domain must be in 0..232");
@@ -172,15 +180,16 @@ void many(Seq& seq, std::vector<T>& v) {
 // The permitted client: request writer, reply reader in its own partition, update reader.
 class Client {
  public:
-  Client(const Args& a) : args_(a) {
-    pp_ = check(make_participant(a.domain, a.security), "dds_create_participant");
+  Client(int domain, const std::string& security, const std::string& client_id, double timeout_s)
+      : client_id_(client_id), timeout_s_(timeout_s) {
+    pp_ = check(make_participant(domain, security), "dds_create_participant");
     const dds_entity_t req_t = check(dds_create_topic(pp_, &kRequestDesc, "surfeledit_request", nullptr, nullptr), "topic");
     const dds_entity_t rep_t = check(dds_create_topic(pp_, &kReplyDesc, "surfeledit_reply", nullptr, nullptr), "topic");
     const dds_entity_t upd_t = check(dds_create_topic(pp_, &kUpdateDesc, "surfeledit_update", nullptr, nullptr), "topic");
     dds_qos_t* wq = protocol_qos(false, true);
     writer_ = check(dds_create_writer(pp_, req_t, wq, nullptr), "request writer");
     dds_delete_qos(wq);
-    replies_ = check(make_reader(pp_, rep_t, reply_partition(a.client_id), true), "reply reader");
+    replies_ = check(make_reader(pp_, rep_t, reply_partition(client_id), true), "reply reader");
     updates_ = check(make_reader(pp_, upd_t, "", false), "update reader");
     ws_ = check(dds_create_waitset(pp_), "waitset");
     cond_ = check(dds_create_readcondition(replies_, DDS_ANY_STATE), "readcondition");
@@ -190,7 +199,7 @@ class Client {
 
   // Waits until the server's request reader and update writer are matched.
   bool wait_matched() {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(args_.timeout_s);
+    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s_);
     while (Clock::now() < deadline) {
       dds_publication_matched_status_t pm;
       dds_subscription_matched_status_t sm;
@@ -206,7 +215,7 @@ class Client {
   int call(surfeledit_proto_Request& r, double* ms = nullptr, std::string* message = nullptr) {
     const auto t0 = Clock::now();
     check(dds_write(writer_, &r), "dds_write");
-    const auto deadline = t0 + std::chrono::duration<double>(args_.timeout_s);
+    const auto deadline = t0 + std::chrono::duration<double>(timeout_s_);
     while (Clock::now() < deadline) {
       void* samples[8] = {nullptr};
       dds_sample_info_t infos[8];
@@ -234,9 +243,11 @@ class Client {
   int updates() { return updates_seen_ += drain<surfeledit_proto_Update>(updates_); }
 
   std::uint64_t next_id() { return next_id_++; }
+  const std::string& id() const { return client_id_; }
 
  private:
-  const Args& args_;
+  std::string client_id_;
+  double timeout_s_;
   dds_entity_t pp_ = 0, writer_ = 0, replies_ = 0, updates_ = 0, ws_ = 0, cond_ = 0;
   std::uint64_t next_id_ = 1;
   int updates_seen_ = 0;
@@ -274,26 +285,28 @@ Scene make_scene(std::size_t total) {
   return s;
 }
 
-int run_client(const Args& a) {
-  Client c(a);
+// Prints `what=<status>` (and `what_error=` unless OK); returns the exit code it implies.
+int report(const char* what, int status, const std::string& msg) {
+  std::printf("%s=%d\n", what, status);
+  if (status != 0) std::printf("%s_error=%s\n", what, msg.c_str());
+  std::fflush(stdout);
+  return status == 0 ? 0 : status == -1 ? 2 : 3;
+}
+
+// Opens the session, uploads the scene, sets the regions, configures algorithm "none"; returns an
+// exit code (0: all OK).
+int prepare(Client& c, const Args& a) {
   if (!c.wait_matched()) {
     std::printf("matched=0\n");
     return 2;
   }
   std::printf("matched=1\n");
-  const std::string& id = a.client_id;
-  const auto report = [](const char* what, int status, const std::string& msg) {
-    std::printf("%s=%d\n", what, status);
-    if (status != 0) std::printf("%s_error=%s\n", what, msg.c_str());
-    std::fflush(stdout);
-    return status == 0 ? 0 : status == -1 ? 2 : 3;
-  };
+  const std::string& id = c.id();
   std::string msg;
   auto r = blank_request(id, c.next_id(), a.session, surfeledit_proto_OP_OPEN_SESSION);
   if (int e = report("open", c.call(r, nullptr, &msg), msg)) return e;
 
-  const Scene scene = make_scene(a.surfels);
-  Scene s = scene;
+  Scene s = make_scene(a.surfels);
   surfeledit_proto_LoadBegin begin{s.radii.size(), true};
   r = blank_request(id, c.next_id(), a.session, surfeledit_proto_OP_LOAD_BEGIN);
   one(r.load_begin, begin);
@@ -324,20 +337,35 @@ int run_client(const Args& a) {
   one(configure.settings, setting);
   r = blank_request(id, c.next_id(), a.session, surfeledit_proto_OP_CONFIGURE);
   one(r.configure, configure);
-  if (int e = report("configure", c.call(r, nullptr, &msg), msg)) return e;
+  return report("configure", c.call(r, nullptr, &msg), msg);
+}
 
+// Step `i` (oscillating in place, as bench_step_rtt.py); `ms`: write to reply. Returns an exit code.
+int step(Client& c, const Args& a, int i, double* ms) {
+  const double sign = i % 2 == 0 ? 1.0 : -1.0;
+  surfeledit_proto_Deform d{};
+  d.translation = {0.0, 0.01 * sign, 0.005 * sign};
+  d.axis = {1.0, 0.0, 0.0};
+  d.angle = 0.05 * sign;
+  d.blend = const_cast<char*>("smooth");
+  auto r = blank_request(c.id(), c.next_id(), a.session, surfeledit_proto_OP_DEFORM);
+  one(r.deform, d);
+  std::string msg;
+  return report("deform", c.call(r, ms, &msg), msg);
+}
+
+int close_session(Client& c, const Args& a) {
+  auto r = blank_request(c.id(), c.next_id(), a.session, surfeledit_proto_OP_CLOSE_SESSION);
+  std::string msg;
+  return report("close", c.call(r, nullptr, &msg), msg);
+}
+
+int run_client(const Args& a) {
+  Client c(a.domain, a.security, a.client_id, a.timeout_s);
+  if (int e = prepare(c, a)) return e;
   for (int i = 0; i < a.steps; ++i) {
-    const double sign = i % 2 == 0 ? 1.0 : -1.0;  // oscillate in place (as bench_step_rtt.py)
-    surfeledit_proto_Deform d{};
-    d.translation = {0.0, 0.01 * sign, 0.005 * sign};
-    d.axis = {1.0, 0.0, 0.0};
-    d.angle = 0.05 * sign;
-    d.blend = const_cast<char*>("smooth");
-    r = blank_request(id, c.next_id(), a.session, surfeledit_proto_OP_DEFORM);
-    one(r.deform, d);
     double ms = 0;
-    const int status = c.call(r, &ms, &msg);
-    if (int e = report("deform", status, msg)) return e;
+    if (int e = step(c, a, i, &ms)) return e;
     std::printf("step_ms=%.4f\n", ms);
   }
   // The step updates follow their replies: wait a little for the last one.
@@ -348,8 +376,30 @@ int run_client(const Args& a) {
     updates = c.updates();
   }
   std::printf("updates=%d\n", updates);
-  r = blank_request(id, c.next_id(), a.session, surfeledit_proto_OP_CLOSE_SESSION);
-  return report("close", c.call(r, nullptr, &msg), msg);
+  return close_session(c, a);
+}
+
+// Two clients in this process, one secured (--domain, --security) and one plain (--plain-domain),
+// each with the same session; their steps alternate (on, off, then off, on, ...), so load changes hit
+// both arms alike. Prints on_ms= and off_ms= per step.
+int run_bench(const Args& a) {
+  if (a.security.empty() || a.plain_domain < 0) throw std::invalid_argument("bench needs --security and --plain-domain");
+  Client on(a.domain, a.security, a.client_id + "-on", a.timeout_s);
+  Client off(a.plain_domain, "", a.client_id + "-off", a.timeout_s);
+  if (int e = prepare(on, a)) return e;
+  if (int e = prepare(off, a)) return e;
+  for (int i = 0; i < a.steps; ++i) {
+    double ms_on = 0, ms_off = 0;
+    const bool on_first = i % 4 < 2;  // each arm takes each oscillation phase first equally often
+    for (int k = 0; k < 2; ++k) {
+      const bool secured = (k == 0) == on_first;
+      if (int e = step(secured ? on : off, a, i, secured ? &ms_on : &ms_off)) return e;
+    }
+    std::printf("on_ms=%.4f\noff_ms=%.4f\n", ms_on, ms_off);
+  }
+  std::fflush(stdout);
+  if (int e = close_session(on, a)) return e;
+  return close_session(off, a);
 }
 
 int run_intruder(const Args& a) {
@@ -414,7 +464,7 @@ int run_intruder(const Args& a) {
 int main(int argc, char** argv) {
   try {
     const Args a = parse(argc, argv);
-    const int rc = a.mode == "client" ? run_client(a) : run_intruder(a);
+    const int rc = a.mode == "client" ? run_client(a) : a.mode == "bench" ? run_bench(a) : run_intruder(a);
     std::fflush(stdout);
     return rc;
   } catch (const std::exception& e) {
