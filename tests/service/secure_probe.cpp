@@ -41,15 +41,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Endpoints match on the type name (PROTOCOL.md, "Topics and QoS"), as the server registers them.
-dds_topic_descriptor_t without_type_info(const dds_topic_descriptor_t& d) {
-  return dds_topic_descriptor_t{d.m_size,  d.m_align, d.m_flagset & ~DDS_TOPIC_XTYPES_METADATA,
-                                d.m_nkeys, d.m_typename, d.m_keys, d.m_nops, d.m_ops, d.m_meta,
-                                {nullptr, 0}, {nullptr, 0}, d.restrict_data_representation};
-}
-const dds_topic_descriptor_t kRequestDesc = without_type_info(surfeledit_proto_Request_desc);
-const dds_topic_descriptor_t kReplyDesc = without_type_info(surfeledit_proto_Reply_desc);
-const dds_topic_descriptor_t kUpdateDesc = without_type_info(surfeledit_proto_Update_desc);
+// The generated descriptors, with XTypes type information, as the server registers them.
+const dds_topic_descriptor_t& kRequestDesc = surfeledit_proto_Request_desc;
+const dds_topic_descriptor_t& kReplyDesc = surfeledit_proto_Reply_desc;
+const dds_topic_descriptor_t& kUpdateDesc = surfeledit_proto_Update_desc;
 
 dds_entity_t check(dds_entity_t rc, const std::string& what) {
   if (rc < 0) throw std::runtime_error(what + ": " + dds_strretcode(rc));

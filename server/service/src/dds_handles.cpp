@@ -64,13 +64,6 @@ Qos protocol_qos() {
   return qos;
 }
 
-dds_topic_descriptor_t without_type_info(const dds_topic_descriptor_t& d) {
-  return dds_topic_descriptor_t{d.m_size,  d.m_align,    d.m_flagset & ~DDS_TOPIC_XTYPES_METADATA,
-                                d.m_nkeys, d.m_typename, d.m_keys,
-                                d.m_nops,  d.m_ops,      d.m_meta,
-                                {nullptr, 0}, {nullptr, 0}, d.restrict_data_representation};
-}
-
 Entity make_participant(dds_domainid_t domain, const std::vector<SecurityProperty>& properties) {
   if (properties.empty()) return Entity(dds_create_participant(domain, nullptr, nullptr), "dds_create_participant");
   Qos qos;

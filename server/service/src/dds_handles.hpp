@@ -74,13 +74,6 @@ class Qos {
 // history keep-all, volatile.
 Qos protocol_qos();
 
-// A copy of a generated descriptor without its XTypes type information, so that endpoints
-// match on the type name alone. Needed for the Python client: the cyclonedds 11.0.1 wheel
-// flags the first enum literal IS_DEFAULT in its type objects and Cyclone C 0.10.2 does not,
-// which makes Request (nested enum Selector.kind) unassignable, so the endpoints never match.
-// The result refers to the original's ops and keys (static, generated data).
-dds_topic_descriptor_t without_type_info(const dds_topic_descriptor_t& d);
-
 // A participant on `domain`; with `properties` (surfeledit/service/security.hpp), a secured one
 // (DDS Security plugins loaded, identity authenticated, permissions checked).
 Entity make_participant(dds_domainid_t domain, const std::vector<SecurityProperty>& properties = {});

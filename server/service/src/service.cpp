@@ -32,10 +32,12 @@ constexpr dds_attach_t kStopTag = 2;
 constexpr dds_attach_t kLoadsTag = 3;
 constexpr dds_attach_t kWritersTag = 4;
 
-// Topic types matched by name only (see dds::without_type_info); static: topics refer to them.
-const dds_topic_descriptor_t kRequestType = dds::without_type_info(surfeledit_proto_Request_desc);
-const dds_topic_descriptor_t kReplyType = dds::without_type_info(surfeledit_proto_Reply_desc);
-const dds_topic_descriptor_t kUpdateType = dds::without_type_info(surfeledit_proto_Update_desc);
+// Topic types with their XTypes type information (PROTOCOL.md, "Topics and QoS"), so that DDS tools
+// (`cyclonedds typeof`, `cyclonedds ls`) can show them. Request has no enum-typed member (op and kinds
+// are `long`): the server, a C 0.10.2 reader, judges the Python wheel's Request assignable.
+const dds_topic_descriptor_t& kRequestType = surfeledit_proto_Request_desc;
+const dds_topic_descriptor_t& kReplyType = surfeledit_proto_Reply_desc;
+const dds_topic_descriptor_t& kUpdateType = surfeledit_proto_Update_desc;
 
 // Requests taken per loan.
 constexpr std::size_t kTakeBatch = 16;

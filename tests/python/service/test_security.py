@@ -4,8 +4,8 @@ security plugins; the Python client's wheel does not).
 
 Certificates and signed documents are made once per module by scripts/make_security.py in a temp
 dir: server, alice (permitted client), mallory (valid identity, permissions without surfeledit's
-topics), eve (valid identity, permissions signed by her own CA). An "outsider" participant has no
-security at all. The control test runs the same outsider against a server without security, where
+topics), eve (valid identity, permissions signed by her own CA); a second setup gives a "stranger"
+(a permitted client of other CAs). An "outsider" participant has no security at all. The control test runs the same outsider against a server without security, where
 it does get in: the probe can see what security prevents.
 """
 
@@ -41,6 +41,16 @@ def security_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("security")
     subprocess.run([sys.executable, str(REPO / "scripts" / "make_security.py"), str(out),
                     "--clients", "alice", "--denied", "mallory", "--rogue", "eve"],
+                   check=True, capture_output=True, text=True, timeout=120)
+    return out
+
+
+@pytest.fixture(scope="module")
+def stranger_dir(tmp_path_factory: pytest.TempPathFactory, security_dir: Path) -> Path:
+    """A second, unrelated setup: its users' identities and permissions are signed by other CAs."""
+    out = tmp_path_factory.mktemp("stranger")
+    subprocess.run([sys.executable, str(REPO / "scripts" / "make_security.py"), str(out),
+                    "--clients", "alice", "--denied", "", "--rogue", ""],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
 
@@ -117,11 +127,12 @@ def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_p
 
 
 def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pytest.FixtureRequest, tmp_path: Path,
-                                                                   security_dir: Path) -> None:
+                                                                   security_dir: Path, stranger_dir: Path) -> None:
     srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
     victim, session = "victim-1", "taken"
     intruders = {
         "outsider": None,  # no security at all
+        "stranger": stranger_dir / "alice" / "security.conf",  # a permitted client of another CA pair
         "mallory": security_dir / "mallory" / "security.conf",  # identity ok, no surfeledit permission
         "eve": security_dir / "eve" / "security.conf",  # identity ok, permissions signed by her own CA
     }
@@ -145,8 +156,9 @@ def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pyte
         # Nothing written: no server endpoint ever matched its writer or readers.
         assert got["matched_servers"] == ["0"], (name, p.log_tail())
     outsider, mallory, eve = (parse(procs[n].log.read_text()) for n in ("outsider", "mallory", "eve"))
-    # The outsider and eve did write (to nobody); mallory could not even create the request writer.
-    assert int(outsider["written"][0]) > 0 and int(eve["written"][0]) > 0
+    # The outsider, the stranger and eve did write (to nobody); mallory could not even create the writer.
+    stranger = parse(procs["stranger"].log.read_text())
+    assert int(outsider["written"][0]) > 0 and int(eve["written"][0]) > 0 and int(stranger["written"][0]) > 0
     assert mallory["writer"] != ["created"], procs["mallory"].log_tail()
     assert srv.alive, srv.log_tail()
 
