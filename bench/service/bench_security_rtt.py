@@ -57,6 +57,8 @@ def run_probe(probe: Path, domains: Dict[str, int], alice: Path, args: argparse.
     out: Dict[str, List[float]] = {"security on": [], "security off": []}
     for line in r.stdout.splitlines():
         key, _, value = line.partition("=")
+        if key == "surfels":
+            args.surfels_actual = int(value)
         if key in ("on_ms", "off_ms"):
             out["security on" if key == "on_ms" else "security off"].append(float(value))
     return {k: v[args.warmup:] for k, v in out.items()}
@@ -114,7 +116,7 @@ def main() -> int:
     diffs = [a - b for a, b in zip(samples["security on"], samples["security off"])]
     results["paired difference"] = stats(diffs)
     print(f"security on / off at p50: {on / off:.2f}x; median of the paired differences (on - off, same step "
-          f"index): {benchlib.median(diffs):+.3f} ms; {args.surfels:,} surfels requested, {args.rounds} rounds x "
+          f"index): {benchlib.median(diffs):+.3f} ms; {args.surfels_actual:,} surfels (half deformable), {args.rounds} rounds x "
           f"{args.steps} step pairs (after {args.warmup} warm-up pairs)")
     print(benchlib.machine_line())
     if args.json_out:
