@@ -99,8 +99,8 @@ int drain(dds_entity_t reader) {
 }
 
 // A Request with every string set and every sequence empty.
-inline surfeledit_proto_Request blank_request(const std::string& client_id, std::uint64_t id, const std::string& session,
-                                       int op) {
+inline surfeledit_proto_Request blank_request(const std::string& client_id, std::uint64_t id,
+                                              const std::string& session, int op) {
   surfeledit_proto_Request r;
   std::memset(&r, 0, sizeof r);
   r.client_id = const_cast<char*>(client_id.c_str());

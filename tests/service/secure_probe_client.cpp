@@ -15,9 +15,12 @@ class Client {
   Client(int domain, const std::string& security, const std::string& client_id, double timeout_s)
       : client_id_(client_id), timeout_s_(timeout_s) {
     pp_ = check(make_participant(domain, security), "dds_create_participant");
-    const dds_entity_t req_t = check(dds_create_topic(pp_, &kRequestDesc, "surfeledit_request", nullptr, nullptr), "topic");
-    const dds_entity_t rep_t = check(dds_create_topic(pp_, &kReplyDesc, "surfeledit_reply", nullptr, nullptr), "topic");
-    const dds_entity_t upd_t = check(dds_create_topic(pp_, &kUpdateDesc, "surfeledit_update", nullptr, nullptr), "topic");
+    const auto topic = [&](const dds_topic_descriptor_t& type, const char* name) {
+      return check(dds_create_topic(pp_, &type, name, nullptr, nullptr), std::string("topic ") + name);
+    };
+    const dds_entity_t req_t = topic(kRequestDesc, "surfeledit_request");
+    const dds_entity_t rep_t = topic(kReplyDesc, "surfeledit_reply");
+    const dds_entity_t upd_t = topic(kUpdateDesc, "surfeledit_update");
     dds_qos_t* wq = protocol_qos(false, true);
     writer_ = check(dds_create_writer(pp_, req_t, wq, nullptr), "request writer");
     dds_delete_qos(wq);
@@ -218,7 +221,9 @@ int run_client(const Args& a) {
 // each with the same session; their steps alternate (on, off, then off, on, ...), so load changes hit
 // both arms alike. Prints on_ms= and off_ms= per step.
 int run_bench(const Args& a) {
-  if (a.security.empty() || a.plain_domain < 0) throw std::invalid_argument("bench needs --security and --plain-domain");
+  if (a.security.empty() || a.plain_domain < 0) {
+    throw std::invalid_argument("bench needs --security and --plain-domain");
+  }
   Client on(a.domain, a.security, a.client_id + "-on", a.timeout_s);
   Client off(a.plain_domain, "", a.client_id + "-off", a.timeout_s);
   if (int e = prepare(on, a)) return e;

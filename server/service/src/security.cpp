@@ -95,7 +95,8 @@ std::vector<SecurityProperty> security_properties(const std::string& config_path
     const auto it = values.find(k.key);
     if (it == values.end()) fail(config_path, std::string("missing key '") + k.key + "'");
     const fs::path p(it->second);
-    props.push_back({k.property, "file:" + regular_file(config_path, k.key, it->second, p.is_absolute() ? p : base / p)});
+    const std::string file = regular_file(config_path, k.key, it->second, p.is_absolute() ? p : base / p);
+    props.push_back({k.property, "file:" + file});
   }
   const auto dir_it = values.find("plugin_dir");
   fs::path plugin_dir(SURFELEDIT_DDS_SECURITY_PLUGIN_DIR);
