@@ -16,15 +16,12 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Dict, Iterator, List, Optional
+from typing import Dict, List, Optional
 
 import pytest
 
 from .conftest import REPO, ManagedProcess, find_executable, free_domain, server_executable
 from surfeledit.server_process import server_args
-
-PLUGIN_DIRS = ("/usr/lib/x86_64-linux-gnu/libddsc0debian", "/usr/lib/aarch64-linux-gnu/libddsc0debian")
-
 
 def probe_executable() -> str:
     exe = find_executable("SURFELEDIT_SECURE_PROBE", "build/tests/surfeledit-secure-probe",
