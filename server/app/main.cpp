@@ -104,6 +104,10 @@ int main(int argc, char** argv) {
                  "Group commit: the longest a reply waits for its group's fsync, ms")
       ->capture_default_str()
       ->check(CLI::Range(1, 10'000));
+  app.add_option("--journal-rejoin-ms", config.journal.rejoin_ms,
+                 "After recovery, how long a recovered client may take to send a request before it is detached")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
   CLI11_PARSE(app, argc, argv);
   config.journal.sync = journal_sync == "group" ? surfeledit::service::JournalSync::Group
                                                 : surfeledit::service::JournalSync::Op;

@@ -54,6 +54,16 @@ void Handler::detach_client(const std::string& client, std::vector<UpdateEvent>&
                  client, s.config.client_lease.count(), sessions.size(), held);
 }
 
+void Handler::start_recovered_leases(std::chrono::milliseconds rejoin) {
+  HandlerState& s = *state_;
+  // The registry's leases run `client_lease` from when the writer was gone: date that back (or ahead)
+  // so that these end `rejoin` from now.
+  const auto gone_since = LeaseClock::now() + rejoin - s.config.client_lease;
+  for (const std::string& name : s.sessions.names()) {
+    for (const std::string& client : s.sessions.find(name)->clients) s.clients.recovered(client, gone_since);
+  }
+}
+
 std::optional<std::chrono::milliseconds> Handler::next_lease_check() const {
   const auto next = state_->clients.next_expiry(state_->config.client_lease);
   if (!next) return std::nullopt;

@@ -45,6 +45,9 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
   if (config_.sync == JournalSync::Group && (config_.group_ms == 0 || config_.group_ms > 10'000)) {
     throw JournalError("journal group commit interval must be in 1..10000 ms");
   }
+  if (config_.rejoin_ms == 0 || config_.rejoin_ms > 3'600'000) {
+    throw JournalError("journal rejoin time must be in 1..3600000 ms");
+  }
   const auto t0 = Clock::now();
   LoadSignal signal;
   handler.set_on_load_done([&signal] {
@@ -69,6 +72,7 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
     throw;
   }
   handler.set_on_load_done({});
+  handler.start_recovered_leases(std::chrono::milliseconds(config_.rejoin_ms));
   recovery_.bytes = log_->bytes();
   recovery_.cut_bytes = log_->cut_bytes();
   recovery_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

@@ -393,7 +393,7 @@ Service::~Service() = default;
 void Service::run() {
   Impl& s = *impl_;
   logger()->debug("serving requests on domain {}", s.config.domain);
-  dds_duration_t sleep = DDS_INFINITY;
+  dds_duration_t sleep = s.check_leases();  // leases of clients recovered from the journal run already
   while (!s.stopping.load()) {
     s.waitset.wait(sleep);
     if (s.stopping.load()) break;

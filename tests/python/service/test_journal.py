@@ -151,3 +151,35 @@ def test_torn_tail_is_cut_and_the_rest_recovered(tmp_path: Path) -> None:
         client.reconnect = 0.0
         srv.stop()
         client.close()
+
+
+def test_recovered_client_that_never_returns_is_detached_by_its_lease(tmp_path: Path) -> None:
+    """After a restart the recovered clients are bound to no writer: each one's lease (the rejoin
+    time) runs until its first request. One that comes back keeps its place; one that never does is
+    detached."""
+    domain = free_domain()
+    journal = tmp_path / "journal"
+    lease = ("--client-lease-ms", "600", "--journal-rejoin-ms", "4000")
+    srv = _server(tmp_path, domain, journal, 0, *lease)
+    back = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, reconnect=20.0)
+    silent = surfeledit.connect(domain=domain, spawn=False, timeout=10.0)
+    try:
+        s = back.open_session("leased")
+        silent.join_session("leased", token=s.invite("viewer"))
+        assert int(s.info().clients) == 2
+        srv.proc.kill()
+        srv.proc.wait()
+        srv = _server(tmp_path, domain, journal, 1, *lease)
+        assert int(s.info().clients) == 2  # both recovered; `back` is bound again by this request
+        deadline = time.monotonic() + 15.0
+        while int(s.info().clients) != 1 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert int(s.info().clients) == 1
+        assert f"client {silent.client_id} detached" in srv.log_tail(10**6)
+        time.sleep(1.0)  # `back` keeps sending: its lease stopped at its first request
+        assert int(s.info().clients) == 1
+    finally:
+        back.reconnect = 0.0
+        srv.stop()
+        back.close()
+        silent.close()

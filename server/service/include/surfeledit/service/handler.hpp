@@ -72,6 +72,9 @@ class Handler {
   // stored for repeats of its request id (a request served, not a repeat: handle(), finish_loads()),
   // before the reply is returned; empty: no call. It must not throw.
   void set_on_stored(std::function<void(const Reply&)> on_stored);
+  // After recovery: a lease of `rejoin` starts for every client attached to a session, so one that
+  // never comes back is detached like one whose writer was lost (a request from it stops the lease).
+  void start_recovered_leases(std::chrono::milliseconds rejoin);
   // Stores a reply for repeats of its request id as handle() does (replay of a refused request).
   void remember(const Reply& reply);
   // The token the next OP_INVITE hands out instead of a fresh random one (replay); once.

@@ -28,6 +28,9 @@ struct JournalConfig {
   std::string dir;                    // journal directory (created if missing); empty: no journal
   JournalSync sync = JournalSync::Op;  // durability policy
   std::uint32_t group_ms = 5;         // JournalSync::Group: the longest a reply waits for its group's fsync, ms
+  // After recovery, how long a recovered client may take to send its first request before it is
+  // detached like a client whose lease ran out, ms (a client notices a dead server in ~1.5 s).
+  std::uint64_t rejoin_ms = 10'000;
 };
 
 // The journal directory cannot be used (not creatable, not writable, locked by another server,
