@@ -143,11 +143,11 @@ def main() -> None:
             for name, s in sessions.items():
                 for i in range(args.steps):
                     rtt[name].append(s.deform(**deform_args(i)).round_trip_ms)
-        rows = [[name, len(v), f"{benchlib.median(v):.2f}", f"{benchlib.percentile(v, 90):.2f}"]
+        rows = [[name, len(v), f"{benchlib.median(v):.2f}", f"{benchlib.percentile(v, 0.9):.2f}"]
                 for name, v in rtt.items()]
         print("\nstep round trip (ms), interleaved blocks of", args.steps, "steps,", args.blocks, "rounds:")
         print(benchlib.table(["journal", "steps", "median", "p90"], rows))
-        results["rtt"] = {name: {"median": benchlib.median(v), "p90": benchlib.percentile(v, 90)}
+        results["rtt"] = {name: {"median": benchlib.median(v), "p90": benchlib.percentile(v, 0.9)}
                           for name, v in rtt.items()}
         for s in sessions.values():
             s.client.close()
