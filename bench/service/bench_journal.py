@@ -4,14 +4,16 @@
 
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
     .venv/bin/python bench/service/bench_journal.py [--build-dir build] [--steps 200] [--blocks 5]
-        [--group-ms 2] [--lengths 250,1000,4000] [--journal-root DIR] [--json-out r.json]
+        [--group-ms 2] [--clients 4] [--seconds 5] [--lengths 250,1000,4000] [--journal-root DIR]
+        [--json-out r.json]
 
 Round trip: three servers (no journal; --journal-sync group --journal-group-ms G; --journal-sync op),
 each on its own DDS domain with `--threads 1`, each with one session of the small scene
 (make_default_scene() at spacing 0.05, ~9.9k surfels; collision algorithm "none", so the step is the
 deformation alone). The client sends --steps OP_DEFORM back to back to one server, then to the next,
 for --blocks rounds; Session.deform's round trip (client side, time.perf_counter) is recorded per op.
-Medians and 90th percentiles per configuration.
+Medians and 90th percentiles per configuration. Then throughput: --clients clients (threads of this
+process, one connection and one session each) step back to back for --seconds against each server.
 
 Recovery: for each length L of --lengths, a fresh journal of L steps (plus the load and the regions)
 is written by a server which is then SIGKILLed; a new server on the same directory recovers it. Reported:
@@ -30,6 +32,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Dict, List, Optional
@@ -94,8 +97,12 @@ class Server:
 
 
 def open_session(domain: int, scene: Dict[str, np.ndarray]) -> "surfeledit.Session":
+    return open_session_named(domain, scene, "bench")
+
+
+def open_session_named(domain: int, scene: Dict[str, np.ndarray], name: str) -> "surfeledit.Session":
     client = surfeledit.connect(domain=domain, spawn=False, timeout=30.0)
-    s = client.open_session("bench")
+    s = client.open_session(name)
     s.load_points(scene["positions"], scene["normals"])
     s.configure(algorithm="none")
     s.set_regions(zero=scene["zero"], one=scene["one"])
@@ -111,6 +118,8 @@ def main() -> None:
     ap.add_argument("--lengths", default="250,1000,4000")
     ap.add_argument("--journal-root")
     ap.add_argument("--domain", type=int, default=150 + os.getpid() % 40)
+    ap.add_argument("--clients", type=int, default=4)
+    ap.add_argument("--seconds", type=float, default=5.0)
     ap.add_argument("--json-out")
     args = ap.parse_args()
     build = benchlib.build_dir(args.build_dir)
@@ -151,6 +160,34 @@ def main() -> None:
                           for name, v in rtt.items()}
         for s in sessions.values():
             s.client.close()
+
+        # Throughput: --clients clients, each on its own session of the same server, steps back to back.
+        tput_rows = []
+        results["throughput"] = {}
+        for k, name in enumerate(configs):
+            many = [open_session_named(args.domain + k, scene, f"tput-{c}") for c in range(args.clients)]
+            counts = [0] * len(many)
+            stop_at = time.monotonic() + args.seconds
+
+            def run(c: int) -> None:
+                i = 0
+                while time.monotonic() < stop_at:
+                    many[c].deform(**deform_args(i))
+                    i += 1
+                counts[c] = i
+
+            threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            rate = sum(counts) / args.seconds
+            tput_rows.append([name, args.clients, f"{rate:.0f}"])
+            results["throughput"][name] = rate
+            for s in many:
+                s.client.close()
+        print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
+        print(benchlib.table(["journal", "clients", "steps/s (all clients)"], tput_rows))
         for srv in servers:
             srv.stop()
         servers.clear()
