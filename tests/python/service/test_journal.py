@@ -183,3 +183,46 @@ def test_recovered_client_that_never_returns_is_detached_by_its_lease(tmp_path: 
         srv.stop()
         back.close()
         silent.close()
+
+
+def test_load_file_is_replayed_from_the_file_and_a_changed_file_stops_recovery(tmp_path: Path) -> None:
+    """OP_LOAD_FILE is journaled when its load commits, with the model's state hash: recovery reads the
+    file again (the deferred path) and checks the hash; a file changed since refuses to start (exit 3)."""
+    from .test_hardening_files import save_cloud
+
+    domain = free_domain()
+    journal = tmp_path / "journal"
+    root = tmp_path / "data"
+    root.mkdir()
+    save_cloud(root / "cloud.ply", n=300, seed=5)
+    exe = server_executable()
+
+    def start(n: int) -> ServerProcess:
+        srv = ServerProcess(exe, domain, tmp_path / f"file-{n}.log", data_root=root,
+                            extra=("--journal", str(journal), "--threads", "1"))
+        return srv
+
+    srv = start(0)
+    _wait_ready(srv)
+    client = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, reconnect=20.0)
+    try:
+        s = client.open_session("from-file")
+        assert s.load_file("cloud.ply").surfels == 300
+        s.remove([0, 1, 2])
+        want = int(s.info().state_hash)
+        srv.proc.kill()
+        srv.proc.wait()
+        srv = start(1)
+        _wait_ready(srv)
+        assert int(s.info().state_hash) == want
+        assert [h.op for h in s.history()] == ["load", "remove"]
+        srv.stop()
+
+        save_cloud(root / "cloud.ply", n=300, seed=6)  # same size, other points
+        bad = start(2)
+        assert _exit_code(bad) == JOURNAL_EXIT
+        assert "OP_LOAD_FILE" in bad.log_tail() and "changed" in bad.log_tail()
+    finally:
+        client.reconnect = 0.0
+        srv.stop()
+        client.close()
