@@ -100,7 +100,14 @@ JournalLog::JournalLog(const std::string& dir,
                        const std::function<void(RecordKind, const std::vector<std::uint8_t>&)>& on_record)
     : path_(dir + "/journal.log") {
   if (dir.empty()) throw JournalError("journal directory is empty");
-  if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST) fail("cannot create journal directory '" + dir + "'", errno);
+  if (::mkdir(dir.c_str(), 0700) == 0) {
+    // A new directory: its entry in the parent must reach the disk too.
+    const std::string parent = dir.find('/') == std::string::npos ? "." : dir.substr(0, dir.find_last_of('/') + 1);
+    UniqueFd parent_fd(::open(parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+    if (parent_fd.get() < 0 || ::fsync(parent_fd.get()) != 0) fail("cannot fsync the parent of '" + dir + "'", errno);
+  } else if (errno != EEXIST) {
+    fail("cannot create journal directory '" + dir + "'", errno);
+  }
   dir_fd_ = UniqueFd(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
   if (dir_fd_.get() < 0) fail("cannot open journal directory '" + dir + "'", errno);
   if (::flock(dir_fd_.get(), LOCK_EX | LOCK_NB) != 0) {

@@ -147,7 +147,9 @@ def _run(tmp_path: Path, sync: Tuple[str, ...], kills: int) -> None:
         np.testing.assert_array_equal(state.normals, mine.normals)
         np.testing.assert_array_equal(state.radii, mine.radii)
         cut = sum("torn or corrupt tail" in s.log_tail(10**7) for s in servers)
-        print(f"{kills} kills, {len(versions)} ops acknowledged, {cut} torn tail(s) cut")
+        ahead = sum(recovered > before for before, recovered, _ in restarts)
+        print(f"{kills} kills, {len(versions)} ops acknowledged, {ahead} restart(s) recovered ops not acknowledged "
+              f"when the kill was decided (answered from the recovered store on retry), {cut} torn tail(s) cut")
     finally:
         for c in clients:
             c.reconnect = 0.0
