@@ -150,6 +150,8 @@ class Client:
 
     Thread-safe for requests (one request is in flight at a time). Close it (or use ``with``) to
     close its sessions and watchers, release the DDS entities and stop a server it spawned.
+    ``reconnect`` (seconds, default 0): re-send a request whose server is gone until a restarted server
+    (``--journal``) answers it (:mod:`surfeledit.reconnect`).
     """
 
     def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
