@@ -28,6 +28,7 @@ from cyclonedds.util import duration
 
 from . import errors
 from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
+from .reconnect import await_reply_across_restart
 from .server_process import exit_message, spawn_server, stop_process
 from .session import Session
 
@@ -149,11 +150,16 @@ class Client:
 
     Thread-safe for requests (one request is in flight at a time). Close it (or use ``with``) to
     close its sessions and watchers, release the DDS entities and stop a server it spawned.
+    ``reconnect`` (seconds, default 0): re-send a request whose server is gone until a restarted server
+    (``--journal``) answers it (:mod:`surfeledit.reconnect`).
     """
 
-    def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None) -> None:
+    def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
+                 reconnect: float = 0.0) -> None:
         self.domain = int(domain)
         self.timeout = float(timeout)
+        # > 0: a request whose server is gone is re-sent (same id) for this many seconds (reconnect.py)
+        self.reconnect = float(reconnect)
         self.client_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
         self._next_id = 1
         self._lock = threading.RLock()
@@ -251,7 +257,8 @@ class Client:
 
         On timeout the same request (same id) is sent again up to ``retries`` times — the server
         answers a repeat from its reply cache — then :class:`~surfeledit.errors.RequestTimeoutError`
-        is raised. With ``check`` a non-OK status raises the typed error of ``surfeledit.errors``.
+        is raised. When the server is gone, :class:`~surfeledit.errors.ServerGoneError` is raised, or
+        with ``reconnect`` > 0 the request is re-sent until a restarted server answers (reconnect.py). With ``check`` a non-OK status raises the typed error of ``surfeledit.errors``.
         """
         if self._closed:
             raise errors.SurfelEditError("client is closed")
@@ -259,7 +266,12 @@ class Client:
         with self._lock:
             for attempt in range(retries + 1):
                 self._writer.write(request)
-                reply = self._wait_reply(request.request_id, time.monotonic() + timeout)
+                try:
+                    reply = self._wait_reply(request.request_id, time.monotonic() + timeout)
+                except errors.ServerGoneError:
+                    if self.reconnect <= 0:
+                        raise
+                    reply = await_reply_across_restart(self, request, self.reconnect)
                 if reply is not None:
                     break
                 _log.warning("no reply to request %d (%s) within %.1f s%s", request.request_id,
@@ -360,7 +372,7 @@ class Client:
 
 
 def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0,
-            data_root: Optional[Union[str, "os.PathLike[str]"]] = None) -> Client:
+            data_root: Optional[Union[str, "os.PathLike[str]"]] = None, reconnect: float = 0.0) -> Client:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
@@ -372,13 +384,15 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             server to come up.
         data_root: for a spawned server: the directory ``Session.load_file`` may read below
             (``--data-root``); None: file loading is off on that server.
+        reconnect: seconds a request whose server is gone is re-sent (same request id) waiting for a
+            restarted server (one with ``--journal`` answers it exactly once); 0: ServerGoneError at once.
 
     Raises:
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
     """
     if domain is None:
         domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
-    client = Client(domain, timeout)
+    client = Client(domain, timeout, reconnect=reconnect)
     try:
         if client.probe(min(_PROBE_S, timeout)):
             return client

@@ -94,7 +94,28 @@ int main(int argc, char** argv) {
                  "scripts/make_security.py writes one per user): participants must authenticate and hold "
                  "permissions, discovery and data are encrypted; without it, security is off")
       ->check(CLI::ExistingFile);
+  // The journal (proto/PROTOCOL.md, "Journal").
+  app.add_option("--journal", config.journal.dir,
+                 "Directory of the journal: every accepted op is made durable before its reply is written, and a "
+                 "restart with the same directory recovers every session, its history and versions (created if "
+                 "missing; one server per directory)");
+  std::string journal_sync = "op";
+  app.add_option("--journal-sync", journal_sync,
+                 "When journal records reach the disk: fsync before every reply (op), or one fsync per group of "
+                 "--journal-group-ms whose replies wait for it (group)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"op", "group"}));
+  app.add_option("--journal-group-ms", config.journal.group_ms,
+                 "Group commit: the longest a reply waits for its group's fsync, ms")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10'000));
+  app.add_option("--journal-rejoin-ms", config.journal.rejoin_ms,
+                 "After recovery, how long a recovered client may take to send a request before it is detached")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
   CLI11_PARSE(app, argc, argv);
+  config.journal.sync = journal_sync == "group" ? surfeledit::service::JournalSync::Group
+                                                : surfeledit::service::JournalSync::Op;
   config.max_client_upload_bytes = client_upload_mb << 20;
   config.max_upload_bytes = upload_mb << 20;
   config.max_reply_cache_bytes = reply_cache_mb << 20;
@@ -132,6 +153,9 @@ int main(int argc, char** argv) {
       throw;
     }
     signal_thread.join();
+  } catch (const surfeledit::service::JournalError& e) {
+    log->critical("surfeledit-server failed: journal: {}", e.what());
+    return surfeledit::service::kJournalExitCode;
   } catch (const std::exception& e) {
     log->critical("surfeledit-server failed: {}", e.what());
     return 1;

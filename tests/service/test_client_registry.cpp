@@ -26,6 +26,23 @@ TEST(ClientRegistry, BindsAnIdToTheFirstWriterAndRefusesOthers) {
   EXPECT_TRUE(r.admit("a", 12, t));   // released ids can be bound again
 }
 
+TEST(ClientRegistry, RecoveredIdsAreBoundByTheirFirstRequestAndExpireWithoutOne) {
+  ClientRegistry r(1);
+  const auto t = LeaseClock::now();
+  r.recovered("a", t);
+  r.recovered("b", t);
+  r.recovered("c", t + 1s);
+  EXPECT_EQ(*r.next_expiry(2s), t + 2s);
+  EXPECT_TRUE(r.admit("a", 7, t + 1s));   // the first writer binds the recovered id; its lease stops
+  EXPECT_FALSE(r.admit("a", 8, t + 1s));  // and then holds it
+  EXPECT_FALSE(r.admit("b", 7, t + 1s));  // writer 7 holds its maximum of 1 id
+  EXPECT_EQ(r.expired(t + 2s, 2s), std::vector<std::string>{"b"});
+  EXPECT_EQ(r.expired(t + 3s, 2s), (std::vector<std::string>{"b", "c"}));
+  r.recovered("a", t);  // an id already known is left as it is
+  EXPECT_EQ(r.find("a")->sender, 7u);
+  EXPECT_FALSE(r.find("a")->gone_since);
+}
+
 TEST(ClientRegistry, LeasesRunFromTheLossOfTheWriterUntilItIsAliveAgain) {
   ClientRegistry r;
   const auto t = LeaseClock::now();

@@ -2,6 +2,8 @@
 #include "handler_ops.hpp"
 #include "surfeledit/service/log.hpp"
 
+#include <utility>
+
 namespace surfeledit::service {
 
 void check_role(const SessionEntry& entry, const Command& command) {
@@ -16,7 +18,7 @@ void check_role(const SessionEntry& entry, const Command& command) {
 
 void serve_invite(OpContext& c) {
   const Role role = args_of<InviteArgs>(c).role;
-  c.reply.token = c.state.sessions.invite(*c.entry, role);
+  c.reply.token = c.state.sessions.invite(*c.entry, role, std::exchange(c.state.next_token, std::string()));
   logger()->info("client {} invited a {} to session '{}'", c.command.client_id, role_name(role), c.command.session);
 }
 
@@ -27,26 +29,39 @@ void Handler::writer_alive(std::uint64_t sender) { state_->clients.writer_alive(
 std::vector<std::string> Handler::expire_leases(std::vector<UpdateEvent>& updates) {
   HandlerState& s = *state_;
   const std::vector<std::string> expired = s.clients.expired(LeaseClock::now(), s.config.client_lease);
-  for (const std::string& client : expired) {
-    const std::uint64_t held = s.uploads.client_bytes(client);
-    const std::vector<std::string> sessions = s.sessions.attached_to(client);
-    for (const std::string& name : sessions) {
-      const std::uint64_t version = s.sessions.find(name)->session->version();
-      if (s.sessions.close(name, client)) {
-        s.uploads.erase_session(name);
-        updates.push_back(make_update_event(name, version + 1, "close"));
-        logger()->info("session '{}' dropped: its last client {} was detached", name, client);
-      }
-    }
-    s.uploads.erase_client(client);
-    s.cache.forget(client);
-    s.sessions.forget_member(client);
-    s.clients.forget(client);
-    logger()->info("client {} detached: its request writer was gone for {} ms ({} session(s) closed, {} upload "
-                   "bytes freed)",
-                   client, s.config.client_lease.count(), sessions.size(), held);
-  }
+  for (const std::string& client : expired) detach_client(client, updates);
   return expired;
+}
+
+void Handler::detach_client(const std::string& client, std::vector<UpdateEvent>& updates) {
+  HandlerState& s = *state_;
+  const std::uint64_t held = s.uploads.client_bytes(client);
+  const std::vector<std::string> sessions = s.sessions.attached_to(client);
+  for (const std::string& name : sessions) {
+    const std::uint64_t version = s.sessions.find(name)->session->version();
+    if (s.sessions.close(name, client)) {
+      s.uploads.erase_session(name);
+      updates.push_back(make_update_event(name, version + 1, "close"));
+      logger()->info("session '{}' dropped: its last client {} was detached", name, client);
+    }
+  }
+  s.uploads.erase_client(client);
+  s.cache.forget(client);
+  s.sessions.forget_member(client);
+  s.clients.forget(client);
+  logger()->info("client {} detached: its request writer was gone for {} ms ({} session(s) closed, {} upload "
+                 "bytes freed)",
+                 client, s.config.client_lease.count(), sessions.size(), held);
+}
+
+void Handler::start_recovered_leases(std::chrono::milliseconds rejoin) {
+  HandlerState& s = *state_;
+  // The registry's leases run `client_lease` from when the writer was gone: date that back (or ahead)
+  // so that these end `rejoin` from now.
+  const auto gone_since = LeaseClock::now() + rejoin - s.config.client_lease;
+  for (const std::string& name : s.sessions.names()) {
+    for (const std::string& client : s.sessions.find(name)->clients) s.clients.recovered(client, gone_since);
+  }
 }
 
 std::optional<std::chrono::milliseconds> Handler::next_lease_check() const {

@@ -11,6 +11,11 @@ bool ClientRegistry::admit(const std::string& id, std::uint64_t sender, LeaseClo
     record.first_seen = now;
     it = clients_.emplace(id, record).first;
     by_sender_.emplace(sender, id);
+  } else if (it->second.sender == 0 && sender != 0) {
+    // Recovered from the journal: the first writer to use the id after the restart binds it.
+    if (by_sender_.count(sender) >= max_ids_per_writer_) return false;
+    it->second.sender = sender;
+    by_sender_.emplace(sender, id);
   } else if (it->second.sender != sender) {
     return false;
   }
@@ -18,6 +23,15 @@ bool ClientRegistry::admit(const std::string& id, std::uint64_t sender, LeaseClo
   it->second.gone_since.reset();  // a request from the writer proves it alive
   ++it->second.requests;
   return true;
+}
+
+void ClientRegistry::recovered(const std::string& id, LeaseClock::time_point gone_since) {
+  if (clients_.count(id)) return;
+  ClientRecord record;
+  record.first_seen = LeaseClock::now();
+  record.last_activity = record.first_seen;
+  record.gone_since = gone_since;
+  clients_.emplace(id, record);
 }
 
 void ClientRegistry::writer_lost(std::uint64_t sender, LeaseClock::time_point now) {

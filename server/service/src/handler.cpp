@@ -206,7 +206,10 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
   // Ops whose row says so (GET_STATE pages, up to max_chunk_surfels surfels each) are not stored:
   // they change nothing, so a repeat is answered by computing the reply again.
   const OpEntry* row = find_op(command.op);
-  if (!reply->client_id.empty() && (!row || row->cached)) state_->cache.put(reply);
+  if (!reply->client_id.empty() && (!row || row->cached)) {
+    state_->cache.put(reply);
+    if (state_->on_stored) state_->on_stored(*reply);
+  }
   return reply;
 }
 
@@ -221,10 +224,17 @@ std::vector<std::shared_ptr<const Reply>> Handler::finish_loads(std::vector<Upda
                 [&] { finish_load_file(*state_, load, *reply, updates); });
     reply->timings.emplace_back("total", ms_since(load.started));
     state_->cache.put(reply);
+    if (state_->on_stored) state_->on_stored(*reply);
     replies.push_back(std::move(reply));
   }
   return replies;
 }
+
+void Handler::set_on_stored(std::function<void(const Reply&)> on_stored) { state_->on_stored = std::move(on_stored); }
+
+void Handler::remember(const Reply& reply) { state_->cache.put(std::make_shared<const Reply>(reply)); }
+
+void Handler::set_next_token(std::string token) { state_->next_token = std::move(token); }
 
 void Handler::set_on_load_done(std::function<void()> on_done) { state_->loads.set_on_done(std::move(on_done)); }
 

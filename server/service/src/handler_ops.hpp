@@ -6,6 +6,7 @@
 
 #include <array>
 #include <chrono>
+#include <functional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -36,6 +37,8 @@ struct HandlerState {
   std::chrono::steady_clock::time_point started;  // for the uptime
   DataRoot data_root;         // where OP_LOAD_FILE may read
   FileLoads loads;            // OP_LOAD_FILE loads running off the request thread
+  std::function<void(const Reply&)> on_stored;  // the journal: a reply was stored (Handler::set_on_stored)
+  std::string next_token;     // replay: the token the next OP_INVITE hands out (empty: a fresh one)
 };
 
 // One request being served.

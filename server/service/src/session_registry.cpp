@@ -79,9 +79,9 @@ bool SessionRegistry::close(const std::string& name, const std::string& client) 
   return true;
 }
 
-std::string SessionRegistry::invite(SessionEntry& entry, Role role) {
+std::string SessionRegistry::invite(SessionEntry& entry, Role role, std::string token) {
   if (entry.invites.size() >= kMaxInvites) entry.invites.erase(entry.invites.begin());
-  std::string token = new_token();
+  if (token.empty()) token = new_token();
   entry.invites[token] = role;
   return token;
 }

@@ -17,7 +17,7 @@ namespace surfeledit::service {
 using LeaseClock = std::chrono::steady_clock;
 
 struct ClientRecord {
-  std::uint64_t sender = 0;                 // publication handle of the bound request writer
+  std::uint64_t sender = 0;                 // publication handle of the bound request writer (0: none yet)
   LeaseClock::time_point first_seen;        // when the id was bound
   LeaseClock::time_point last_activity;     // last request admitted
   std::optional<LeaseClock::time_point> gone_since;  // the writer is not alive / unmatched since
@@ -32,6 +32,9 @@ class ClientRegistry {
   // True when `id` is bound to `sender` (binding it now when the id is new); false when the id is
   // bound to another writer, or the writer already holds its maximum of ids.
   bool admit(const std::string& id, std::uint64_t sender, LeaseClock::time_point now);
+  // A client recovered from the journal, bound to no writer yet: its lease runs as if its writer was
+  // gone since `gone_since`, until its first request (from any writer, which it is then bound to).
+  void recovered(const std::string& id, LeaseClock::time_point gone_since);
   // The writer lost its liveliness or was unmatched: its clients' leases start running (once).
   void writer_lost(std::uint64_t sender, LeaseClock::time_point now);
   // The writer is alive again: its clients' leases stop.

@@ -63,8 +63,22 @@ class Handler {
   // last client of, with a "close" update appended to `updates`), drops its uploads and cached
   // replies and forgets its id and memberships. Returns the ids detached.
   std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates);
+  // Detaches one client as its lease would (expire_leases); the journal replays lease expiry with it.
+  void detach_client(const std::string& client, std::vector<UpdateEvent>& updates);
   // Time until the next lease can run out (nullopt: none is running).
   std::optional<std::chrono::milliseconds> next_lease_check() const;
+
+  // The journal (journal.hpp). `on_stored` is called on the request thread each time a reply is
+  // stored for repeats of its request id (a request served, not a repeat: handle(), finish_loads()),
+  // before the reply is returned; empty: no call. It must not throw.
+  void set_on_stored(std::function<void(const Reply&)> on_stored);
+  // After recovery: a lease of `rejoin` starts for every client attached to a session, so one that
+  // never comes back is detached like one whose writer was lost (a request from it stops the lease).
+  void start_recovered_leases(std::chrono::milliseconds rejoin);
+  // Stores a reply for repeats of its request id as handle() does (replay of a refused request).
+  void remember(const Reply& reply);
+  // The token the next OP_INVITE hands out instead of a fresh random one (replay); once.
+  void set_next_token(std::string token);
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);

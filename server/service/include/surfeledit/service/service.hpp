@@ -11,6 +11,8 @@
 #include <memory>
 #include <string>
 
+#include "surfeledit/service/journal.hpp"
+
 namespace surfeledit::service {
 
 // Who writes the Update samples: a publisher thread (the request loop only copies the changed
@@ -38,18 +40,21 @@ struct ServiceConfig {
   // DDS Security configuration file (surfeledit/service/security.hpp; PROTOCOL.md, "Security");
   // empty: security off (any participant on the domain may match).
   std::string security;
+  JournalConfig journal;  // --journal DIR and its durability policy (PROTOCOL.md, "Journal"); dir empty: off
 };
 
 class Service {
  public:
-  // Creates the participant, topics, reader and writers; throws std::runtime_error on DDS
-  // failures and std::invalid_argument on a bad config.
+  // Creates the participant, topics, reader and writers, and recovers the journal's sessions when
+  // config.journal.dir is set; throws std::runtime_error on DDS failures, std::invalid_argument on
+  // a bad config and JournalError when the journal cannot be used.
   explicit Service(ServiceConfig config);
   ~Service();
   Service(const Service&) = delete;
   Service& operator=(const Service&) = delete;
 
-  // Serves requests until stop() is called (blocks on a waitset; never polls).
+  // Serves requests until stop() is called (blocks on a waitset; never polls). Throws JournalError
+  // when a journal append or fsync fails (the replies of the ops it could not record are not sent).
   void run();
   // Makes run() return after the request in progress (run() then writes the updates still queued,
   // for at most 2 s, and stops the publisher thread); callable from any thread, also before run().

@@ -44,8 +44,9 @@ class SessionRegistry {
   SessionEntry& attached(const std::string& name, const std::string& client);
   // Detaches the client (Conflict if not attached); returns true when that dropped the session.
   bool close(const std::string& name, const std::string& client);
-  // A token granting `role` in the session (the caller checked the inviter's role).
-  std::string invite(SessionEntry& entry, Role role);
+  // A token granting `role` in the session (the caller checked the inviter's role): `token` when
+  // given (the journal's replay hands out the token recorded), a fresh random one otherwise.
+  std::string invite(SessionEntry& entry, Role role, std::string token = {});
 
   SessionEntry* find(const std::string& name);
   const SessionEntry* find(const std::string& name) const;

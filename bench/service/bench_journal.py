@@ -1,0 +1,237 @@
+#!/usr/bin/env python3
+"""The journal's cost: step round trip without a journal, with group commit and with fsync per op
+(same run, interleaved blocks), and recovery time against the journal's length.
+
+Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
+    .venv/bin/python bench/service/bench_journal.py [--build-dir build] [--steps 200] [--blocks 5]
+        [--group-ms 2] [--clients 4] [--seconds 5] [--lengths 250,1000,4000] [--journal-root DIR]
+        [--json-out r.json]
+
+Round trip: three servers (no journal; --journal-sync group --journal-group-ms G; --journal-sync op),
+each on its own DDS domain with `--threads 1`, each with one session of the small scene
+(make_default_scene() at spacing 0.05, ~9.9k surfels; collision algorithm "none", so the step is the
+deformation alone). The client sends --steps OP_DEFORM back to back to one server, then to the next,
+for --blocks rounds; Session.deform's round trip (client side, time.perf_counter) is recorded per op.
+Medians and 90th percentiles per configuration. Then throughput: --clients clients (threads of this
+process, one connection and one session each) step back to back for --seconds against each server.
+
+Recovery: for each length L of --lengths, a fresh journal of L steps (plus the load and the regions)
+is written by a server which is then SIGKILLed; a new server on the same directory recovers it. Reported:
+the server's own replay time (its "recovered ... in X ms" log line), the wall time from starting the
+process to its "ready" log line, and the journal's size. The journals live below --journal-root
+(default: a temporary directory under build/, the same disk as the build: fsync costs what it costs there).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Dict, List, Optional
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
+import surfeledit  # noqa: E402
+from surfeledit import core  # noqa: E402
+
+
+def small_scene() -> Dict[str, np.ndarray]:
+    s = core.make_default_scene().sample(spacing=0.05, seed=1)
+    pos, nrm, part = np.asarray(s.positions), np.asarray(s.normals), np.asarray(s.part)
+    return {"positions": pos, "normals": nrm, "zero": np.flatnonzero(part == 0),
+            "one": np.flatnonzero((part == 1) & (pos[:, 2] > 1.25))}
+
+
+def deform_args(i: int) -> dict:
+    sign = 1.0 if i % 2 == 0 else -1.0  # oscillate in place
+    return {"translation": (0.0, 0.01 * sign, 0.005 * sign), "axis": (1.0, 0.0, 0.0), "angle": 0.05 * sign}
+
+
+class Server:
+    def __init__(self, exe: Path, domain: int, log: Path, extra: List[str]) -> None:
+        self.log = log
+        self.started = time.perf_counter()
+        with open(log, "wb") as out:
+            self.proc = subprocess.Popen([str(exe), "--domain", str(domain), "--threads", "1"] + extra,
+                                         stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                         start_new_session=True)
+        self.domain = domain
+
+    def text(self) -> str:
+        return self.log.read_text(errors="replace")
+
+    def wait_ready(self, timeout: float = 600.0) -> float:
+        """Seconds from the start of the process to its "ready" log line."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if "ready on domain" in self.text():
+                return time.perf_counter() - self.started
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"server exited with {self.proc.returncode}:\n{self.text()[-2000:]}")
+            time.sleep(0.002)
+        raise RuntimeError("server not ready")
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait()
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.kill()
+
+
+def open_session(domain: int, scene: Dict[str, np.ndarray]) -> "surfeledit.Session":
+    return open_session_named(domain, scene, "bench")
+
+
+def open_session_named(domain: int, scene: Dict[str, np.ndarray], name: str) -> "surfeledit.Session":
+    client = surfeledit.connect(domain=domain, spawn=False, timeout=30.0)
+    s = client.open_session(name)
+    s.load_points(scene["positions"], scene["normals"])
+    s.configure(algorithm="none")
+    s.set_regions(zero=scene["zero"], one=scene["one"])
+    return s
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build-dir")
+    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--blocks", type=int, default=5)
+    ap.add_argument("--group-ms", type=int, default=2)
+    ap.add_argument("--lengths", default="250,1000,4000")
+    ap.add_argument("--journal-root")
+    ap.add_argument("--domain", type=int, default=150 + os.getpid() % 40)
+    ap.add_argument("--clients", type=int, default=4)
+    ap.add_argument("--seconds", type=float, default=5.0)
+    ap.add_argument("--json-out")
+    args = ap.parse_args()
+    build = benchlib.build_dir(args.build_dir)
+    exe = build / "server" / "app" / "surfeledit-server"
+    root = Path(args.journal_root) if args.journal_root else Path(tempfile.mkdtemp(prefix="bench-journal-", dir=build))
+    root.mkdir(parents=True, exist_ok=True)
+    print(benchlib.machine_line())
+    print(f"journal directories below {root}")
+    scene = small_scene()
+    configs = {
+        "off": [],
+        f"group {args.group_ms} ms": ["--journal", str(root / "group"), "--journal-sync", "group",
+                                      "--journal-group-ms", str(args.group_ms)],
+        "fsync per op": ["--journal", str(root / "op"), "--journal-sync", "op"],
+    }
+    servers: List[Server] = []
+    results: Dict[str, object] = {"machine": benchlib.machine_line()}
+    try:
+        sessions = {}
+        for k, (name, extra) in enumerate(configs.items()):
+            srv = Server(exe, args.domain + k, root / f"rtt-{k}.log", extra)
+            servers.append(srv)
+            srv.wait_ready()
+            sessions[name] = open_session(srv.domain, scene)
+        rtt: Dict[str, List[float]] = {name: [] for name in configs}
+        for name, s in sessions.items():  # warm-up
+            for i in range(20):
+                s.deform(**deform_args(i))
+        for _ in range(args.blocks):
+            for name, s in sessions.items():
+                for i in range(args.steps):
+                    rtt[name].append(s.deform(**deform_args(i)).round_trip_ms)
+        rows = [[name, len(v), f"{benchlib.median(v):.2f}", f"{benchlib.percentile(v, 0.9):.2f}"]
+                for name, v in rtt.items()]
+        print("\nstep round trip (ms), interleaved blocks of", args.steps, "steps,", args.blocks, "rounds:")
+        print(benchlib.table(["journal", "steps", "median", "p90"], rows))
+        results["rtt"] = {name: {"median": benchlib.median(v), "p90": benchlib.percentile(v, 0.9)}
+                          for name, v in rtt.items()}
+        for s in sessions.values():
+            s.client.close()
+
+        # Throughput: --clients clients, each on its own session of the same server, steps back to back.
+        tput_rows = []
+        results["throughput"] = {}
+        for k, name in enumerate(configs):
+            many = [open_session_named(args.domain + k, scene, f"tput-{c}") for c in range(args.clients)]
+            counts = [0] * len(many)
+            stop_at = time.monotonic() + args.seconds
+
+            def run(c: int) -> None:
+                i = 0
+                while time.monotonic() < stop_at:
+                    many[c].deform(**deform_args(i))
+                    i += 1
+                counts[c] = i
+
+            threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            rate = sum(counts) / args.seconds
+            tput_rows.append([name, args.clients, f"{rate:.0f}"])
+            results["throughput"][name] = rate
+            for s in many:
+                s.client.close()
+        print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
+        print(benchlib.table(["journal", "clients", "steps/s (all clients)"], tput_rows))
+        for srv in servers:
+            srv.stop()
+        servers.clear()
+
+        rec_rows = []
+        results["recovery"] = []
+        for n, length in enumerate(int(x) for x in args.lengths.split(",")):
+            jdir = root / f"recovery-{length}"
+            extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
+            srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-a.log", extra)
+            servers.append(srv)
+            srv.wait_ready()
+            s = open_session(srv.domain, scene)
+            for i in range(length):
+                s.deform(**deform_args(i))
+            srv.kill()
+            s.client.reconnect = 0.0
+            srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-b.log", extra)
+            servers.append(srv2)
+            ready_s = srv2.wait_ready()
+            m = re.search(r"recovered (\d+) request\(s\).* from ([\d.]+) MB in (\d+) ms", srv2.text())
+            assert m, srv2.text()[-2000:]
+            requests, mb, replay_ms = int(m.group(1)), float(m.group(2)), int(m.group(3))
+            rec_rows.append([length, requests, f"{mb:.1f}", replay_ms, f"{ready_s * 1e3:.0f}",
+                             f"{replay_ms / max(requests, 1):.2f}"])
+            results["recovery"].append({"steps": length, "requests": requests, "mb": mb, "replay_ms": replay_ms,
+                                        "ready_ms": ready_s * 1e3})
+            srv2.stop()
+            try:
+                s.client.close()
+            except surfeledit.SurfelEditError:
+                pass
+        print("\nrecovery against journal length (steps of the small scene, plus load/configure/regions):")
+        print(benchlib.table(["steps", "records replayed", "journal MB", "replay ms", "start-to-ready ms",
+                              "ms / record"], rec_rows))
+        print(benchlib.machine_line())
+    finally:
+        for srv in servers:
+            srv.stop()
+        if not args.journal_root:
+            shutil.rmtree(root, ignore_errors=True)
+    if args.json_out:
+        Path(args.json_out).write_text(json.dumps(results, indent=2))
+
+
+if __name__ == "__main__":
+    main()

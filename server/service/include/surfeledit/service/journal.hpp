@@ -1,0 +1,106 @@
+// The journal (surfeledit-server --journal DIR, PROTOCOL.md "Journal"): an append-only log of
+// the requests the server accepted, in the server's order, made durable before their replies are
+// written. On start the service replays it through the same Handler::handle path (the core is
+// deterministic), which restores every session, its history and versions, and the replies kept for
+// repeated request ids.
+//
+// This header holds the settings, the typed error and the log file's framing (JournalLog); what a
+// record holds and how it is replayed is private to the service (src/journal_*.hpp).
+// Standard library only.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace surfeledit::service {
+
+// When a record is forced to disk (fdatasync) relative to its reply.
+enum class JournalSync {
+  Op,     // every record before its reply is written (one fdatasync per accepted op)
+  Group,  // group commit: the records of `group_ms` share one fdatasync; their replies wait for it
+};
+
+struct JournalConfig {
+  std::string dir;                    // journal directory (created if missing); empty: no journal
+  JournalSync sync = JournalSync::Op;  // durability policy
+  std::uint32_t group_ms = 5;         // JournalSync::Group: the longest a reply waits for its group's fsync, ms
+  // After recovery, how long a recovered client may take to send its first request before it is
+  // detached like a client whose lease ran out, ms (a client notices a dead server in ~1.5 s).
+  std::uint64_t rejoin_ms = 10'000;
+};
+
+// The journal directory cannot be used (not creatable, not writable, locked by another server,
+// not a journal, or its records do not replay to what they recorded). The server exits with
+// kJournalExitCode on it.
+class JournalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Exit code of surfeledit-server when the journal cannot be used.
+constexpr int kJournalExitCode = 3;
+
+// Kinds of records (the first byte of each record).
+enum class RecordKind : std::uint8_t {
+  Request = 1,  // an accepted request: its CDR form and what its reply said
+  Refusal = 2,  // a refused request's reply (kept for repeats; replay does not re-run it)
+  Detach = 3,   // a client detached by its lease
+};
+
+// Owns a file descriptor (closed on destruction). Move-only.
+class UniqueFd {
+ public:
+  UniqueFd() = default;
+  explicit UniqueFd(int fd) : fd_(fd) {}
+  ~UniqueFd();
+  UniqueFd(UniqueFd&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+  UniqueFd& operator=(UniqueFd&& other) noexcept;
+  UniqueFd(const UniqueFd&) = delete;
+  UniqueFd& operator=(const UniqueFd&) = delete;
+  int get() const { return fd_; }
+
+ private:
+  int fd_ = -1;
+};
+
+// The log file DIR/journal.log: a 16-byte header, then records framed as
+//   u32 payload length | u32 CRC-32 (zlib) of kind and payload | u8 kind | payload
+// (little endian). Opening it reads every intact record and cuts a torn or corrupt tail (a short
+// frame, a length beyond the file or kMaxRecordBytes, a checksum mismatch, an unknown kind) with a
+// log line: what follows the first bad frame is never applied. The directory is locked (flock)
+// while the log is open. One thread uses it.
+class JournalLog {
+ public:
+  static constexpr std::uint32_t kMaxRecordBytes = std::uint32_t(1) << 30;  // largest payload accepted
+
+  // Opens (creating) the log in `dir` and reads its intact records, handing each to `on_record`
+  // in order (an exception from it propagates: the log is then left as it was). Throws JournalError.
+  JournalLog(const std::string& dir, const std::function<void(RecordKind, const std::vector<std::uint8_t>&)>& on_record);
+  ~JournalLog();
+  JournalLog(const JournalLog&) = delete;
+  JournalLog& operator=(const JournalLog&) = delete;
+
+  // Appends one record (written to the file, not yet forced to disk). Throws JournalError.
+  void append(RecordKind kind, const std::vector<std::uint8_t>& payload);
+  // Forces everything appended to disk (fdatasync). Throws JournalError.
+  void sync();
+
+  std::uint64_t records() const { return records_; }          // intact records read plus appended
+  std::uint64_t bytes() const { return size_; }               // file size (header included)
+  std::uint64_t cut_bytes() const { return cut_bytes_; }      // bytes of torn / corrupt tail cut at open
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  UniqueFd dir_fd_;  // the directory (locked with flock; fsynced after the log was created)
+  UniqueFd fd_;      // the log, open for reading and appending
+  std::uint64_t size_ = 0;
+  std::uint64_t records_ = 0;
+  std::uint64_t cut_bytes_ = 0;
+};
+
+}  // namespace surfeledit::service

@@ -1,0 +1,234 @@
+// The journal's log file: framing, checksums, cutting a torn tail, appending and fdatasync.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include "surfeledit/service/journal.hpp"
+#include "surfeledit/service/log.hpp"
+
+namespace surfeledit::service {
+
+namespace {
+
+constexpr std::array<char, 8> kMagic = {'S', 'E', 'J', 'O', 'U', 'R', 'N', 'L'};
+constexpr std::uint32_t kFormat = 1;       // framing version in the header
+constexpr std::size_t kHeaderBytes = 16;   // magic, format, reserved
+constexpr std::size_t kFrameBytes = 9;     // length, crc, kind
+
+[[noreturn]] void fail(const std::string& what, int err) {
+  throw JournalError(what + ": " + std::strerror(err));
+}
+
+void put_u32(std::uint8_t* p, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+std::uint32_t get_u32(const std::uint8_t* p) {
+  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
+}
+
+// CRC-32 of the kind byte and the payload.
+std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size_t size) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, &kind, 1);
+  // zlib takes uInt lengths: feed large payloads in pieces.
+  while (size > 0) {
+    const std::size_t n = std::min<std::size_t>(size, 1u << 30);
+    crc = crc32(crc, payload, static_cast<uInt>(n));
+    payload += n;
+    size -= n;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+// Reads exactly `size` bytes at `offset`; false at end of file first.
+bool read_at(int fd, std::uint64_t offset, std::uint8_t* out, std::size_t size, const std::string& path) {
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::pread(fd, out + done, size - done, static_cast<off_t>(offset + done));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("cannot read journal '" + path + "'", errno);
+    }
+    if (n == 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& path) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("cannot append to journal '" + path + "'", errno);
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
+bool known_kind(std::uint8_t kind) {
+  return kind == static_cast<std::uint8_t>(RecordKind::Request) ||
+         kind == static_cast<std::uint8_t>(RecordKind::Refusal) ||
+         kind == static_cast<std::uint8_t>(RecordKind::Detach);
+}
+
+}  // namespace
+
+UniqueFd::~UniqueFd() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+UniqueFd& UniqueFd::operator=(UniqueFd&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+JournalLog::JournalLog(const std::string& dir,
+                       const std::function<void(RecordKind, const std::vector<std::uint8_t>&)>& on_record)
+    : path_(dir + "/journal.log") {
+  if (dir.empty()) throw JournalError("journal directory is empty");
+  if (::mkdir(dir.c_str(), 0700) == 0) {
+    // A new directory: its entry in the parent must reach the disk too.
+    const std::string parent = dir.find('/') == std::string::npos ? "." : dir.substr(0, dir.find_last_of('/') + 1);
+    UniqueFd parent_fd(::open(parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+    if (parent_fd.get() < 0 || ::fsync(parent_fd.get()) != 0) fail("cannot fsync the parent of '" + dir + "'", errno);
+  } else if (errno != EEXIST) {
+    fail("cannot create journal directory '" + dir + "'", errno);
+  }
+  dir_fd_ = UniqueFd(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (dir_fd_.get() < 0) fail("cannot open journal directory '" + dir + "'", errno);
+  if (::flock(dir_fd_.get(), LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EWOULDBLOCK) throw JournalError("journal directory '" + dir + "' is in use by another server");
+    fail("cannot lock journal directory '" + dir + "'", errno);
+  }
+  bool created = false;
+  fd_ = UniqueFd(::open(path_.c_str(), O_RDWR | O_CLOEXEC));
+  if (fd_.get() < 0 && errno == ENOENT) {
+    fd_ = UniqueFd(::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
+    created = true;
+  }
+  if (fd_.get() < 0) fail("cannot open journal '" + path_ + "'", errno);
+  struct stat st {};
+  if (::fstat(fd_.get(), &st) != 0) fail("cannot stat journal '" + path_ + "'", errno);
+  const auto file_size = static_cast<std::uint64_t>(st.st_size);
+
+  if (file_size < kHeaderBytes) {
+    // New, or cut short before its header was complete (nothing can follow then): write the header.
+    if (file_size > 0) logger()->warn("journal '{}': {} byte(s) without a complete header; starting it anew", path_, file_size);
+    if (::ftruncate(fd_.get(), 0) != 0) fail("cannot truncate journal '" + path_ + "'", errno);
+    std::array<std::uint8_t, kHeaderBytes> header{};
+    std::memcpy(header.data(), kMagic.data(), kMagic.size());
+    put_u32(header.data() + 8, kFormat);
+    if (::lseek(fd_.get(), 0, SEEK_SET) < 0) fail("cannot seek in journal '" + path_ + "'", errno);
+    write_all(fd_.get(), header.data(), header.size(), path_);
+    if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
+    if (created && ::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir + "'", errno);
+    size_ = kHeaderBytes;
+    cut_bytes_ = file_size;
+    return;
+  }
+  std::array<std::uint8_t, kHeaderBytes> header{};
+  read_at(fd_.get(), 0, header.data(), header.size(), path_);
+  if (std::memcmp(header.data(), kMagic.data(), kMagic.size()) != 0) {
+    throw JournalError("'" + path_ + "' is not a surfeledit journal (bad magic)");
+  }
+  if (get_u32(header.data() + 8) != kFormat) {
+    throw JournalError("journal '" + path_ + "' has format " + std::to_string(get_u32(header.data() + 8)) +
+                       "; this server reads format " + std::to_string(kFormat));
+  }
+
+  // Intact records, up to the first bad frame.
+  std::uint64_t at = kHeaderBytes;
+  std::string bad;
+  std::vector<std::uint8_t> payload;
+  while (at < file_size) {
+    std::array<std::uint8_t, kFrameBytes> frame{};
+    if (file_size - at < kFrameBytes || !read_at(fd_.get(), at, frame.data(), frame.size(), path_)) {
+      bad = "a frame cut short";
+      break;
+    }
+    const std::uint32_t length = get_u32(frame.data());
+    const std::uint32_t crc = get_u32(frame.data() + 4);
+    const std::uint8_t kind = frame[8];
+    if (length > kMaxRecordBytes || length > file_size - at - kFrameBytes) {
+      bad = "a record of " + std::to_string(length) + " bytes beyond the end of the file";
+      break;
+    }
+    payload.resize(length);
+    if (!read_at(fd_.get(), at + kFrameBytes, payload.data(), length, path_)) {
+      bad = "a record cut short";
+      break;
+    }
+    if (checksum(kind, payload.data(), payload.size()) != crc) {
+      bad = "a checksum mismatch";
+      break;
+    }
+    if (!known_kind(kind)) {
+      bad = "an unknown record kind " + std::to_string(kind);
+      break;
+    }
+    on_record(static_cast<RecordKind>(kind), payload);
+    ++records_;
+    at += kFrameBytes + length;
+  }
+  if (at < file_size) {
+    cut_bytes_ = file_size - at;
+    logger()->warn("journal '{}': cut {} byte(s) after record {} at offset {} ({}): a torn or corrupt tail, not applied",
+                   path_, cut_bytes_, records_, at, bad);
+    if (::ftruncate(fd_.get(), static_cast<off_t>(at)) != 0) fail("cannot cut journal '" + path_ + "'", errno);
+    if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
+  }
+  size_ = at;
+}
+
+JournalLog::~JournalLog() = default;
+
+void JournalLog::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
+  if (payload.size() > kMaxRecordBytes) {
+    throw JournalError("journal record of " + std::to_string(payload.size()) + " bytes exceeds the limit of " +
+                       std::to_string(kMaxRecordBytes));
+  }
+  std::array<std::uint8_t, kFrameBytes> frame{};
+  const auto k = static_cast<std::uint8_t>(kind);
+  put_u32(frame.data(), static_cast<std::uint32_t>(payload.size()));
+  put_u32(frame.data() + 4, checksum(k, payload.data(), payload.size()));
+  frame[8] = k;
+  // pwrite at the known end: a failed append leaves `size_` at the last intact record, and the
+  // next append overwrites the partial one.
+  const std::uint64_t at = size_;
+  auto write_at = [&](std::uint64_t offset, const std::uint8_t* data, std::size_t size) {
+    while (size > 0) {
+      const ssize_t n = ::pwrite(fd_.get(), data, size, static_cast<off_t>(offset));
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        fail("cannot append to journal '" + path_ + "'", errno);
+      }
+      data += n;
+      offset += static_cast<std::uint64_t>(n);
+      size -= static_cast<std::size_t>(n);
+    }
+  };
+  write_at(at, frame.data(), frame.size());
+  write_at(at + kFrameBytes, payload.data(), payload.size());
+  size_ = at + kFrameBytes + payload.size();
+  ++records_;
+}
+
+void JournalLog::sync() {
+  if (::fdatasync(fd_.get()) != 0) fail("cannot fdatasync journal '" + path_ + "'", errno);
+}
+
+}  // namespace surfeledit::service

@@ -1,0 +1,198 @@
+#include "journal_records.hpp"
+
+#include <dds/dds.h>
+#include <dds/ddsi/ddsi_cdrstream.h>
+
+#include <cstring>
+#include <limits>
+
+#include "surfeledit/service/journal.hpp"
+
+namespace surfeledit::service::journal {
+
+namespace {
+
+constexpr std::uint32_t kXcdr2 = 2;  // CDR_ENC_VERSION_2
+
+// Little-endian writer of the record payloads.
+class Writer {
+ public:
+  void u8(std::uint8_t v) { out_.push_back(v); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void str(const std::string& s) {
+    u32(static_cast<std::uint32_t>(s.size()));
+    out_.insert(out_.end(), s.begin(), s.end());
+  }
+  void bytes(const std::vector<std::uint8_t>& b) { out_.insert(out_.end(), b.begin(), b.end()); }
+  std::vector<std::uint8_t> take() { return std::move(out_); }
+
+ private:
+  std::vector<std::uint8_t> out_;
+};
+
+// Reader of the record payloads; every read is bounds-checked.
+class Reader {
+ public:
+  Reader(const std::vector<std::uint8_t>& in, const char* what) : in_(in), what_(what) {}
+  std::uint8_t u8() { return need(1), in_[at_++]; }
+  std::uint32_t u32() {
+    need(4);
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= std::uint32_t(in_[at_++]) << (8 * i);
+    return v;
+  }
+  std::uint64_t u64() {
+    need(8);
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= std::uint64_t(in_[at_++]) << (8 * i);
+    return v;
+  }
+  std::string str() {
+    const std::uint32_t n = u32();
+    need(n);
+    std::string s(reinterpret_cast<const char*>(in_.data() + at_), n);
+    at_ += n;
+    return s;
+  }
+  std::vector<std::uint8_t> rest() {
+    std::vector<std::uint8_t> r(in_.begin() + static_cast<std::ptrdiff_t>(at_), in_.end());
+    at_ = in_.size();
+    return r;
+  }
+  void end() const {
+    if (at_ != in_.size()) throw JournalError(std::string("journal ") + what_ + " record has trailing bytes");
+  }
+
+ private:
+  void need(std::size_t n) const {
+    if (in_.size() - at_ < n) throw JournalError(std::string("journal ") + what_ + " record is cut short");
+  }
+  const std::vector<std::uint8_t>& in_;
+  const char* what_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> encode(const RequestRecord& r) {
+  Writer w;
+  w.u64(r.version);
+  w.u8(r.state_hash ? 1 : 0);
+  w.u64(r.state_hash.value_or(0));
+  w.str(r.token);
+  w.u8(kXcdr2);
+  w.bytes(r.cdr);
+  return w.take();
+}
+
+RequestRecord decode_request(const std::vector<std::uint8_t>& payload) {
+  Reader in(payload, "request");
+  RequestRecord r;
+  r.version = in.u64();
+  const bool has_hash = in.u8() != 0;
+  const std::uint64_t hash = in.u64();
+  if (has_hash) r.state_hash = hash;
+  r.token = in.str();
+  if (in.u8() != kXcdr2) throw JournalError("journal request record: unknown CDR encoding");
+  r.cdr = in.rest();
+  return r;
+}
+
+std::vector<std::uint8_t> encode(const RefusalRecord& r) {
+  Writer w;
+  w.str(r.client_id);
+  w.u64(r.request_id);
+  w.u32(r.request_op);
+  w.u32(static_cast<std::uint32_t>(r.status));
+  w.str(r.field);
+  w.str(r.message);
+  w.u64(r.version);
+  return w.take();
+}
+
+RefusalRecord decode_refusal(const std::vector<std::uint8_t>& payload) {
+  Reader in(payload, "refusal");
+  RefusalRecord r;
+  r.client_id = in.str();
+  r.request_id = in.u64();
+  r.request_op = in.u32();
+  r.status = static_cast<Status>(in.u32());
+  r.field = in.str();
+  r.message = in.str();
+  r.version = in.u64();
+  in.end();
+  if (r.status == Status::Ok || static_cast<std::uint32_t>(r.status) > static_cast<std::uint32_t>(Status::PermissionDenied)) {
+    throw JournalError("journal refusal record with status " + std::to_string(static_cast<std::uint32_t>(r.status)));
+  }
+  return r;
+}
+
+std::vector<std::uint8_t> encode(const DetachRecord& r) {
+  Writer w;
+  w.str(r.client_id);
+  return w.take();
+}
+
+DetachRecord decode_detach(const std::vector<std::uint8_t>& payload) {
+  Reader in(payload, "detach");
+  DetachRecord r;
+  r.client_id = in.str();
+  in.end();
+  return r;
+}
+
+RefusalRecord refusal_of(const Reply& reply) {
+  return RefusalRecord{reply.client_id, reply.request_id, reply.request_op, reply.status,
+                       reply.field,     reply.message,    reply.version};
+}
+
+Reply reply_of(const RefusalRecord& r) {
+  Reply reply;
+  reply.client_id = r.client_id;
+  reply.request_id = r.request_id;
+  reply.request_op = r.request_op;
+  reply.status = r.status;
+  reply.field = r.field;
+  reply.message = r.message;
+  reply.version = r.version;
+  return reply;
+}
+
+std::vector<std::uint8_t> request_cdr(const surfeledit_proto_Request& request) {
+  dds_ostream_t os;
+  dds_ostream_init(&os, 0, kXcdr2);
+  const bool ok = dds_stream_write(&os, reinterpret_cast<const char*>(&request), surfeledit_proto_Request_desc.m_ops) != nullptr;
+  std::vector<std::uint8_t> out;
+  if (ok) out.assign(os.m_buffer, os.m_buffer + os.m_index);
+  dds_ostream_fini(&os);
+  if (!ok) throw JournalError("the request could not be serialized for the journal");
+  return out;
+}
+
+RequestSample::RequestSample(std::vector<std::uint8_t> cdr) {
+  if (cdr.size() > std::numeric_limits<std::uint32_t>::max()) throw JournalError("journal request too large");
+  const auto size = static_cast<std::uint32_t>(cdr.size());
+  std::uint32_t offset = 0;
+  if (dds_stream_normalize_data(reinterpret_cast<char*>(cdr.data()), &offset, size, false, kXcdr2,
+                                surfeledit_proto_Request_desc.m_ops) == nullptr ||
+      offset != size) {
+    throw JournalError("journal request record does not hold a valid Request sample");
+  }
+  sample_ = static_cast<surfeledit_proto_Request*>(dds_alloc(sizeof(surfeledit_proto_Request)));
+  if (!sample_) throw std::bad_alloc();
+  dds_istream_t is;
+  dds_istream_init(&is, size, cdr.data(), kXcdr2);
+  dds_stream_read(&is, reinterpret_cast<char*>(sample_), surfeledit_proto_Request_desc.m_ops);
+  dds_istream_fini(&is);
+}
+
+RequestSample::~RequestSample() {
+  if (sample_) dds_sample_free(sample_, &surfeledit_proto_Request_desc, DDS_FREE_ALL);
+}
+
+}  // namespace surfeledit::service::journal
