@@ -151,10 +151,15 @@ class Client:
     close its sessions and watchers, release the DDS entities and stop a server it spawned.
     """
 
-    def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None) -> None:
+    def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
+                 client_id: Optional[str] = None) -> None:
         self.domain = int(domain)
         self.timeout = float(timeout)
-        self.client_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
+        if client_id is not None and (not isinstance(client_id, str) or not client_id or len(client_id) > 256):
+            raise errors.InvalidArgumentError(f"client_id {client_id!r}: expected 1..256 characters", "client_id")
+        # A fresh id, or the caller's: a restarted process reusing its id finds its sessions again once
+        # the server detached the old process (its lease) and within the grace period (PROTOCOL.md).
+        self.client_id = client_id or f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
         self._next_id = 1
         self._lock = threading.RLock()
         self._server = _server
@@ -360,7 +365,7 @@ class Client:
 
 
 def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0,
-            data_root: Optional[Union[str, "os.PathLike[str]"]] = None) -> Client:
+            data_root: Optional[Union[str, "os.PathLike[str]"]] = None, client_id: Optional[str] = None) -> Client:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
@@ -372,13 +377,17 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             server to come up.
         data_root: for a spawned server: the directory ``Session.load_file`` may read below
             (``--data-root``); None: file loading is off on that server.
+        client_id: this client's id (None: a fresh unique one). Reuse the id of a process that died to
+            reopen its sessions after the server detached it (``--client-lease-ms``) and before its
+            grace period ended (``--session-grace-ms``); until the old one is detached the server
+            does not answer the new one (the id is bound to the old writer), so the probe fails.
 
     Raises:
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
     """
     if domain is None:
         domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
-    client = Client(domain, timeout)
+    client = Client(domain, timeout, client_id=client_id)
     try:
         if client.probe(min(_PROBE_S, timeout)):
             return client

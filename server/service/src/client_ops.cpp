@@ -26,31 +26,65 @@ void Handler::writer_alive(std::uint64_t sender) { state_->clients.writer_alive(
 
 std::vector<std::string> Handler::expire_leases(std::vector<UpdateEvent>& updates) {
   HandlerState& s = *state_;
-  const std::vector<std::string> expired = s.clients.expired(LeaseClock::now(), s.config.client_lease);
+  const LeaseClock::time_point now = LeaseClock::now();
+  const std::vector<std::string> expired = s.clients.expired(now, s.config.client_lease);
   for (const std::string& client : expired) {
     const std::uint64_t held = s.uploads.client_bytes(client);
     const std::vector<std::string> sessions = s.sessions.attached_to(client);
+    s.away[client] = now;  // before the presence updates: they list it as away
     for (const std::string& name : sessions) {
-      const std::uint64_t version = s.sessions.find(name)->session->version();
-      if (s.sessions.close(name, client)) {
-        s.uploads.erase_session(name);
-        updates.push_back(make_update_event(name, version + 1, "close"));
-        logger()->info("session '{}' dropped: its last client {} was detached", name, client);
+      SessionEntry& entry = *s.sessions.find(name);
+      release_tool(entry, client);
+      if (s.sessions.leave(name, client)) {
+        entry.orphaned_since = now;
+        logger()->info("session '{}' kept for {} ms: its last client {} was detached", name,
+                       s.config.session_grace.count(), client);
       }
+      updates.push_back(presence_event(s, entry, name, client, "expired"));
     }
     s.uploads.erase_client(client);
     s.cache.forget(client);
-    s.sessions.forget_member(client);
     s.clients.forget(client);
-    logger()->info("client {} detached: its request writer was gone for {} ms ({} session(s) closed, {} upload "
+    logger()->info("client {} detached: its request writer was gone for {} ms ({} session(s) left, {} upload "
                    "bytes freed)",
                    client, s.config.client_lease.count(), sessions.size(), held);
+  }
+  // Grace periods that ran out: sessions nobody came back to, memberships of clients that did not return.
+  for (const std::string& name : s.sessions.names()) {
+    SessionEntry& entry = *s.sessions.find(name);
+    if (!entry.clients.empty() || !entry.orphaned_since || now - *entry.orphaned_since < s.config.session_grace) {
+      continue;
+    }
+    const std::uint64_t version = entry.session->version();
+    s.uploads.erase_session(name);
+    s.sessions.drop(name);
+    UpdateEvent close = make_update_event(name, version + 1, "close");
+    updates.push_back(std::move(close));
+    logger()->info("session '{}' dropped: no client came back within {} ms", name, s.config.session_grace.count());
+  }
+  for (auto it = s.away.begin(); it != s.away.end();) {
+    if (now - it->second < s.config.session_grace) {
+      ++it;
+      continue;
+    }
+    s.sessions.forget_member(it->first);
+    logger()->info("client {} did not come back within {} ms: its memberships are forgotten", it->first,
+                   s.config.session_grace.count());
+    it = s.away.erase(it);
   }
   return expired;
 }
 
 std::optional<std::chrono::milliseconds> Handler::next_lease_check() const {
-  const auto next = state_->clients.next_expiry(state_->config.client_lease);
+  const HandlerState& s = *state_;
+  std::optional<LeaseClock::time_point> next = s.clients.next_expiry(s.config.client_lease);
+  auto consider = [&](LeaseClock::time_point t) {
+    if (!next || t < *next) next = t;
+  };
+  for (const auto& [name, entry] : s.sessions.all()) {
+    if (entry.clients.empty() && entry.orphaned_since) consider(*entry.orphaned_since + s.config.session_grace);
+  }
+  for (const auto& [client, since] : s.away) consider(since + s.config.session_grace);
   if (!next) return std::nullopt;
   const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*next - LeaseClock::now());
   return std::max(left, std::chrono::milliseconds(0));

@@ -31,6 +31,9 @@ struct HandlerConfig {
   std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
   std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeats
   std::chrono::milliseconds client_lease{2000};  // a client whose writer is gone this long is detached
+  // A session whose last client was detached by its lease (not one closed by its last client) is kept
+  // this long, and a detached client's memberships too, so that a restarted client finds them.
+  std::chrono::milliseconds session_grace{30000};
 };
 
 struct HandlerState;
@@ -59,11 +62,14 @@ class Handler {
   // is alive again; clients bound to it are detached once it stayed gone for config().client_lease.
   void writer_lost(std::uint64_t sender);
   void writer_alive(std::uint64_t sender);
-  // Detaches every client whose lease ran out: closes its sessions (dropping those it was the
-  // last client of, with a "close" update appended to `updates`), drops its uploads and cached
-  // replies and forgets its id and memberships. Returns the ids detached.
+  // Detaches every client whose lease ran out: releases its tools, detaches it from its sessions
+  // (a "presence" update "expired" each; a session left without clients is kept for the grace
+  // period), drops its uploads and cached replies and forgets its id (its memberships are kept for
+  // the grace period). Drops the sessions whose grace period ran out without a client coming back
+  // (a "close" update each) and forgets the memberships of detached clients that did not come back.
+  // Appends the updates to `updates`; returns the ids detached.
   std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates);
-  // Time until the next lease can run out (nullopt: none is running).
+  // Time until the next lease or grace period can run out (nullopt: none is running).
   std::optional<std::chrono::milliseconds> next_lease_check() const;
 
   // The model an update event refers to (nullptr when its session is gone or has none).
