@@ -84,6 +84,7 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
     check_expected_version(*entry, *command.expect_version);
   }
   const std::uint64_t version_before = entry ? entry->session->version() : 0;
+  if (entry) note_activity(*entry, command.client_id, command.op, version_before, Clock::now());  // idle from now
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
   if (context.entry) {

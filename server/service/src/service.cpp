@@ -242,8 +242,11 @@ dds_duration_t Service::Impl::check_leases() {
     }
   }
   std::vector<UpdateEvent> events;
-  for (const std::string& client : handler.expire_leases(events)) client_replies.drop(client);
+  const std::vector<std::string> expired = handler.expire_leases(events);
+  // Presence first: deleting a dead client's reply writer can block for Cyclone's writer linger
+  // duration (1 s by default) while it waits for acknowledgements that never come.
   for (const UpdateEvent& event : events) publish(event);
+  for (const std::string& client : expired) client_replies.drop(client);
   const auto next = handler.next_lease_check();
   if (!next) return DDS_INFINITY;
   return DDS_MSECS(next->count() + 1);

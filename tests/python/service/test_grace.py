@@ -135,7 +135,8 @@ def test_a_restarted_client_resumes_within_the_grace_period_and_not_after(
         assert r.wait(timeout=20) == 0
         assert time.monotonic() - expired_at < grace_ms / 1000
         presence_until(watcher, "join", me)
-        update = watcher.get(timeout=10.0)
+        load, update = watcher.get(timeout=10.0), watcher.get(timeout=10.0)  # both processes' changes, in order
+        assert load is not None and (load.cause, load.version, load.author) == ("load", held["version"], me)
         assert update is not None and (update.cause, update.version, update.author) == ("remove", changed, me)
         np.testing.assert_array_equal(update.removed, np.array([0], np.uint64))
         presence_until(watcher, "expired", me)  # the resumed process exited without closing: leased out again
