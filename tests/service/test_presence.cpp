@@ -75,6 +75,9 @@ TEST_F(Collaboration, ExpectVersionRefusesAStaleOpAndChangesNothing) {
 
 TEST_F(Collaboration, PeersAndPresenceNameTheClientsTheirRolesLastOpsAndTools) {
   load(40);
+  ASSERT_EQ(updates.size(), 1u);
+  EXPECT_EQ(updates[0].cause, "load");
+  EXPECT_EQ(updates[0].author, "client-a");
   rb.token = send_as(surfeledit_proto_OP_INVITE, 0)->token;
   rb.client = "client-b";
   updates.clear();
@@ -172,4 +175,43 @@ TEST(CollaborationGrace, ASessionLeftByALeaseIsKeptForTheGracePeriodThenDropped)
   EXPECT_EQ(updates[1].author, "");
   EXPECT_EQ(send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::NotFound);
   EXPECT_FALSE(h.next_lease_check());
+}
+
+TEST(CollaborationWire, PeersAndAuthorsReachTheSamples) {
+  Reply r;
+  r.peers.push_back(PeerInfo{"a", "owner", "attached", "deform", 7, 12.5, 10, 20, 30});
+  r.peers.push_back(PeerInfo{"b", "viewer", "away", "", 0, 1.0, 0, 0, 0});
+  const ReplyView view(r);
+  ASSERT_EQ(view.get()->peers._length, 2u);
+  const surfeledit_proto_Peer& a = view.get()->peers._buffer[0];
+  EXPECT_STREQ(a.client_id, "a");
+  EXPECT_STREQ(a.role, "owner");
+  EXPECT_STREQ(a.state, "attached");
+  EXPECT_STREQ(a.last_op, "deform");
+  EXPECT_EQ(a.last_version, 7u);
+  EXPECT_EQ(a.idle_ms, 12.5);
+  EXPECT_EQ(a.zero, 10u);
+  EXPECT_EQ(a.one, 20u);
+  EXPECT_EQ(a.deformable, 30u);
+  EXPECT_STREQ(view.get()->peers._buffer[1].state, "away");
+
+  // An update of 3 surfels in parts of 2: the author and presence in every part, the peers in part 0.
+  UpdateEvent event = make_update_event("s", 4, "presence");
+  event.author = "a";
+  event.presence = "join";
+  event.peers = r.peers;
+  PreparedUpdate update = prepare_update(event, nullptr);
+  update.ids = {1, 2, 3};
+  update.positions.assign(9, 0.0);
+  update.normals.assign(9, 0.0);
+  update.radii.assign(3, 1.0);
+  ASSERT_EQ(update_parts(update, 2), 2u);
+  const UpdateView first(update_chunk(update, 0, 2));
+  const UpdateView second(update_chunk(update, 1, 2));
+  EXPECT_STREQ(first.get()->author, "a");
+  EXPECT_STREQ(second.get()->author, "a");
+  EXPECT_STREQ(first.get()->presence, "join");
+  EXPECT_STREQ(second.get()->presence, "join");
+  EXPECT_EQ(first.get()->peers._length, 2u);
+  EXPECT_EQ(second.get()->peers._length, 0u);
 }
