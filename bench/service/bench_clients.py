@@ -7,7 +7,7 @@ Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
                                                      [--spacing 0.1] [--clients 1,2,4,8]
 
 Each run starts a fresh server on a fresh DDS domain and k client processes (tests/python/service/
-collab_peer.py, mode "edit": the real Python client). "one": the bench process opens one session with the
+collab_peer.py, mode "edit" without a watcher: the real Python client). "one": the bench process opens one session with the
 demo scene (sampled at --spacing; slab = zero region, sphere = one region, default collision settings) and
 invites the k clients as editors; "separate": each client opens its own session with the same scene. Once
 all are ready they start together and send deform steps (small random translations, one at a time each,
@@ -79,7 +79,7 @@ def one_run(exe: str, k: int, shared: bool, seconds: float, spacing: float) -> T
             token = s.invite("editor")
         for i in range(k):
             args = dict(session="bench" if shared else f"bench-{i}", token=token, steps=10**9, seconds=seconds,
-                        seed=i, scene=spacing)
+                        seed=i, scene=spacing, watch=False)
             peers.append(subprocess.Popen([sys.executable, str(PEER), "edit", str(domain), json.dumps(args)],
                                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                           text=True, start_new_session=True))

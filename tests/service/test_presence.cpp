@@ -215,3 +215,35 @@ TEST(CollaborationWire, PeersAndAuthorsReachTheSamples) {
   EXPECT_EQ(first.get()->peers._length, 2u);
   EXPECT_EQ(second.get()->peers._length, 0u);
 }
+
+TEST(CollaborationGrace, TheLastCloseKeepsASessionWhileAMemberIsAway) {
+  HandlerConfig config{4, 1000, 1};
+  config.client_lease = 1ms;
+  config.session_grace = 10s;
+  Handler h(config);
+  RequestBuilder rb;
+  std::vector<UpdateEvent> updates;
+  std::uint64_t id = 1;
+  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) {
+    Command c = decode(rb.make(op, id++));
+    c.sender = sender;
+    return h.handle(c, updates);
+  };
+  ASSERT_EQ(send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
+  rb.token = send_from(surfeledit_proto_OP_INVITE, 100)->token;
+  rb.client = "client-b";
+  ASSERT_EQ(send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::Ok);
+  rb.token.clear();
+  h.writer_lost(300);
+  std::this_thread::sleep_for(5ms);
+  ASSERT_EQ(h.expire_leases(updates), std::vector<std::string>{"client-b"});
+  rb.client = "client-a";
+  updates.clear();
+  ASSERT_EQ(send_from(surfeledit_proto_OP_CLOSE_SESSION, 100)->status, Status::Ok);
+  ASSERT_EQ(updates.size(), 1u);  // no "close": client-b may come back
+  EXPECT_EQ(updates[0].presence, "leave");
+  rb.client = "client-b";
+  const auto back = send_from(surfeledit_proto_OP_JOIN_SESSION, 400);
+  ASSERT_EQ(back->status, Status::Ok) << back->message;
+  EXPECT_EQ(back->session_info->clients, 1u);
+}

@@ -87,9 +87,9 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   if (entry) note_activity(*entry, command.client_id, command.op, version_before, Clock::now());  // idle from now
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
-  if (context.entry) {
-    note_activity(*context.entry, command.client_id, command.op, entry ? version_before : context.entry->session->version(),
-                  Clock::now());
+  if (context.entry) {  // open / join: the version the client found
+    const std::uint64_t before = entry ? version_before : context.entry->session->version();
+    note_activity(*context.entry, command.client_id, command.op, before, Clock::now());
   }
   if (context.deferred) return true;
   if (context.entry) fill_reply_tail(reply, *context.entry, op->tail);

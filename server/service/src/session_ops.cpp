@@ -1,4 +1,6 @@
 // Handler functions of the session ops: INFO, OPEN_SESSION, JOIN_SESSION, CLOSE_SESSION.
+#include <algorithm>
+
 #include "handler_ops.hpp"
 #include "surfeledit/service/log.hpp"
 
@@ -81,15 +83,24 @@ void serve_close_session(OpContext& c) {
   const std::uint64_t version = c.entry->session->version();
   c.state.uploads.erase(client, session);
   release_tool(*c.entry, client);
-  if (c.state.sessions.close(session, client)) {
+  // A member detached by its lease may still come back: the session then waits for it (grace period).
+  const bool awaited = std::any_of(c.entry->members.begin(), c.entry->members.end(), [&](const auto& member) {
+    return member.first != client && c.state.away.count(member.first) > 0;
+  });
+  if (!awaited && c.state.sessions.close(session, client)) {
     c.entry = nullptr;  // dropped: the reply tail has no session to describe
     c.state.uploads.erase_session(session);
     c.updates.push_back(make_update_event(session, version + 1, "close"));
     c.reply.version = version + 1;
     logger()->info("session '{}' dropped: its last client {} closed it", session, client);
-  } else {
-    c.updates.push_back(presence_event(c.state, *c.entry, session, client, "leave"));
+    return;
   }
+  if (awaited && c.state.sessions.leave(session, client)) {
+    c.entry->orphaned_since = std::chrono::steady_clock::now();
+    logger()->info("session '{}' kept for {} ms: its last client {} closed it while a member is away", session,
+                   c.state.config.session_grace.count(), client);
+  }
+  c.updates.push_back(presence_event(c.state, *c.entry, session, client, "leave"));
 }
 
 }  // namespace surfeledit::service

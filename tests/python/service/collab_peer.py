@@ -2,9 +2,10 @@
 
 Modes (first argument), each followed by the domain and a JSON argument; output is one JSON object per line.
 
-``edit DOMAIN '{"session", "token", "steps", "seconds", "seed", "scene"}'``
+``edit DOMAIN '{"session", "token", "steps", "seconds", "seed", "scene", "watch"}'``
     joins the session with the token (empty: opens it as its own and, with ``scene`` = a spacing, loads
-    the demo scene sampled at it with the slab as zero and the sphere as one region), starts a watcher on it from the
+    the demo scene sampled at it with the slab as zero and the sphere as one region), starts (unless
+    ``watch`` is false: then ``final`` is not offered) a watcher on it from the
     state it fetched, prints ``{"ready": true, "client_id": ...}`` and waits for a line ``go`` on stdin.
     Then sends deform steps (small random translations) until ``steps`` were acknowledged or ``seconds``
     passed, prints ``{"client_id", "versions": [acknowledged versions, in order], "seconds"}`` and waits
@@ -81,7 +82,7 @@ def _edit(domain: int, args: Dict[str, Any]) -> None:
         session.load_points(pos, nrm, rad)
         ids = session.ids()
         session.set_regions(zero=ids[part == 0], one=ids[part == 1])
-    watcher = session.watch()
+    watcher = session.watch() if args.get("watch", True) else None
     view = fresh_state(session)  # after the watcher exists: no update is missed
     emit({"ready": True, "client_id": client.client_id})
     if sys.stdin.readline().strip() != "go":
@@ -94,7 +95,7 @@ def _edit(domain: int, args: Dict[str, Any]) -> None:
         versions.append(step.version)
     emit({"client_id": client.client_id, "versions": versions, "seconds": time.perf_counter() - t0})
     for line in sys.stdin:
-        if line.strip() != "final":
+        if line.strip() != "final" or watcher is None:
             break
         truth = fresh_state(session)
         events = []
@@ -110,7 +111,8 @@ def _edit(domain: int, args: Dict[str, Any]) -> None:
         emit({"view_equal": same(view, truth), "state_equal": same(session.state(), truth), "digest": digest(truth),
               "version": truth.version, "watched": [e.version for e in events],
               "authors": {str(e.version): e.author for e in events}})
-    watcher.close()
+    if watcher is not None:
+        watcher.close()
     client.close()
 
 

@@ -17,9 +17,8 @@ import numpy as np
 import pytest
 
 import surfeledit
-from surfeledit import errors
 
-from .conftest import ServerProcess, connect_to, free_domain, generated_scene, server_executable
+from .conftest import ServerProcess, connect_to, free_domain, server_executable
 from .test_presence import presence_until
 
 PEER = Path(__file__).with_name("collab_peer.py")
