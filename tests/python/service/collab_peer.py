@@ -39,6 +39,7 @@ import numpy as np
 import surfeledit
 from surfeledit import errors
 from surfeledit._protocol import proto
+from surfeledit.connection import wait_matched
 from surfeledit.results import Changes, State, merge
 
 
@@ -66,6 +67,15 @@ def same(a: State, b: State) -> bool:
     return all(np.array_equal(getattr(a, n), getattr(b, n)) for n in ("ids", "positions", "normals", "radii"))
 
 
+def watch(session: surfeledit.Session) -> surfeledit.Watcher:
+    """A watcher of the session whose reader matched the server's update writer (updates are volatile: one
+    published before the match is never seen); waits up to 20 s, where the watcher itself waits 2 s."""
+    w = session.watch()
+    if not wait_matched(session.client._participant, (w._inbox.reader,), 20.0):
+        raise SystemExit("the watcher did not match the server's update writer within 20 s")
+    return w
+
+
 def fresh_state(session: surfeledit.Session) -> State:
     """The whole state by a full GET_STATE (not the session's incremental cache)."""
     ch = session._fetch(False, 0)
@@ -82,7 +92,7 @@ def _edit(domain: int, args: Dict[str, Any]) -> None:
         session.load_points(pos, nrm, rad)
         ids = session.ids()
         session.set_regions(zero=ids[part == 0], one=ids[part == 1])
-    watcher = session.watch() if args.get("watch", True) else None
+    watcher = watch(session) if args.get("watch", True) else None
     view = fresh_state(session)  # after the watcher exists: no update is missed
     emit({"ready": True, "client_id": client.client_id})
     if sys.stdin.readline().strip() != "go":

@@ -18,6 +18,9 @@ import pytest
 
 import surfeledit
 
+from surfeledit.connection import wait_matched
+
+from .collab_peer import watch
 from .conftest import ServerProcess, connect_to, free_domain, server_executable
 from .test_presence import presence_until
 
@@ -82,7 +85,7 @@ def test_a_killed_client_expires_with_a_presence_update_and_its_upload_dropped(
     owner_client = connect_to(srv)
     try:
         owner = owner_client.open_session("crew")
-        watcher = owner.watch()
+        watcher = watch(owner)
         victim = "victim-" + owner_client.client_id
         p = peers("hold", srv, session="crew", token=owner.invite("editor"), client_id=victim, upload=4000)
         assert line(p)["ready"]
@@ -116,6 +119,7 @@ def test_a_restarted_client_resumes_within_the_grace_period_and_not_after(
         # A session only the peer is in: the observer is no member, it reads the update stream only.
         me = "restartable-" + observer.client_id
         watcher = surfeledit.Watcher(observer, "solo")
+        assert wait_matched(observer._participant, (watcher._inbox.reader,), 20.0)
         p = peers("hold", srv, session="solo", client_id=me, points=500)
         held = line(p)
         presence_until(watcher, "join", me)
