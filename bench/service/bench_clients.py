@@ -26,6 +26,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Dict, List, Tuple
 
@@ -41,7 +42,6 @@ PEER = ROOT / "tests" / "python" / "service" / "collab_peer.py"
 
 
 def connect(domain: int) -> surfeledit.Client:
-    import time
     deadline = time.monotonic() + 30
     while True:
         try:
