@@ -27,6 +27,7 @@ from .connection import Client, connect
 from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, Hole, HistoryEntry, MergeResult,
                       State, StepResult, UpdateEvent)
 from .server_process import find_server_executable
+from .presence import Peer, PresenceEvent
 from .session import Session
 from .session_api import EditingSession
 from .watcher import Watcher
@@ -54,5 +55,5 @@ __all__ = [
     "Changes", "UpdateEvent", "MergeResult", "Curve", "Watcher", "proto", "BlendResult", "FillResult", "Hole",
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
-    "ServerStartError", "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError",
+    "ServerStartError", "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError", "Peer", "PresenceEvent",
 ]

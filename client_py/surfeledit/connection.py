@@ -155,12 +155,16 @@ class Client:
     """
 
     def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
-                 reconnect: float = 0.0) -> None:
+                 reconnect: float = 0.0, client_id: Optional[str] = None) -> None:
         self.domain = int(domain)
         self.timeout = float(timeout)
         # > 0: a request whose server is gone is re-sent (same id) for this many seconds (reconnect.py)
         self.reconnect = float(reconnect)
-        self.client_id = f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
+        if client_id is not None and (not isinstance(client_id, str) or not client_id or len(client_id) > 256):
+            raise errors.InvalidArgumentError(f"client_id {client_id!r}: expected 1..256 characters", "client_id")
+        # A fresh id, or the caller's: a restarted process reusing its id finds its sessions again once
+        # the server detached the old process (its lease) and within the grace period (PROTOCOL.md).
+        self.client_id = client_id or f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
         self._next_id = 1
         self._lock = threading.RLock()
         self._server = _server
@@ -372,7 +376,8 @@ class Client:
 
 
 def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0,
-            data_root: Optional[Union[str, "os.PathLike[str]"]] = None, reconnect: float = 0.0) -> Client:
+            data_root: Optional[Union[str, "os.PathLike[str]"]] = None, reconnect: float = 0.0,
+            client_id: Optional[str] = None) -> Client:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
@@ -386,13 +391,17 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             (``--data-root``); None: file loading is off on that server.
         reconnect: seconds a request whose server is gone is re-sent (same request id) waiting for a
             restarted server (one with ``--journal`` answers it exactly once); 0: ServerGoneError at once.
+        client_id: this client's id (None: a fresh unique one). Reuse the id of a process that died to
+            reopen its sessions after the server detached it (``--client-lease-ms``) and before its
+            grace period ended (``--session-grace-ms``); until the old one is detached the server
+            does not answer the new one (the id is bound to the old writer), so the probe fails.
 
     Raises:
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
     """
     if domain is None:
         domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
-    client = Client(domain, timeout, reconnect=reconnect)
+    client = Client(domain, timeout, reconnect=reconnect, client_id=client_id)
     try:
         if client.probe(min(_PROBE_S, timeout)):
             return client

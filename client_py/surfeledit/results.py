@@ -237,6 +237,7 @@ class UpdateEvent:
         session: session name. version: version after the change.
         cause: ``"load"``, ``"regions"``, ``"deform"``, ``"remove"``, ``"undo"``, ``"redo"`` or ``"close"``.
         full: a new model (replaces everything the watcher had). step: deform step number (0 otherwise).
+        author: the client id whose op made the change (``""`` for a session dropped after its grace period).
         ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64 of the changed surfels
         (for a deform: moved surfels and those inserted by resampling); removed (R,) uint64.
         detected: deform: a collision detector ran, and ``colliding`` (K,) uint64 holds every id
@@ -261,6 +262,7 @@ class UpdateEvent:
     radii: np.ndarray
     removed: np.ndarray
     detected: bool = False
+    author: str = ""
     colliding: np.ndarray = dataclasses.field(default_factory=lambda: NO_IDS)
     clips: Optional[np.ndarray] = None
 

@@ -21,7 +21,9 @@ from .arrays import (ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_ra
 from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
                       StepResult, clips_or_none, merge)
 from .session_blend import BlendOps
+from .session_presence import PresenceOps
 from .session_api import StateArrays, settings_doc
+from .presence import PresenceCallback
 from .watcher import Watcher
 
 if TYPE_CHECKING:
@@ -98,12 +100,17 @@ def _curves(wire: Any) -> List[Curve]:
     return out
 
 
-class Session(BlendOps, StateArrays):
+class Session(BlendOps, PresenceOps, StateArrays):
     """An opened or joined editing session; close it (or use ``with``) to detach.
 
     Attributes:
         client: the connection. name: the session's name.
         version: the session version of the last reply (0 before the first load).
+
+    Optimistic concurrency: ``set_regions``, ``deform``, ``configure``, ``remove``, ``undo``, ``redo`` and
+    ``merge`` take ``expect_version=v``: the op runs only when the session is still at version ``v``
+    (:class:`~surfeledit.errors.ConflictError` with field ``"expect_version"`` naming the current version
+    when another client's op came first; nothing changes). None: no condition.
     """
 
     def __init__(self, client: "Client", name: str, reply: "proto.Reply") -> None:
@@ -139,8 +146,14 @@ class Session(BlendOps, StateArrays):
         self._closed = True
         self._request(proto.Op.OP_CLOSE_SESSION)
 
-    def _request(self, op: "proto.Op", **args: Any) -> "proto.Reply":
-        """One request on this session; keeps :attr:`version` and the last session info up to date."""
+    def _request(self, op: "proto.Op", expect_version: Optional[int] = None, **args: Any) -> "proto.Reply":
+        """One request on this session (``expect_version``: the version the session must be at);
+        keeps :attr:`version` and the last session info up to date."""
+        if expect_version is not None:
+            v = int(expect_version)
+            if not 0 <= v < 2**64:
+                raise errors.InvalidArgumentError(f"expect_version = {v}: not a version", "expect_version")
+            args["expect_version"] = [v]
         return self._absorb(self.client.request(op, self.name, **args))
 
     def _absorb(self, reply: "proto.Reply") -> "proto.Reply":
@@ -228,8 +241,8 @@ class Session(BlendOps, StateArrays):
     # -- regions and deformation -------------------------------------------------------------
     def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None,
                     zero_sphere: Optional[SelectorLike] = None, one_sphere: Optional[SelectorLike] = None,
-                    zero_box: Optional[SelectorLike] = None, one_box: Optional[SelectorLike] = None
-                    ) -> "proto.SessionInfo":
+                    zero_box: Optional[SelectorLike] = None, one_box: Optional[SelectorLike] = None,
+                    expect_version: Optional[int] = None) -> "proto.SessionInfo":
         """Sets the zero region (never moves) and the one region (moves fully).
 
         Each region is the union of its ids ((K,) integer) and selectors, applied to the current
@@ -253,11 +266,12 @@ class Session(BlendOps, StateArrays):
 
         arg = proto.SetRegions(zero=spec(zero, zero_sphere, zero_box, "zero"),
                                one=spec(one, one_sphere, one_box, "one"))
-        self._request(proto.Op.OP_SET_REGIONS, set_regions=arg)
+        self._request(proto.Op.OP_SET_REGIONS, expect_version, set_regions=arg)
         return self._info
 
     def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
-               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth") -> StepResult:
+               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth",
+               expect_version: Optional[int] = None) -> StepResult:
         """Applies one deformation step (then resampling and collision detection as configured).
 
         Args:
@@ -266,17 +280,18 @@ class Session(BlendOps, StateArrays):
             angle: radians.
             center: (3,) rotation centre; None -> centroid of the one region.
             blend: ``"smooth"``, ``"quadratic"`` or ``"linear"``.
+            expect_version: run only if the session is at this version (ConflictError otherwise).
         """
         arg = proto.Deform(translation=vec3(translation, "translation"), axis=vec3(axis, "axis"),
                            angle=float(angle), has_center=center is not None,
                            center=vec3(center, "center") if center is not None else proto.Vec3(),
                            blend=str(blend))
         t0 = time.perf_counter()
-        reply = self._request(proto.Op.OP_DEFORM, deform=arg)
+        reply = self._request(proto.Op.OP_DEFORM, expect_version, deform=arg)
         return _step_result(reply, (time.perf_counter() - t0) * 1e3)
 
     # -- settings and removal ----------------------------------------------------------------
-    def configure(self, **settings: SettingValue) -> "proto.SessionInfo":
+    def configure(self, *, expect_version: Optional[int] = None, **settings: SettingValue) -> "proto.SessionInfo":
         """Changes session settings, all or none, e.g. ``configure(algorithm="temporal", boundary_n=8)``.
 
         Every setting is listed below (from the server's settings table). A bool is sent as a flag, an
@@ -289,14 +304,14 @@ class Session(BlendOps, StateArrays):
         type is refused before sending.
         """
         arg = proto.Configure(settings=[_setting(name, value) for name, value in settings.items()])
-        self._request(proto.Op.OP_CONFIGURE, configure=arg)
+        self._request(proto.Op.OP_CONFIGURE, expect_version, configure=arg)
         return self._info
 
     def settings(self) -> Dict[str, SettingValue]:
         """Every session setting with its current value: ``{name: bool | int | float | str}``."""
         return {s.name: _setting_value(s) for s in self.info().settings}
 
-    def remove(self, ids: ArrayLike) -> "proto.SessionInfo":
+    def remove(self, ids: ArrayLike, expect_version: Optional[int] = None) -> "proto.SessionInfo":
         """Removes surfels by id ((K,) integer); the other ids stay as they are.
 
         Raises :class:`~surfeledit.errors.NotFoundError` for an unknown id and
@@ -306,19 +321,19 @@ class Session(BlendOps, StateArrays):
         id_list = as_ids(ids, "ids")
         if not id_list:
             raise errors.InvalidArgumentError("remove needs at least one id", "ids")
-        self._request(proto.Op.OP_REMOVE, remove=proto.Remove(ids=id_list))
+        self._request(proto.Op.OP_REMOVE, expect_version, remove=proto.Remove(ids=id_list))
         return self._info
 
     # -- history -----------------------------------------------------------------------------
-    def undo(self) -> int:
+    def undo(self, expect_version: Optional[int] = None) -> int:
         """Undoes the session's last change (any client's; published to watchers with cause
         ``"undo"``); returns the new version. ConflictError when there is nothing to undo."""
-        return int(self._request(proto.Op.OP_UNDO).version)
+        return int(self._request(proto.Op.OP_UNDO, expect_version).version)
 
-    def redo(self) -> int:
+    def redo(self, expect_version: Optional[int] = None) -> int:
         """Redoes the last undone change (cause ``"redo"``); returns the new version. ConflictError
         when there is nothing to redo."""
-        return int(self._request(proto.Op.OP_REDO).version)
+        return int(self._request(proto.Op.OP_REDO, expect_version).version)
 
     def history(self) -> List[HistoryEntry]:
         """The session's history entries, oldest first (``client`` is the client id that made each)."""
@@ -328,10 +343,11 @@ class Session(BlendOps, StateArrays):
                 for h in reply.history]
 
     # -- merge -------------------------------------------------------------------------------
-    def merge(self, crease: bool = True) -> MergeResult:
+    def merge(self, crease: bool = True, expect_version: Optional[int] = None) -> MergeResult:
         """Merges the regions now (see :meth:`surfeledit.session_api.EditingSession.merge`); watchers
         get cause ``"merge"`` with the clip lines."""
-        return self._merge_result(self._request(proto.Op.OP_MERGE, merge=proto.Merge(crease=bool(crease))), "MERGE")
+        reply = self._request(proto.Op.OP_MERGE, expect_version, merge=proto.Merge(crease=bool(crease)))
+        return self._merge_result(reply, "MERGE")
 
     def _merge_result(self, reply: "proto.Reply", op: str) -> MergeResult:
         """The :class:`MergeResult` a MERGE / BOOLEAN reply carries."""
@@ -411,9 +427,10 @@ class Session(BlendOps, StateArrays):
         return new
 
     # -- updates -----------------------------------------------------------------------------
-    def watch(self) -> Watcher:
-        """Starts receiving this session's Update samples (from now on; fetch ``state()`` for the past)."""
-        return Watcher(self.client, self.name)
+    def watch(self, on_presence: Optional[PresenceCallback] = None) -> Watcher:
+        """Starts receiving this session's Update samples (from now on; fetch ``state()`` for the past);
+        presence changes go to ``watcher.presence()`` and ``on_presence``, not into the model updates."""
+        return Watcher(self.client, self.name, on_presence=on_presence)
 
 
 Session.configure.__doc__ = (Session.configure.__doc__ or "") + settings_doc()

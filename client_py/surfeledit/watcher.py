@@ -11,6 +11,7 @@ import numpy as np
 
 from ._protocol import proto
 from .arrays import concat, join_clips, join_surfels
+from .presence import PresenceCallback, PresenceEvent, presence_of
 from .results import UpdateEvent
 
 if TYPE_CHECKING:
@@ -28,9 +29,14 @@ class Watcher:
     Use :meth:`get` (blocking with timeout), :meth:`poll` (non-blocking, e.g. from a GUI timer) or
     iterate (``for ev in watcher`` blocks; it ends after a ``close`` update or :meth:`close`).
     Updates are volatile: only changes made after the watcher was created arrive.
+
+    Presence changes (updates with cause ``"presence"``: joins, leaves, lease expiries, region changes)
+    are kept apart from the model's updates, so that applying what :meth:`get` returns reconstructs the
+    model exactly: :meth:`presence` returns them, and ``on_presence`` (if given) is called with each as
+    it is received (on the thread that drains: get, poll or presence).
     """
 
-    def __init__(self, client: "Client", session: str) -> None:
+    def __init__(self, client: "Client", session: str, on_presence: Optional[PresenceCallback] = None) -> None:
         self.client = client
         self.session = session
         self._inbox = client.update_inbox()
@@ -38,6 +44,8 @@ class Watcher:
             _log.warning("watcher of %r: no update writer discovered in time", session)
         self._pending: Dict[int, Dict[int, "proto.Update"]] = {}
         self._ready: List[UpdateEvent] = []
+        self._presence: List[PresenceEvent] = []
+        self._on_presence = on_presence
         self._closed = False
         self._lock = threading.Lock()
         client.attach(self)
@@ -67,6 +75,12 @@ class Watcher:
 
     def _add(self, s: "proto.Update") -> None:
         """Keeps one part; when all ``parts`` of its version are in, queues their :class:`UpdateEvent`."""
+        if s.cause == "presence":  # one sample, at the session's current version: not a model change
+            event = presence_of(s)
+            self._presence.append(event)
+            if self._on_presence is not None:
+                self._on_presence(event)
+            return
         parts = max(1, int(s.parts))
         got = self._pending.setdefault(int(s.version), {})
         got[int(s.part)] = s
@@ -78,7 +92,7 @@ class Watcher:
         ids, positions, normals, radii = join_surfels(ordered)
         self._ready.append(UpdateEvent(
             session=first.session, version=int(first.version), cause=first.cause, full=bool(first.full),
-            step=int(first.step), ids=ids, positions=positions, normals=normals, radii=radii,
+            step=int(first.step), author=str(first.author), ids=ids, positions=positions, normals=normals, radii=radii,
             removed=concat(ordered, "removed", np.uint64), detected=bool(first.detected),
             colliding=np.asarray(first.colliding, dtype=np.uint64), clips=join_clips(ordered)))
         self._ready.sort(key=lambda e: e.version)
@@ -90,6 +104,19 @@ class Watcher:
                 return []
             self._drain()
             out, self._ready = self._ready, []
+            return out
+
+    def presence(self, timeout: float = 0.0) -> List[PresenceEvent]:
+        """The presence changes received so far, oldest first (each returned once); waits up to
+        ``timeout`` seconds for the first when there is none yet."""
+        deadline = time.monotonic() + timeout
+        with self._lock:
+            while not self._closed:
+                self._drain()
+                if self._presence or time.monotonic() >= deadline:
+                    break
+                self._inbox.wait(max(0.0, deadline - time.monotonic()))
+            out, self._presence = self._presence, []
             return out
 
     def get(self, timeout: Optional[float] = None) -> Optional[UpdateEvent]:

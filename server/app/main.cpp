@@ -76,6 +76,11 @@ int main(int argc, char** argv) {
                  "its sessions are closed and its unfinished uploads freed")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
+  app.add_option("--session-grace-ms", config.session_grace_ms,
+                 "Keep a session whose last client was detached by its lease (and that client's memberships) this "
+                 "long, so that a restarted client with the same client id finds it; then drop it (0: at once)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(0), std::uint64_t(86'400'000)));
   std::uint64_t client_upload_mb = config.max_client_upload_bytes >> 20;
   app.add_option("--max-client-upload-mb", client_upload_mb,
                  "Memory of one client's unfinished uploads, MiB (reserved as chunks arrive)")

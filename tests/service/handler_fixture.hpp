@@ -27,6 +27,7 @@ class HandlerTest : public ::testing::Test {
   // Opens session "s" and uploads n sphere surfels in chunks of 4.
   void load(std::size_t n) {
     ASSERT_EQ(send(surfeledit_proto_OP_OPEN_SESSION)->status, Status::Ok);
+    updates.clear();  // the presence update of the open
     rb.load_begin.total = n;
     rb.load_begin.has_radii = true;
     ASSERT_EQ(send(surfeledit_proto_OP_LOAD_BEGIN)->status, Status::Ok);

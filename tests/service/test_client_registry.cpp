@@ -77,6 +77,7 @@ TEST(HandlerIdentity, ASpoofedIdGetsNoReplyAndCannotReachTheCache) {
   RequestBuilder rb;
   std::vector<UpdateEvent> updates;
   ASSERT_EQ(send_from(h, rb, surfeledit_proto_OP_OPEN_SESSION, 1, 100, updates)->status, Status::Ok);
+  updates.clear();  // the presence update of the join
   // Another writer: a repeat of request 1 (a cache read), a close, and the victim's next id.
   EXPECT_EQ(send_from(h, rb, surfeledit_proto_OP_OPEN_SESSION, 1, 200, updates), nullptr);
   EXPECT_EQ(send_from(h, rb, surfeledit_proto_OP_CLOSE_SESSION, 5, 200, updates), nullptr);
@@ -94,6 +95,7 @@ TEST(HandlerIdentity, ASpoofedIdGetsNoReplyAndCannotReachTheCache) {
 TEST(HandlerIdentity, AnExpiredLeaseDetachesTheClientAndFreesItsUpload) {
   HandlerConfig config{4, 1000, 1};
   config.client_lease = 1ms;
+  config.session_grace = 1ms;
   Handler h(config);
   RequestBuilder rb;
   std::vector<UpdateEvent> updates;
@@ -117,13 +119,20 @@ TEST(HandlerIdentity, AnExpiredLeaseDetachesTheClientAndFreesItsUpload) {
   h.writer_lost(300);
   ASSERT_TRUE(h.next_lease_check());
   std::this_thread::sleep_for(5ms);
+  updates.clear();  // the presence updates of the joins
   EXPECT_EQ(h.expire_leases(updates), std::vector<std::string>{"client-b"});
-  EXPECT_TRUE(updates.empty());  // client-a is still attached: the session stays
+  // client-a is still attached: the session stays; the expiry is a presence update about client-b.
+  ASSERT_EQ(updates.size(), 1u);
+  EXPECT_EQ(updates[0].cause, "presence");
+  EXPECT_EQ(updates[0].presence, "expired");
+  EXPECT_EQ(updates[0].author, "client-b");
   info = send_from(h, rb, surfeledit_proto_OP_INFO, 4, 100, updates);
   EXPECT_EQ(info->server_info->upload_bytes, 0u);
   EXPECT_EQ(info->session_info->clients, 1u);
   EXPECT_EQ(info->server_info->clients, 1u);
-  // The detached id lost its membership: rejoining needs a token again.
+  // After the grace period the detached id lost its membership: rejoining needs a token again.
+  std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(h.expire_leases(updates).empty());
   rb.client = "client-b";
   rb.token.clear();
   EXPECT_EQ(send_from(h, rb, surfeledit_proto_OP_JOIN_SESSION, 1, 400, updates)->status, Status::NotFound);

@@ -144,12 +144,12 @@ TEST(JournalLog, TornOrCorruptLastRecordIsCutAtEveryPosition) {
   write_bytes(file, std::vector<std::uint8_t>(whole.begin(), whole.end() - 3));
   {
     JournalLog log(dir.path.string(), [](RecordKind, const Payload&) {});
-    log.append(RecordKind::Detach, Payload{1, 2, 3});
+    log.append(RecordKind::Expiry, Payload{1, 2, 3});
     log.sync();
   }
   const auto got = read_all(dir.path);
   ASSERT_EQ(got.size(), payloads.size());
-  EXPECT_EQ(got.back().first, RecordKind::Detach);
+  EXPECT_EQ(got.back().first, RecordKind::Expiry);
   EXPECT_EQ(got.back().second, (Payload{1, 2, 3}));
 }
 
@@ -205,7 +205,7 @@ TEST(JournalRecords, RequestCdrRoundTrip) {
   dds_free(d.blend);
 }
 
-TEST(JournalRecords, RefusalAndDetachRoundTrip) {
+TEST(JournalRecords, RefusalAndExpiryRoundTrip) {
   namespace j = surfeledit::service::journal;
   j::RefusalRecord r{"c", 42, 9, surfeledit::service::Status::Conflict, "deform.expect_version", "moved on", 17};
   const j::RefusalRecord b = j::decode_refusal(j::encode(r));
@@ -216,7 +216,15 @@ TEST(JournalRecords, RefusalAndDetachRoundTrip) {
   EXPECT_EQ(b.field, "deform.expect_version");
   EXPECT_EQ(b.message, "moved on");
   EXPECT_EQ(b.version, 17u);
-  EXPECT_EQ(j::decode_detach(j::encode(j::DetachRecord{"gone"})).client_id, "gone");
+  for (const auto kind : {surfeledit::service::Expiry::Kind::Lease, surfeledit::service::Expiry::Kind::Grace,
+                          surfeledit::service::Expiry::Kind::Forget}) {
+    const j::ExpiryRecord e = j::decode_expiry(j::encode(j::ExpiryRecord{{kind, "gone"}}));
+    EXPECT_EQ(e.expiry.kind, kind);
+    EXPECT_EQ(e.expiry.name, "gone");
+  }
+  auto bad = j::encode(j::ExpiryRecord{{surfeledit::service::Expiry::Kind::Lease, "x"}});
+  bad[0] = 7;  // no such kind
+  EXPECT_THROW(j::decode_expiry(bad), JournalError);
   auto payload = j::encode(r);
   payload.pop_back();
   EXPECT_THROW(j::decode_refusal(payload), JournalError);

@@ -28,7 +28,13 @@ TEST_F(HandlerTest, TheLastCloseDropsTheSession) {
   rb.client = "client-b";
   ASSERT_EQ(send(surfeledit_proto_OP_JOIN_SESSION)->session_info->clients, 2u);
   ASSERT_EQ(send(surfeledit_proto_OP_CLOSE_SESSION)->status, Status::Ok);
-  EXPECT_TRUE(updates.empty());
+  // client-b left a session that goes on: presence updates of the two joins and the leave, no close.
+  ASSERT_EQ(updates.size(), 3u);
+  EXPECT_EQ(updates[0].presence, "join");
+  EXPECT_EQ(updates[1].presence, "join");
+  EXPECT_EQ(updates[2].presence, "leave");
+  EXPECT_EQ(updates[2].author, "client-b");
+  updates.clear();
   rb.client = "client-a";
   ASSERT_EQ(send(surfeledit_proto_OP_CLOSE_SESSION)->status, Status::Ok);
   ASSERT_EQ(updates.size(), 1u);

@@ -30,7 +30,8 @@ Role required_role(std::uint32_t op) {
     case Op::CloseSession:
     case Op::GetState:
     case Op::History:
-    case Op::Curves: return Role::Viewer;
+    case Op::Curves:
+    case Op::Peers: return Role::Viewer;
     case Op::Invite: return Role::Owner;
     default: return Role::Editor;  // every other op changes the session (or an upload into it)
   }

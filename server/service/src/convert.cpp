@@ -44,6 +44,17 @@ Seq borrow_range(const T* data, std::size_t count) {
 
 char* cstr(const std::string& s) { return const_cast<char*>(s.c_str()); }
 
+// Wire views of peers (strings borrowed from `peers`, which must outlive them).
+std::vector<surfeledit_proto_Peer> peer_views(const std::vector<PeerInfo>& peers) {
+  std::vector<surfeledit_proto_Peer> out;
+  out.reserve(peers.size());
+  for (const PeerInfo& p : peers) {
+    out.push_back(surfeledit_proto_Peer{cstr(p.client_id), cstr(p.role), cstr(p.state), cstr(p.last_op),
+                                        p.last_version, p.idle_ms, p.zero, p.one, p.deformable});
+  }
+  return out;
+}
+
 // The project's op numbers are the protocol's.
 static_assert(static_cast<std::uint32_t>(Op::Info) == surfeledit_proto_OP_INFO, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::OpenSession) == surfeledit_proto_OP_OPEN_SESSION, "Op numbers");
@@ -67,7 +78,8 @@ static_assert(static_cast<std::uint32_t>(Op::Invite) == surfeledit_proto_OP_INVI
 static_assert(static_cast<std::uint32_t>(Op::Blend) == surfeledit_proto_OP_BLEND, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Boolean) == surfeledit_proto_OP_BOOLEAN, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::FillHoles) == surfeledit_proto_OP_FILL_HOLES, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_FILL_HOLES + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Peers) == surfeledit_proto_OP_PEERS, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_PEERS + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>
@@ -225,6 +237,13 @@ Command decode(const surfeledit_proto_Request& r) {
   c.session = str(r.session);
   c.op = static_cast<Op>(r.op);
   c.token = str(r.token);
+  if (r.expect_version._length == 1 && r.expect_version._buffer) {
+    c.expect_version = r.expect_version._buffer[0];
+  } else if (r.expect_version._length > 1) {
+    c.invalid = std::make_exception_ptr(Error(ErrorCode::InvalidArgument, "expect_version",
+                                              "expected 0 or 1 element, got " +
+                                                  std::to_string(r.expect_version._length)));
+  }
   switch (c.op) {
     case Op::LoadBegin:
       decode_argument(c, r.load_begin, "load_begin", [](const surfeledit_proto_LoadBegin& a) {
@@ -435,6 +454,7 @@ ReplyView::ReplyView(const Reply& reply) {
     server_info_.max_client_upload_bytes = s.max_client_upload_bytes;
     server_info_.reply_cache_bytes = s.reply_cache_bytes;
     server_info_.client_lease_s = s.client_lease_s;
+    server_info_.session_grace_s = s.session_grace_s;
   }
   msg_.server_info =
       borrow_one<dds_sequence_surfeledit_proto_ServerInfo>(&server_info_, reply.server_info.has_value());
@@ -510,6 +530,8 @@ ReplyView::ReplyView(const Reply& reply) {
     fill_.ms = f.ms;
   }
   msg_.fill = borrow_one<dds_sequence_surfeledit_proto_FillResult>(&fill_, reply.fill.has_value());
+  peers_ = peer_views(reply.peers);
+  msg_.peers = borrow<dds_sequence_surfeledit_proto_Peer>(peers_);
 }
 
 UpdateView::UpdateView(const UpdateChunk& c) {
@@ -535,6 +557,10 @@ UpdateView::UpdateView(const UpdateChunk& c) {
     msg_.clip_points = borrow_range<dds_sequence_double>(u.clip_points.data() + 3 * c.begin, 3 * c.count);
     msg_.clip_dirs = borrow_range<dds_sequence_double>(u.clip_dirs.data() + 3 * c.begin, 3 * c.count);
   }
+  msg_.author = cstr(u.author);
+  msg_.presence = cstr(u.presence);
+  if (first) peers_ = peer_views(u.peers);
+  msg_.peers = borrow<dds_sequence_surfeledit_proto_Peer>(peers_);
 }
 
 }  // namespace surfeledit::service

@@ -11,8 +11,12 @@ namespace surfeledit::service {
 void serve_set_regions(OpContext& c) {
   const auto& args = args_of<SetRegionsArgs>(c);
   EditSession& s = *c.entry->session;
+  const std::uint64_t before = s.version();
   prefixed("set_regions", [&] { s.set_regions(args.zero, args.one, c.command.client_id); });
+  note_activity(*c.entry, c.command.client_id, Op::SetRegions, before, std::chrono::steady_clock::now());
   c.updates.push_back(make_update_event(c.command.session, s.version(), "regions"));
+  // The client's tool changed: its peers see its new region sizes.
+  c.updates.push_back(presence_event(c.state, *c.entry, c.command.session, c.command.client_id, "regions"));
 }
 
 void serve_deform(OpContext& c) {

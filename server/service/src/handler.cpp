@@ -42,7 +42,30 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::Blend, {"OP_BLEND", serve_blend, true, T::VersionAndSessionInfo, true});
   row(Op::Boolean, {"OP_BOOLEAN", serve_boolean, true, T::VersionAndSessionInfo, true});
   row(Op::FillHoles, {"OP_FILL_HOLES", serve_fill_holes, true, T::VersionAndSessionInfo, true});
+  row(Op::Peers, {"OP_PEERS", serve_peers, true, T::Version, false});
   return t;
+}
+
+// Optimistic concurrency: Conflict unless the session is at `expected` (InvalidArgument for a version it
+// never reached).
+void check_expected_version(const SessionEntry& entry, std::uint64_t expected) {
+  const std::uint64_t version = entry.session->version();
+  if (expected == version) return;
+  if (expected > version) {
+    throw Error(ErrorCode::InvalidArgument, "expect_version",
+                "expected version " + std::to_string(expected) + " is ahead of the session's version " +
+                    std::to_string(version));
+  }
+  throw Error(ErrorCode::Conflict, "expect_version",
+              "the session moved past version " + std::to_string(expected) + ": it is at version " +
+                  std::to_string(version));
+}
+
+// Names the requesting client as the author of the updates from index `from` on that have none.
+void set_author(std::vector<UpdateEvent>& updates, std::size_t from, const std::string& client) {
+  for (std::size_t i = from; i < updates.size(); ++i) {
+    if (updates[i].author.empty()) updates[i].author = client;
+  }
 }
 
 // Serves a command whose client id is set: the op's row, its argument, the session, the op. True when
@@ -57,8 +80,17 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   SessionEntry* entry = op->attached ? &state.sessions.attached(command.session, command.client_id) : nullptr;
   if (entry) check_role(*entry, command);
   if (command.invalid) std::rethrow_exception(command.invalid);
+  if (entry && command.expect_version && required_role(static_cast<std::uint32_t>(command.op)) >= Role::Editor) {
+    check_expected_version(*entry, *command.expect_version);
+  }
+  const std::uint64_t version_before = entry ? entry->session->version() : 0;
+  if (entry) note_activity(*entry, command.client_id, command.op, version_before, Clock::now());  // idle from now
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
+  if (context.entry) {  // open / join: the version the client found
+    const std::uint64_t before = entry ? version_before : context.entry->session->version();
+    note_activity(*context.entry, command.client_id, command.op, before, Clock::now());
+  }
   if (context.deferred) return true;
   if (context.entry) fill_reply_tail(reply, *context.entry, op->tail);
   return false;
@@ -195,11 +227,15 @@ std::shared_ptr<const Reply> Handler::handle(const Command& command, std::vector
     }
   }
 
+  // A client detached by its lease is back (a restarted process with the same id): its memberships stay.
+  if (!reply->client_id.empty()) state_->away.erase(reply->client_id);
   bool deferred = false;
+  const std::size_t updates_before = updates.size();
   run_guarded(*state_, op, session, *reply, updates, [&] {
     if (reply->client_id.empty()) throw Error(ErrorCode::InvalidArgument, "client_id", "a client id is required");
     deferred = dispatch(*state_, command, *reply, updates);
   });
+  set_author(updates, updates_before, reply->client_id);
   if (deferred) return nullptr;
   reply->timings.emplace_back("total", ms_since(t0));
 
@@ -220,8 +256,10 @@ std::vector<std::shared_ptr<const Reply>> Handler::finish_loads(std::vector<Upda
     reply->client_id = load.client_id;
     reply->request_id = load.request_id;
     reply->request_op = static_cast<std::uint32_t>(Op::LoadFile);
+    const std::size_t updates_before = updates.size();
     run_guarded(*state_, "OP_LOAD_FILE", load.session, *reply, updates,
                 [&] { finish_load_file(*state_, load, *reply, updates); });
+    set_author(updates, updates_before, load.client_id);
     reply->timings.emplace_back("total", ms_since(load.started));
     state_->cache.put(reply);
     if (state_->on_stored) state_->on_stored(*reply);

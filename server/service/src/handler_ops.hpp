@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <map>
 #include <string>
 #include <variant>
 #include <vector>
@@ -39,6 +40,9 @@ struct HandlerState {
   FileLoads loads;            // OP_LOAD_FILE loads running off the request thread
   std::function<void(const Reply&)> on_stored;  // the journal: a reply was stored (Handler::set_on_stored)
   std::string next_token;     // replay: the token the next OP_INVITE hands out (empty: a fresh one)
+  // Clients detached by their lease -> when: their memberships are kept for config.session_grace (a
+  // restarted client with the same id finds its sessions and role), then forgotten.
+  std::map<std::string, LeaseClock::time_point> away;
 };
 
 // One request being served.
@@ -82,6 +86,28 @@ void check_role(const SessionEntry& entry, const Command& command);
 // The session's description for replies (session_ops.cpp).
 SessionInfo session_info(const SessionEntry& entry);
 
+// Presence (presence_ops.cpp).
+// The sizes of a client's tool in the session: its zero, one and deformable (s > 0) regions.
+struct ToolSummary {
+  std::uint64_t zero = 0;        // surfels of the zero region
+  std::uint64_t one = 0;         // surfels of the one region
+  std::uint64_t deformable = 0;  // surfels it may move (the one region and the band between)
+};
+// `client`'s tool in the session (today one shared set of regions: the session's for everyone).
+ToolSummary tool_summary(const SessionEntry& entry, const std::string& client);
+// Frees what `client`'s tool holds in the session (its regions, its locks) when it leaves the session
+// or its lease ends; called before the client is detached. Today: nothing (the regions are shared).
+void release_tool(SessionEntry& entry, const std::string& client);
+// Records a served request of `client` (its time; op and version when it changed the version).
+void note_activity(SessionEntry& entry, const std::string& client, Op op, std::uint64_t version_before,
+                   std::chrono::steady_clock::time_point now);
+// The session's attached clients and away members (detached by lease, within the grace period), by id.
+std::vector<PeerInfo> peers_of(const HandlerState& state, const SessionEntry& entry,
+                               std::chrono::steady_clock::time_point now);
+// A "presence" update of the session at its current version: `what` happened to `client`, with every peer.
+UpdateEvent presence_event(const HandlerState& state, const SessionEntry& entry, const std::string& session,
+                           const std::string& client, const char* what);
+
 // Handler functions, one per op: session_ops.cpp, load_ops.cpp, edit_ops.cpp, state_ops.cpp.
 void serve_info(OpContext& c);
 void serve_open_session(OpContext& c);
@@ -109,6 +135,8 @@ void serve_invite(OpContext& c);
 void serve_blend(OpContext& c);
 void serve_boolean(OpContext& c);
 void serve_fill_holes(OpContext& c);
+// presence_ops.cpp
+void serve_peers(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

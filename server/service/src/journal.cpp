@@ -63,7 +63,7 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
         throw;
       } catch (const std::exception& e) {
         throw JournalError("journal record " + std::to_string(recovery_.requests + recovery_.refusals +
-                                                              recovery_.detaches + 1) +
+                                                              recovery_.expiries + 1) +
                            " could not be replayed: " + e.what());
       }
     });
@@ -76,8 +76,8 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
   recovery_.bytes = log_->bytes();
   recovery_.cut_bytes = log_->cut_bytes();
   recovery_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  logger()->info("journal '{}': recovered {} request(s), {} refusal(s), {} detach(es) from {:.1f} MB in {:.0f} ms{}",
-                 log_->path(), recovery_.requests, recovery_.refusals, recovery_.detaches,
+  logger()->info("journal '{}': recovered {} request(s), {} refusal(s), {} expiries from {:.1f} MB in {:.0f} ms{}",
+                 log_->path(), recovery_.requests, recovery_.refusals, recovery_.expiries,
                  static_cast<double>(recovery_.bytes) / 1e6, recovery_.ms,
                  recovery_.cut_bytes ? " (a torn tail was cut)" : "");
 }
@@ -114,9 +114,9 @@ void Journal::replay(RecordKind kind, const std::vector<std::uint8_t>& payload, 
       handler.remember(journal::reply_of(journal::decode_refusal(payload)));
       ++recovery_.refusals;
       return;
-    case RecordKind::Detach:
-      handler.detach_client(journal::decode_detach(payload).client_id, ignored);
-      ++recovery_.detaches;
+    case RecordKind::Expiry:
+      handler.apply_expiry(journal::decode_expiry(payload).expiry, ignored);
+      ++recovery_.expiries;
       return;
   }
 }
@@ -167,10 +167,10 @@ void Journal::on_stored(const Reply& reply) {
   }
 }
 
-void Journal::on_detached(const std::string& client) {
+void Journal::on_expired(const Expiry& expiry) {
   if (failed()) return;
   try {
-    append(RecordKind::Detach, journal::encode(journal::DetachRecord{client}));
+    append(RecordKind::Expiry, journal::encode(journal::ExpiryRecord{expiry}));
   } catch (const std::exception& e) {
     failure_ = std::string("journal: ") + e.what();
     logger()->critical("{}: no more replies are sent", failure_);

@@ -24,7 +24,7 @@ namespace surfeledit::service {
 struct RecoveryStats {
   std::uint64_t requests = 0;   // accepted requests re-served
   std::uint64_t refusals = 0;   // refused replies restored for repeats
-  std::uint64_t detaches = 0;   // lease expiries re-applied
+  std::uint64_t expiries = 0;   // lease and grace expiries re-applied
   std::uint64_t bytes = 0;      // log size after recovery
   std::uint64_t cut_bytes = 0;  // torn / corrupt tail cut
   double ms = 0.0;              // wall time of the replay
@@ -50,8 +50,8 @@ class Journal {
   // Handler::set_on_stored: journals the stored reply (OK: the request; refused: the reply).
   // Never throws: a failure marks the journal failed (the reply is then never released).
   void on_stored(const Reply& reply);
-  // Journals a client detached by its lease.
-  void on_detached(const std::string& client);
+  // Journals what a lease or grace period that ran out changed (Handler::expire_leases).
+  void on_expired(const Expiry& expiry);
 
   // Runs `release` (which sends replies, publishes updates) once everything journaled so far is
   // durable: now with JournalSync::Op or when nothing waits for a group; else after the group's fsync.

@@ -78,7 +78,7 @@ void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::st
 bool known_kind(std::uint8_t kind) {
   return kind == static_cast<std::uint8_t>(RecordKind::Request) ||
          kind == static_cast<std::uint8_t>(RecordKind::Refusal) ||
-         kind == static_cast<std::uint8_t>(RecordKind::Detach);
+         kind == static_cast<std::uint8_t>(RecordKind::Expiry);
 }
 
 }  // namespace

@@ -132,16 +132,22 @@ RefusalRecord decode_refusal(const std::vector<std::uint8_t>& payload) {
   return r;
 }
 
-std::vector<std::uint8_t> encode(const DetachRecord& r) {
+std::vector<std::uint8_t> encode(const ExpiryRecord& r) {
   Writer w;
-  w.str(r.client_id);
+  w.u32(static_cast<std::uint32_t>(r.expiry.kind));
+  w.str(r.expiry.name);
   return w.take();
 }
 
-DetachRecord decode_detach(const std::vector<std::uint8_t>& payload) {
-  Reader in(payload, "detach");
-  DetachRecord r;
-  r.client_id = in.str();
+ExpiryRecord decode_expiry(const std::vector<std::uint8_t>& payload) {
+  Reader in(payload, "expiry");
+  ExpiryRecord r;
+  const std::uint32_t kind = in.u32();
+  if (kind > static_cast<std::uint32_t>(Expiry::Kind::Forget)) {
+    throw JournalError("journal expiry record of kind " + std::to_string(kind));
+  }
+  r.expiry.kind = static_cast<Expiry::Kind>(kind);
+  r.expiry.name = in.str();
   in.end();
   return r;
 }

@@ -100,7 +100,9 @@ void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::ve
                 "the file holds " + std::to_string(rows) + " surfels, beyond the limit of " + std::to_string(limit));
   }
   SurfelModel model = prefixed("load_file", [&] { return SurfelModel::from_arrays(std::move(arrays)); });
+  const std::uint64_t version_before = c.entry->session->version();
   replace_model(c, std::move(model));
+  note_activity(*c.entry, load.client_id, Op::LoadFile, version_before, std::chrono::steady_clock::now());
   fill_reply_tail(reply, *c.entry, ReplyTail::VersionAndSessionInfo);
 }
 

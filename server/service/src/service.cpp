@@ -63,6 +63,7 @@ HandlerConfig handler_config(const ServiceConfig& c) {
   if (c.client_lease_ms == 0 || c.client_lease_ms > 3'600'000) {
     throw std::invalid_argument("client_lease_ms must be in 1..3600000");
   }
+  if (c.session_grace_ms > 86'400'000) throw std::invalid_argument("session_grace_ms must be in 0..86400000");
   if (c.max_client_upload_bytes == 0 || c.max_upload_bytes == 0 || c.max_reply_cache_bytes == 0) {
     throw std::invalid_argument("upload and reply cache limits must be positive");
   }
@@ -71,6 +72,7 @@ HandlerConfig handler_config(const ServiceConfig& c) {
   h.max_upload_bytes = c.max_upload_bytes;
   h.max_reply_cache_bytes = c.max_reply_cache_bytes;
   h.client_lease = std::chrono::milliseconds(c.client_lease_ms);
+  h.session_grace = std::chrono::milliseconds(c.session_grace_ms);
   return h;
 }
 
@@ -305,11 +307,13 @@ dds_duration_t Service::Impl::check_leases() {
     }
   }
   std::vector<UpdateEvent> events;
-  for (const std::string& client : handler.expire_leases(events)) {
-    client_replies.drop(client);
-    if (journal) journal->on_detached(client);
-  }
+  std::vector<Expiry> expiries;
+  const std::vector<std::string> expired = handler.expire_leases(events, journal ? &expiries : nullptr);
+  for (const Expiry& e : expiries) journal->on_expired(e);
+  // Presence first (when nothing waits for a group commit): deleting a dead client's reply writer can block
+  // for Cyclone's writer linger duration (1 s by default) while it waits for acknowledgements that never come.
   emit(nullptr, events);
+  for (const std::string& client : expired) client_replies.drop(client);
   dds_duration_t sleep = DDS_INFINITY;
   if (const auto next = handler.next_lease_check()) sleep = DDS_MSECS(next->count() + 1);
   if (journal && journal->deadline()) {
@@ -358,6 +362,7 @@ void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
   std::optional<UpdateEvent> merged = handler.changes_event(event.session, since);
   if (!merged) throw std::logic_error("session '" + event.session + "' vanished while its update was merged");
   merged->cause = event.cause;
+  merged->author = event.author;  // the newest's (PROTOCOL.md, "Updates")
   merged->step = event.step;
   merged->detected = event.detected;
   merged->colliding = event.colliding;

@@ -43,6 +43,7 @@ SessionEntry& SessionRegistry::open(const std::string& name, const std::string& 
                 "the name '" + name + "' is taken; choose another, or join the session with an invitation token");
   }
   it->second.clients.insert(client);
+  it->second.orphaned_since.reset();
   return it->second;
 }
 
@@ -59,6 +60,7 @@ SessionEntry& SessionRegistry::join(const std::string& name, const std::string& 
     entry.members[client] = granted;
   }
   entry.clients.insert(client);
+  entry.orphaned_since.reset();
   return entry;
 }
 
@@ -78,6 +80,14 @@ bool SessionRegistry::close(const std::string& name, const std::string& client) 
   sessions_.erase(name);
   return true;
 }
+
+bool SessionRegistry::leave(const std::string& name, const std::string& client) {
+  SessionEntry& entry = attached(name, client);
+  entry.clients.erase(client);
+  return entry.clients.empty();
+}
+
+void SessionRegistry::drop(const std::string& name) { sessions_.erase(name); }
 
 std::string SessionRegistry::invite(SessionEntry& entry, Role role, std::string token) {
   if (entry.invites.size() >= kMaxInvites) entry.invites.erase(entry.invites.begin());
@@ -125,7 +135,10 @@ std::vector<std::string> SessionRegistry::attached_to(const std::string& client)
 }
 
 void SessionRegistry::forget_member(const std::string& client) {
-  for (auto& kv : sessions_) kv.second.members.erase(client);
+  for (auto& kv : sessions_) {
+    kv.second.members.erase(client);
+    kv.second.activity.erase(client);
+  }
 }
 
 }  // namespace surfeledit::service

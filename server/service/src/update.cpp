@@ -9,7 +9,8 @@ std::size_t PreparedUpdate::bytes() const {
   return sizeof(*this) + session.size() + cause.size() + ids.size() * sizeof(ids[0]) +
          (positions.size() + normals.size() + radii.size()) * sizeof(double) +
          (removed.size() + colliding.size()) * sizeof(std::uint64_t) +
-         (clip_points.size() + clip_dirs.size()) * sizeof(double);
+         (clip_points.size() + clip_dirs.size()) * sizeof(double) + author.size() + presence.size() +
+         peers.size() * sizeof(PeerInfo);
 }
 
 UpdateEvent make_update_event(const std::string& session, std::uint64_t version, const std::string& cause) {
@@ -58,6 +59,9 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   p.removed = event.removed;
   p.detected = event.detected;
   p.colliding = event.colliding;
+  p.author = event.author;
+  p.presence = event.presence;
+  p.peers = event.peers;
 
   const bool has_surfels = event.all_rows || !event.rows.empty();
   if (!has_surfels || (event.all_rows && !model)) return p;  // a full update without a model: it is empty

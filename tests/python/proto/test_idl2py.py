@@ -90,7 +90,8 @@ def test_struct_fields_and_types(proto: pytypes.ModuleType) -> None:
     req = field_types(proto.Request)
     assert list(req) == ["client_id", "request_id", "session", "op", "load_begin", "load_chunk",
                          "load_file", "set_regions", "deform", "get_state", "configure", "remove", "merge", "curves",
-                         "invite", "token", "blend", "boolean_op", "fill_holes"]
+                         "invite", "token", "blend", "boolean_op", "fill_holes", "expect_version"]
+    assert req["expect_version"] == "sequence[uint64]"
     # Enum-valued request fields travel as long (proto/surfeledit.idl): unknown values still arrive.
     assert req["client_id"] == "str" and req["op"] == "int32"
     assert field_types(proto.Selector)["kind"] == "int32" and field_types(proto.Setting)["kind"] == "int32"

@@ -12,7 +12,7 @@ namespace surfeledit::service {
 
 // A client's role in one session, weakest first.
 enum class Role : std::uint8_t {
-  Viewer = 0,  // watches and reads (INFO, GET_STATE, HISTORY, CURVES); changes nothing
+  Viewer = 0,  // watches and reads (INFO, GET_STATE, HISTORY, CURVES, PEERS); changes nothing
   Editor = 1,  // and changes the session (load, regions, deform, configure, remove, undo, redo, merge)
   Owner = 2,   // and invites others (OP_INVITE); the client that created the session
 };

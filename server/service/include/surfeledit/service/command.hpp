@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -41,8 +42,9 @@ enum class Op : std::uint32_t {
   Blend = 19,
   Boolean = 20,
   FillHoles = 21,
+  Peers = 22,
 };
-constexpr std::size_t kOpCount = 22;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = 23;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {
@@ -133,6 +135,9 @@ struct Command {
   // unattached client hears about the session first).
   std::exception_ptr invalid;
   std::string token;           // OP_JOIN_SESSION: invitation token (empty: members only)
+  // Optimistic concurrency: an op needing the editor role runs only when the session is at this version
+  // (Conflict, field "expect_version", otherwise); none: no condition.
+  std::optional<std::uint64_t> expect_version;
   // The DDS writer that sent the request (its publication handle); 0: not from DDS (tests, in-process),
   // then the client id is not bound to a sender.
   std::uint64_t sender = 0;

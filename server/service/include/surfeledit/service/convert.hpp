@@ -81,6 +81,7 @@ class ReplyView {
   surfeledit_proto_BlendResult blend_{};
   std::vector<surfeledit_proto_Hole> holes_;
   surfeledit_proto_FillResult fill_{};
+  std::vector<surfeledit_proto_Peer> peers_;
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's
@@ -94,6 +95,7 @@ class UpdateView {
 
  private:
   surfeledit_proto_Update msg_{};
+  std::vector<surfeledit_proto_Peer> peers_;
 };
 
 }  // namespace surfeledit::service

@@ -31,9 +31,23 @@ struct HandlerConfig {
   std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
   std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeats
   std::chrono::milliseconds client_lease{2000};  // a client whose writer is gone this long is detached
+  // A session whose last client was detached by its lease (not one closed by its last client) is kept
+  // this long, and a detached client's memberships too, so that a restarted client finds them.
+  std::chrono::milliseconds session_grace{30000};
 };
 
 struct HandlerState;
+
+// One change the passing of time made (Handler::expire_leases): not a request, so the journal records it.
+struct Expiry {
+  enum class Kind : std::uint8_t {
+    Lease = 0,   // the client `name` was detached: its lease ran out
+    Grace = 1,   // the session `name` was dropped: no client came back within the grace period
+    Forget = 2,  // the client `name` did not come back within the grace period: its memberships are forgotten
+  };
+  Kind kind = Kind::Lease;
+  std::string name;  // client id (Lease, Forget) or session name (Grace)
+};
 
 class Handler {
  public:
@@ -59,13 +73,19 @@ class Handler {
   // is alive again; clients bound to it are detached once it stayed gone for config().client_lease.
   void writer_lost(std::uint64_t sender);
   void writer_alive(std::uint64_t sender);
-  // Detaches every client whose lease ran out: closes its sessions (dropping those it was the
-  // last client of, with a "close" update appended to `updates`), drops its uploads and cached
-  // replies and forgets its id and memberships. Returns the ids detached.
-  std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates);
-  // Detaches one client as its lease would (expire_leases); the journal replays lease expiry with it.
-  void detach_client(const std::string& client, std::vector<UpdateEvent>& updates);
-  // Time until the next lease can run out (nullopt: none is running).
+  // Detaches every client whose lease ran out: releases its tools, detaches it from its sessions
+  // (a "presence" update "expired" each; a session left without clients is kept for the grace
+  // period), drops its uploads and cached replies and forgets its id (its memberships are kept for
+  // the grace period). Drops the sessions whose grace period ran out without a client coming back
+  // (a "close" update each) and forgets the memberships of detached clients that did not come back.
+  // Appends the updates to `updates`; returns the ids detached.
+  // `applied` (when given) gets every change made, in order, for the journal.
+  std::vector<std::string> expire_leases(std::vector<UpdateEvent>& updates, std::vector<Expiry>* applied = nullptr);
+  // Detaches one client as its lease would (expire_leases), drops a session whose grace period ran
+  // out, forgets the memberships of a client that did not come back: the journal replays what
+  // expire_leases did with it.
+  void apply_expiry(const Expiry& expiry, std::vector<UpdateEvent>& updates);
+  // Time until the next lease or grace period can run out (nullopt: none is running).
   std::optional<std::chrono::milliseconds> next_lease_check() const;
 
   // The journal (journal.hpp). `on_stored` is called on the request thread each time a reply is

@@ -48,7 +48,7 @@ constexpr int kJournalExitCode = 3;
 enum class RecordKind : std::uint8_t {
   Request = 1,  // an accepted request: its CDR form and what its reply said
   Refusal = 2,  // a refused request's reply (kept for repeats; replay does not re-run it)
-  Detach = 3,   // a client detached by its lease
+  Expiry = 3,   // a lease or grace period that ran out (Handler::expire_leases, apply_expiry)
 };
 
 // Owns a file descriptor (closed on destruction). Move-only.

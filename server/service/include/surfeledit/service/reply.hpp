@@ -72,6 +72,7 @@ struct ServerInfo {
   std::uint64_t max_client_upload_bytes = 0;   // per-client upload memory limit
   std::uint64_t reply_cache_bytes = 0;         // replies kept for repeats (estimated bytes)
   double client_lease_s = 0.0;                 // detach a client whose writer is not alive this long
+  double session_grace_s = 0.0;                // keep a session whose last client was detached this long
 };
 
 // The collision detector's counters of one step (proto CollisionStats).
@@ -150,6 +151,19 @@ struct FillInfo {
   double ms = 0.0;
 };
 
+// One client of a session (proto Peer; OP_PEERS and presence updates).
+struct PeerInfo {
+  std::string client_id;
+  std::string role;              // "owner" | "editor" | "viewer"
+  std::string state;             // "attached" | "lease" (writer gone, lease running) | "away" (detached, in grace)
+  std::string last_op;           // its last op that changed the session ("" before any)
+  std::uint64_t last_version = 0;  // the version that op produced
+  double idle_ms = 0.0;          // since its last request to the session (away: since it was detached)
+  std::uint64_t zero = 0;        // its tool: surfels of the zero region
+  std::uint64_t one = 0;         // of the one region
+  std::uint64_t deformable = 0;  // it may move (s > 0)
+};
+
 struct Reply {
   std::string client_id;
   std::uint64_t request_id = 0;
@@ -169,6 +183,7 @@ struct Reply {
   std::uint32_t request_op = 0;      // the op number of the request answered
   std::optional<BlendInfo> blend;    // OP_BLEND
   std::optional<FillInfo> fill;      // OP_FILL_HOLES
+  std::vector<PeerInfo> peers;       // OP_PEERS
 };
 
 }  // namespace surfeledit::service

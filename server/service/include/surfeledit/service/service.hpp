@@ -34,6 +34,9 @@ struct ServiceConfig {
   std::uint64_t max_file_bytes = std::uint64_t(1) << 30;  // largest file OP_LOAD_FILE reads (1 GiB)
   // Identity, leases and memory bounds (PROTOCOL.md, "Identity and access", "Leases").
   std::uint64_t client_lease_ms = 2000;  // detach a client whose request writer is gone (not alive / unmatched) this long
+  // Keep a session whose last client was detached by its lease (and a detached client's memberships)
+  // this long, so that a restarted client with the same id finds them; then drop them.
+  std::uint64_t session_grace_ms = 30000;
   std::uint64_t max_client_upload_bytes = std::uint64_t(1200) << 20;  // one client's unfinished uploads
   std::uint64_t max_upload_bytes = std::uint64_t(4096) << 20;         // all unfinished uploads
   std::uint64_t max_reply_cache_bytes = std::uint64_t(64) << 20;      // replies kept for repeated requests

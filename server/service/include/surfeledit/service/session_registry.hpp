@@ -4,8 +4,10 @@
 // dropped when its last attached client closes it or is detached.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <memory>
 #include <set>
 #include <string>
@@ -16,6 +18,13 @@
 
 namespace surfeledit::service {
 
+// What a client last did in one session (OP_PEERS).
+struct PeerActivity {
+  std::string last_op;                                 // its last op that changed the version ("" before any)
+  std::uint64_t last_version = 0;                      // the version that op produced
+  std::chrono::steady_clock::time_point last_request;  // its last request served in this session
+};
+
 struct SessionEntry {
   std::unique_ptr<EditSession> session;
   std::set<std::string> clients;         // attached client ids
@@ -23,6 +32,10 @@ struct SessionEntry {
   std::string owner;                     // the client that opened it
   std::map<std::string, Role> members;   // client id -> role (the owner included); kept while attached or not
   std::map<std::string, Role> invites;   // token -> role it grants (valid until the session is dropped)
+  std::map<std::string, PeerActivity> activity;  // member client id -> what it last did here
+  // Its last client was detached (lease) at this time: it is kept for the grace period, then dropped;
+  // nullopt while a client is attached.
+  std::optional<std::chrono::steady_clock::time_point> orphaned_since;
 
   // The client's role; nullptr when it is not a member.
   const Role* role_of(const std::string& client) const;
@@ -44,6 +57,11 @@ class SessionRegistry {
   SessionEntry& attached(const std::string& name, const std::string& client);
   // Detaches the client (Conflict if not attached); returns true when that dropped the session.
   bool close(const std::string& name, const std::string& client);
+  // Detaches the client without dropping the session (Conflict if not attached); returns true when
+  // no client is attached any more (the caller keeps it for the grace period, then drop()s it).
+  bool leave(const std::string& name, const std::string& client);
+  // Drops the session (nothing when there is none).
+  void drop(const std::string& name);
   // A token granting `role` in the session (the caller checked the inviter's role): `token` when
   // given (the journal's replay hands out the token recorded), a fresh random one otherwise.
   std::string invite(SessionEntry& entry, Role role, std::string token = {});
@@ -59,6 +77,9 @@ class SessionRegistry {
   std::vector<std::string> attached_to(const std::string& client) const;
   // Forgets the client's memberships (it was detached for good); attachments are closed by the caller first.
   void forget_member(const std::string& client);
+  // Every session, for the lease and grace checks.
+  std::map<std::string, SessionEntry>& all() { return sessions_; }
+  const std::map<std::string, SessionEntry>& all() const { return sessions_; }
   std::size_t size() const { return sessions_.size(); }
 
  private:

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/service/reply.hpp"
 
 namespace surfeledit::service {
 
@@ -29,6 +30,9 @@ struct UpdateEvent {
   IdList removed;                // ids removed by the change
   bool detected = false;         // deform: a collision detector ran; `colliding` is its result
   IdList colliding;              // deform: every colliding id after the step, ascending
+  std::string author;            // client id whose op made the change (set by the handler); presence: its subject
+  std::string presence;          // cause "presence": "join" | "leave" | "expired" | "regions"
+  std::vector<PeerInfo> peers;   // cause "presence": every peer after the change
 };
 
 // The one way an event starts: the session, its version after the change and the cause; the
@@ -58,6 +62,9 @@ struct PreparedUpdate {
   std::vector<std::uint64_t> colliding;  // sent in part 0
   std::vector<double> clip_points;     // n*3, or empty when the model has no clip lines
   std::vector<double> clip_dirs;       // n*3, or empty likewise
+  std::string author;                  // sent in every part
+  std::string presence;                // sent in every part
+  std::vector<PeerInfo> peers;         // sent in part 0
 
   std::size_t surfels() const { return ids.size(); }
   // Payload bytes held (for the publisher's queue bound).
