@@ -21,6 +21,7 @@ from .arrays import (ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_ra
 from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State,
                       StepResult, clips_or_none, merge)
 from .session_blend import BlendOps
+from .session_tools import ToolOps
 from .session_api import StateArrays, settings_doc
 from .watcher import Watcher
 
@@ -98,7 +99,7 @@ def _curves(wire: Any) -> List[Curve]:
     return out
 
 
-class Session(BlendOps, StateArrays):
+class Session(BlendOps, ToolOps, StateArrays):
     """An opened or joined editing session; close it (or use ``with``) to detach.
 
     Attributes:

@@ -24,8 +24,8 @@ std::size_t SessionImage::bytes() const {
   }
   if (whole) {
     b += whole->model.memory_bytes() + whole->row_version.capacity() * sizeof(std::uint64_t) +
-         array_bytes(whole->rest_radius) + (whole->fields ? whole->fields->memory_bytes() : 0) +
-         (whole->detector ? whole->detector->memory_bytes() : 0);
+         array_bytes(whole->rest_radius);
+    for (const auto& [id, t] : whole->tools) b += id.capacity() + t.bytes();
   }
   return b;
 }

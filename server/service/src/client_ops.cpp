@@ -31,8 +31,13 @@ std::vector<std::string> Handler::expire_leases(std::vector<UpdateEvent>& update
     const std::uint64_t held = s.uploads.client_bytes(client);
     const std::vector<std::string> sessions = s.sessions.attached_to(client);
     for (const std::string& name : sessions) {
-      const std::uint64_t version = s.sessions.find(name)->session->version();
-      if (s.sessions.close(name, client)) {
+      SessionEntry* entry = s.sessions.find(name);
+      const std::uint64_t version = entry->session->version();
+      const bool dropped = s.sessions.close(name, client);
+      if (!dropped && entry->session->version() != version) {
+        updates.push_back(make_update_event(name, entry->session->version(), "release"));  // its tool was released
+      }
+      if (dropped) {
         s.uploads.erase_session(name);
         updates.push_back(make_update_event(name, version + 1, "close"));
         logger()->info("session '{}' dropped: its last client {} was detached", name, client);

@@ -76,7 +76,7 @@ void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(), const char* 
   UpdateEvent event = changes_event(s, c.command.session, before);
   event.cause = cause;
   event.detected = true;
-  event.colliding = s.colliding();
+  event.colliding = s.colliding(c.command.client_id);
   c.updates.push_back(std::move(event));
 }
 
@@ -110,7 +110,7 @@ void serve_merge(OpContext& c) {
     UpdateEvent event = changes_event(s, c.command.session, before);
     event.cause = "merge";
     event.detected = true;
-    event.colliding = s.colliding();
+    event.colliding = s.colliding(c.command.client_id);
     c.updates.push_back(std::move(event));
   }
 }
@@ -118,7 +118,7 @@ void serve_merge(OpContext& c) {
 void serve_curves(OpContext& c) {
   CurveParams p;
   p.refine_angle = args_of<CurvesArgs>(c).refine_angle;
-  c.reply.curves = to_reply(prefixed("curves", [&] { return c.entry->session->intersection_curves(p); }));
+  c.reply.curves = to_reply(prefixed("curves", [&] { return c.entry->session->intersection_curves(p, c.command.client_id); }));
 }
 
 void serve_history(OpContext& c) {

@@ -42,6 +42,7 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::Blend, {"OP_BLEND", serve_blend, true, T::VersionAndSessionInfo, true});
   row(Op::Boolean, {"OP_BOOLEAN", serve_boolean, true, T::VersionAndSessionInfo, true});
   row(Op::FillHoles, {"OP_FILL_HOLES", serve_fill_holes, true, T::VersionAndSessionInfo, true});
+  row(Op::Release, {"OP_RELEASE", serve_release, true, T::VersionAndSessionInfo, true});
   return t;
 }
 
@@ -60,7 +61,7 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
   OpContext context{state, command, entry, reply, updates};
   op->serve(context);
   if (context.deferred) return true;
-  if (context.entry) fill_reply_tail(reply, *context.entry, op->tail);
+  if (context.entry) fill_reply_tail(reply, *context.entry, op->tail, command.client_id);
   return false;
 }
 
@@ -228,9 +229,9 @@ std::vector<std::shared_ptr<const Reply>> Handler::finish_loads(std::vector<Upda
 
 void Handler::set_on_load_done(std::function<void()> on_done) { state_->loads.set_on_done(std::move(on_done)); }
 
-void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail) {
+void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail, const std::string& client) {
   reply.version = entry.session->version();
-  if (tail == ReplyTail::VersionAndSessionInfo) reply.session_info = session_info(entry);
+  if (tail == ReplyTail::VersionAndSessionInfo) reply.session_info = session_info(entry, client);
 }
 
 }  // namespace surfeledit::service

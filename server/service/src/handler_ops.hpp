@@ -69,15 +69,16 @@ struct OpEntry {
 // The row of `op`, or nullptr for a value outside the table.
 const OpEntry* find_op(Op op);
 
-// The reply tail: the session's version, and its SessionInfo when `tail` says so.
-void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail);
+// The reply tail: the session's version, and its SessionInfo (as `client` sees it) when `tail` says so.
+void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail, const std::string& client);
 
 // Refuses (PermissionDenied) a command whose op needs a stronger role in the session than the
 // client has (client_ops.cpp).
 void check_role(const SessionEntry& entry, const Command& command);
 
-// The session's description for replies (session_ops.cpp).
-SessionInfo session_info(const SessionEntry& entry);
+// The session's description for replies to `client` (session_ops.cpp): has_regions and the settings
+// are those of the client's tool.
+SessionInfo session_info(const SessionEntry& entry, const std::string& client);
 
 // Handler functions, one per op: session_ops.cpp, load_ops.cpp, edit_ops.cpp, state_ops.cpp.
 void serve_info(OpContext& c);
@@ -106,6 +107,8 @@ void serve_invite(OpContext& c);
 void serve_blend(OpContext& c);
 void serve_boolean(OpContext& c);
 void serve_fill_holes(OpContext& c);
+// tool_ops.cpp
+void serve_release(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

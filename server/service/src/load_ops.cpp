@@ -101,7 +101,7 @@ void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::ve
   }
   SurfelModel model = prefixed("load_file", [&] { return SurfelModel::from_arrays(std::move(arrays)); });
   replace_model(c, std::move(model));
-  fill_reply_tail(reply, *c.entry, ReplyTail::VersionAndSessionInfo);
+  fill_reply_tail(reply, *c.entry, ReplyTail::VersionAndSessionInfo, load.client_id);
 }
 
 }  // namespace surfeledit::service

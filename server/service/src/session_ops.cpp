@@ -8,11 +8,11 @@
 
 namespace surfeledit::service {
 
-SessionInfo session_info(const SessionEntry& entry) {
+SessionInfo session_info(const SessionEntry& entry, const std::string& client) {
   const EditSession& s = *entry.session;
   SessionInfo info;
   info.name = s.name();
-  info.has_regions = s.has_regions();
+  info.has_regions = s.has_regions(client);
   info.clients = static_cast<std::uint32_t>(entry.clients.size());
   if (s.has_model()) {
     info.surfels = static_cast<std::uint64_t>(s.model().size());
@@ -21,7 +21,7 @@ SessionInfo session_info(const SessionEntry& entry) {
     info.bytes_per_surfel = report.bytes_per_surfel;
     for (const StructureInfo& st : report.structures) info.structures.emplace_back(st.name, st.bytes);
   }
-  for (const NamedSetting& setting : describe(s.settings())) info.settings.push_back(to_reply(setting));
+  for (const NamedSetting& setting : describe(s.settings(client))) info.settings.push_back(to_reply(setting));
   return info;
 }
 
@@ -57,7 +57,11 @@ void serve_close_session(OpContext& c) {
   const std::string& client = c.command.client_id;
   const std::uint64_t version = c.entry->session->version();
   c.state.uploads.erase(client, session);
-  if (c.state.sessions.close(session, client)) {
+  const bool dropped = c.state.sessions.close(session, client);
+  if (!dropped && c.entry->session->version() != version) {
+    c.updates.push_back(make_update_event(session, c.entry->session->version(), "release"));
+  }
+  if (dropped) {
     c.entry = nullptr;  // dropped: the reply tail has no session to describe
     c.state.uploads.erase_session(session);
     c.updates.push_back(make_update_event(session, version + 1, "close"));

@@ -74,7 +74,10 @@ SessionEntry& SessionRegistry::attached(const std::string& name, const std::stri
 bool SessionRegistry::close(const std::string& name, const std::string& client) {
   SessionEntry& entry = attached(name, client);
   entry.clients.erase(client);
-  if (!entry.clients.empty()) return false;
+  if (!entry.clients.empty()) {
+    entry.session->release(client);  // its tool and lock (one history entry when it held regions)
+    return false;
+  }
   sessions_.erase(name);
   return true;
 }

@@ -41,8 +41,9 @@ enum class Op : std::uint32_t {
   Blend = 19,
   Boolean = 20,
   FillHoles = 21,
+  Release = FillHoles + 1,  // the IDL's next op (numbered there; convert.cpp checks it)
 };
-constexpr std::size_t kOpCount = 22;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = static_cast<std::size_t>(Op::Release) + 1;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {

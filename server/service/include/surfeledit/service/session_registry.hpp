@@ -42,7 +42,8 @@ class SessionRegistry {
   // The session the client is attached to; throws Conflict (field "session") otherwise, with the
   // same message whether the session exists or not.
   SessionEntry& attached(const std::string& name, const std::string& client);
-  // Detaches the client (Conflict if not attached); returns true when that dropped the session.
+  // Detaches the client (Conflict if not attached) and releases its tool (EditSession::release: a new
+  // version when it held regions); returns true when that dropped the session.
   bool close(const std::string& name, const std::string& client);
   // A token granting `role` in the session (the caller checked the inviter's role).
   std::string invite(SessionEntry& entry, Role role);
