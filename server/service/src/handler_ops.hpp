@@ -76,8 +76,8 @@ void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail, co
 // client has (client_ops.cpp).
 void check_role(const SessionEntry& entry, const Command& command);
 
-// The session's description for replies to `client` (session_ops.cpp): has_regions and the settings
-// are those of the client's tool.
+// The session's description for replies to `client` (session_ops.cpp): the settings are those of the
+// client's tool; has_regions: some tool has regions.
 SessionInfo session_info(const SessionEntry& entry, const std::string& client);
 
 // Handler functions, one per op: session_ops.cpp, load_ops.cpp, edit_ops.cpp, state_ops.cpp.

@@ -12,7 +12,7 @@ SessionInfo session_info(const SessionEntry& entry, const std::string& client) {
   const EditSession& s = *entry.session;
   SessionInfo info;
   info.name = s.name();
-  info.has_regions = s.has_regions(client);
+  info.has_regions = !s.tools().empty();  // some client's tool has regions (the settings are the caller's)
   info.clients = static_cast<std::uint32_t>(entry.clients.size());
   if (s.has_model()) {
     info.surfels = static_cast<std::uint64_t>(s.model().size());

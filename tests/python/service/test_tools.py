@@ -46,7 +46,8 @@ def test_locks_conflict_naming_the_client_and_release_frees_them(
     owner, other, a, b, ids, part, _ = open_shared(make_client, "locks")
     arm_a, arm_b, body = ids[part == 1], ids[part == 2], ids[part == 0]
     a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
-    assert a.info().has_regions and not b.info().has_regions  # session_info describes the caller's tool
+    b.configure(algorithm="simple")  # settings are per tool: a's stay
+    assert a.settings()["algorithm"] == "robust" and b.settings()["algorithm"] == "simple"
     version = a.version
     # b asks to move both arms: every surfel of arm A is in a's lock.
     with pytest.raises(errors.ConflictError) as refused:
