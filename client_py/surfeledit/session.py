@@ -312,13 +312,15 @@ class Session(BlendOps, ToolOps, StateArrays):
 
     # -- history -----------------------------------------------------------------------------
     def undo(self) -> int:
-        """Undoes the session's last change (any client's; published to watchers with cause
-        ``"undo"``); returns the new version. ConflictError when there is nothing to undo."""
+        """Undoes this client's own last change, not another client's (published to watchers with cause
+        ``"undo"``); returns the new version. ConflictError (field ``"history"``) when there is nothing to
+        undo, or when a later change of another client touched one of its surfels (the message names that
+        change's version and client); nothing changes then."""
         return int(self._request(proto.Op.OP_UNDO).version)
 
     def redo(self) -> int:
-        """Redoes the last undone change (cause ``"redo"``); returns the new version. ConflictError
-        when there is nothing to redo."""
+        """Redoes this client's last undone change (cause ``"redo"``); returns the new version.
+        ConflictError when there is nothing to redo or another client's later change is in the way."""
         return int(self._request(proto.Op.OP_REDO).version)
 
     def history(self) -> List[HistoryEntry]:

@@ -186,20 +186,119 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   return version_;
 }
 
-std::uint64_t EditSession::undo() {
-  HistoryEntry* e = history_.undo_target();
-  if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to undo in session '" + name_ + "'");
-  const std::uint64_t v = swap_entry(*e, "undo");
-  history_.undone();
+namespace {
+
+bool meet(const IdList& a, const IdList& b) {  // both ascending
+  auto i = a.begin(), j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (*i == *j) return true;
+    if (*i < *j) ++i;
+    else ++j;
+  }
+  return false;
+}
+
+// An entry whose op inserted or removed surfels (a whole image with touched surfels): rows renumbered.
+bool renumbers(const HistoryEntry& e) { return e.image.whole && !e.item.touched.empty(); }
+
+// Whether another author's entry `o` is in effect now and was not at `e`'s last swap, or the other way
+// round: applied or redone since, or in effect then and undone since. (Applied and undone again since
+// leaves the surfels as they were; an undo is exact on what it touched.)
+bool changed_since(const HistoryEntry& o, const HistoryEntry& e) {
+  if (&o == &e || o.item.author == e.item.author || o.stamp <= e.stamp) return false;
+  return !o.item.undone || o.applied_at < e.stamp;
+}
+
+}  // namespace
+
+std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
+  const char* what = undo ? "undo" : "redo";
+  const auto& entries = history_.entries();
+  // Whole: no other author's entry changed state since this one's last swap (changed_since), so the
+  // session is exactly as it left it but for the author's own later entries, all undone (last in, first
+  // out per author). A single author's history is always this case, and so is undo() in strict global
+  // order.
+  bool whole = true;
+  for (const HistoryEntry& o : entries)
+    if (changed_since(o, e)) whole = false;
+  if (!whole) {
+    for (const HistoryEntry& o : entries) {
+      if (!changed_since(o, e)) continue;
+      const bool hit = renumbers(o) || renumbers(e) || meet(o.item.touched, e.item.touched);
+      if (!hit) continue;
+      std::string why = renumbers(e) ? "it inserted or removed surfels and cannot come back alone"
+                        : renumbers(o) ? "that op inserted or removed surfels since"
+                                       : "that op changed surfels it changed since";
+      throw Error(ErrorCode::Conflict, "history",
+                  std::string("cannot ") + what + " '" + e.item.op + "' (version " + std::to_string(e.item.version) +
+                      ") of client '" + e.item.author + "': client '" + o.item.author + "' " +
+                      (o.item.undone ? "undid" : "applied") + " '" + o.item.op + "' (version " +
+                      std::to_string(o.item.version) + ") after it; " + why);
+    }
+  }
+  if (!e.image.complete) {
+    throw Error(ErrorCode::Conflict, "history",
+                std::string("cannot ") + what + " '" + e.item.op +
+                    "': its detector state was not saved (hierarchies and approximate detection keep no history)");
+  }
+  std::uint64_t v = 0;
+  if (whole || e.image.rows) {
+    v = swap_entry(e, what);
+    // Its tool's detector saw the rows other tools moved since as they were then.
+    if (!whole) tools_.at(e.image.tool).stale = true;
+  } else {
+    // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
+    const ToolImage& t = e.image.whole->tools.at(e.image.tool);
+    if (t.fields && t.fields->regions.size() != static_cast<std::size_t>(model_.size()))
+      throw Error(ErrorCode::Internal, "history", "the tool image does not fit the model");
+    for (const auto& [id, other] : tools_) {
+      if (id == e.image.tool || !other.fields || !t.fields) continue;
+      const std::size_t overlap = lock_overlap(t.fields->regions, other.fields->regions);
+      if (overlap > 0) {
+        throw Error(ErrorCode::Conflict, "history",
+                    std::string("cannot ") + what + " '" + e.item.op + "' of client '" + e.item.author + "': " +
+                        std::to_string(overlap) + " surfel(s) of its regions are in the lock of client '" + id + "'");
+      }
+    }
+    use(e.image.tool);
+    SessionImage now = capture_whole(false);
+    tool_->restore(t, false);
+    tool_->stale = true;
+    history_.replace_image(e, std::move(now));
+    v = ++version_;
+  }
+  history_.set_undone(e, undo, v);
   return v;
 }
 
+std::uint64_t EditSession::undo() {
+  HistoryEntry* e = history_.last_applied();
+  if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to undo in session '" + name_ + "'");
+  return swap_own(*e, true);
+}
+
 std::uint64_t EditSession::redo() {
-  HistoryEntry* e = history_.redo_target();
+  HistoryEntry* e = history_.last_undone();
   if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to redo in session '" + name_ + "'");
-  const std::uint64_t v = swap_entry(*e, "redo");
-  history_.redone();
-  return v;
+  return swap_own(*e, false);
+}
+
+std::uint64_t EditSession::undo(const std::string& author) {
+  HistoryEntry* e = history_.undo_target(author);
+  if (!e) {
+    throw Error(ErrorCode::Conflict, "history",
+                "nothing of client '" + author + "' to undo in session '" + name_ + "'");
+  }
+  return swap_own(*e, true);
+}
+
+std::uint64_t EditSession::redo(const std::string& author) {
+  HistoryEntry* e = history_.redo_target(author);
+  if (!e) {
+    throw Error(ErrorCode::Conflict, "history",
+                "nothing of client '" + author + "' to redo in session '" + name_ + "'");
+  }
+  return swap_own(*e, false);
 }
 
 }  // namespace surfeledit

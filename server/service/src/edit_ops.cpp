@@ -68,11 +68,12 @@ void serve_remove(OpContext& c) {
 
 namespace {
 
-// Undo or redo (`cause`): what changed since is published like any change, with the collision state.
-void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(), const char* cause) {
+// Undo or redo (`cause`) of the caller's own last change (issue 11 §3): what changed since is published
+// like any change, with the collision state of the caller's tool.
+void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(const std::string&), const char* cause) {
   EditSession& s = *c.entry->session;
   const std::uint64_t before = s.version();
-  (s.*swap)();
+  (s.*swap)(c.command.client_id);
   UpdateEvent event = changes_event(s, c.command.session, before);
   event.cause = cause;
   event.detected = true;
@@ -82,9 +83,13 @@ void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(), const char* 
 
 }  // namespace
 
-void serve_undo(OpContext& c) { serve_swap(c, &EditSession::undo, "undo"); }
+void serve_undo(OpContext& c) {
+  serve_swap(c, static_cast<std::uint64_t (EditSession::*)(const std::string&)>(&EditSession::undo), "undo");
+}
 
-void serve_redo(OpContext& c) { serve_swap(c, &EditSession::redo, "redo"); }
+void serve_redo(OpContext& c) {
+  serve_swap(c, static_cast<std::uint64_t (EditSession::*)(const std::string&)>(&EditSession::redo), "redo");
+}
 
 namespace {
 

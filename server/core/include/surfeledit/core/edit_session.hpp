@@ -216,7 +216,17 @@ class EditSession {
   // undone op gives.
   std::uint64_t undo();
   std::uint64_t redo();
-  // The entries, oldest first (undone ones last, flagged).
+  // Per author (issue 11 §3): undoes the author's own last applied change / redoes its last undone one.
+  // While no other author's entry was applied, undone or redone after it, exactly undo() / redo().
+  // Otherwise only the entry's own part comes back -- its surfels bit for bit and its author's tool (whose
+  // detector is then re-initialised at its next step) -- and it is refused (Conflict, field "history",
+  // naming the other op's version and author) when such a later entry touched any surfel the entry
+  // touched, or inserted or removed surfels (rows renumbered), or when the entry itself inserted or removed
+  // surfels (those can only come back whole), or when its regions would overlap another tool's lock.
+  // Refused: nothing changes.
+  std::uint64_t undo(const std::string& author);
+  std::uint64_t redo(const std::string& author);
+  // The entries, oldest first (in the order first applied; undone ones flagged).
   std::vector<HistoryItem> history() const { return history_.items(); }
 
   // Changes since version `since` (since >= version() gives none).
@@ -258,6 +268,8 @@ class EditSession {
   // Appends the entry of an op that just bumped the version; `before` is the image before it.
   void record(const char* op, const std::string& author, IdList touched, SessionImage before);
   std::uint64_t swap_entry(HistoryEntry& entry, const char* what);
+  // Undo / redo of an author's entry (undo(author)): the whole swap or the entry's own part (see undo()).
+  std::uint64_t swap_own(HistoryEntry& entry, bool undo);
   std::size_t history_limit() const;
   // Responses (session_response.cpp): the step is applied and detected; `before` is its image.
   // A merge makes `before` a whole image.

@@ -12,8 +12,11 @@
 //    the whole model and every tool (tool.hpp: regions and fields, settings, and the detector object
 //    itself: the live one after a change that replaced it, else an independent clone() of the acting
 //    tool's; another tool's detector is never changed in place by an op that is not its own).
-// Undo and redo are strictly last-in first-out, so a detector object an image refers to is in the
-// state the image needs whenever it is swapped back in.
+// Undo and redo are last-in first-out per author (issue 11 §3): an author undoes its own last applied
+// entry and redoes its own last undone one. While no other author's entry changed state after it, the
+// whole image is swapped (exactly as a single author's history); otherwise only the entry's own part is
+// (its rows and its author's tool), and only when no other author's later entry touched those surfels
+// or renumbered rows (EditSession::swap_own).
 #pragma once
 
 #include <cstdint>
@@ -85,21 +88,29 @@ struct HistoryEntry {
   HistoryItem item;
   SessionImage image;  // before the op while applied, after it once undone
   std::size_t bytes = 0;  // image.bytes(), kept by History
+  std::uint64_t stamp = 0;       // the session version of its last apply, undo or redo
+  std::uint64_t applied_at = 0;  // the session version of its last apply or redo
 };
 
-// The entries of one session, oldest first, with the undo cursor and the memory bound.
+// The entries of one session, oldest first (in the order they were first applied), each flagged undone
+// or not, and the memory bound.
 class History {
  public:
-  // Appends an applied entry: drops the redo tail, then the oldest entries beyond `limit_bytes`.
+  // Appends an applied entry (stamp: its version): drops its author's undone entries (the author's redo
+  // tail), then the oldest entries beyond `limit_bytes`.
   void push(HistoryEntry entry, std::size_t limit_bytes);
   // Drops oldest entries until at most `limit_bytes` are held.
   void trim(std::size_t limit_bytes);
-  // The entry undo() acts on / redo() acts on; nullptr when there is none.
-  HistoryEntry* undo_target();
-  HistoryEntry* redo_target();
-  // Moves the cursor after a successful undo / redo.
-  void undone() { --applied_; }
-  void redone() { ++applied_; }
+  // The entry undo(author) acts on (the author's last applied one) / redo(author) acts on (the author's
+  // first undone one); nullptr when there is none.
+  HistoryEntry* undo_target(const std::string& author);
+  HistoryEntry* redo_target(const std::string& author);
+  // Any author's: the last applied entry / the entry undone last (highest stamp).
+  HistoryEntry* last_applied();
+  HistoryEntry* last_undone();
+  // Flags an entry undone or applied again (redone) at version `stamp`.
+  void set_undone(HistoryEntry& entry, bool undone, std::uint64_t stamp);
+  const std::deque<HistoryEntry>& entries() const { return entries_; }
   void clear();
 
   std::vector<HistoryItem> items() const;
@@ -118,7 +129,6 @@ class History {
   void recount();
 
   std::deque<HistoryEntry> entries_;
-  std::size_t applied_ = 0;  // entries_[0, applied_) are applied; the rest is the redo tail
   std::size_t bytes_ = 0;
   std::vector<RowsImage> spare_;  // buffers of dropped entries
 };
