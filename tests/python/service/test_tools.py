@@ -106,3 +106,64 @@ def test_two_arms_swung_into_each_other_are_detected_where_the_other_client_move
     old = core.Scene()
     old.add(core.make_capsule(ARM_R, ARM_HALF, center=ARM_B))
     assert np.all(old.sdf(state.positions[rows]) > 0.05)
+
+
+def _rows(state, ids: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    rows = np.searchsorted(state.ids, ids)
+    return state.positions[rows].copy(), state.normals[rows].copy()
+
+
+def _expected_refusal(history, client: str):
+    """From the history alone: the version and client of the first later entry of another client touching a
+    surfel of ``client``'s last applied entry (None: the undo must be accepted)."""
+    mine = [k for k, h in enumerate(history) if h.client == client and not h.undone]
+    if not mine:
+        return None
+    target = history[mine[-1]]
+    touched = set(int(i) for i in target.touched)
+    for h in history[mine[-1] + 1:]:
+        if h.client != client and touched & set(int(i) for i in h.touched):
+            return h.version, h.client
+    return None
+
+
+def test_each_client_undoes_its_own_op_and_is_refused_when_another_clients_later_op_overlaps(
+        make_client: Callable[[], surfeledit.Client]) -> None:
+    owner, other, a, b, ids, part, _ = open_shared(make_client, "undo")
+    arm_a, arm_b, body = ids[part == 1], ids[part == 2], ids[part == 0]
+    a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
+    b.set_regions(zero=np.concatenate([body, arm_a]), one=arm_b)
+    a0, b0 = _rows(a.state(), arm_a), _rows(a.state(), arm_b)
+    a.deform(translation=(0.03, 0.0, 0.0))
+    b.deform(translation=(-0.03, 0.0, 0.0))
+    b1 = _rows(b.state(), arm_b)
+    # a's step is not its session's last change, but b's later step touched other surfels: undone, exact.
+    assert _expected_refusal(a.history(), owner.client_id) is None
+    a.undo()
+    s = a.state()
+    for got, want in zip(_rows(s, arm_a) + _rows(s, arm_b), a0 + b1):
+        np.testing.assert_array_equal(got, want)
+    a.redo()
+    b.undo()
+    for got, want in zip(_rows(b.state(), arm_b), b0):
+        np.testing.assert_array_equal(got, want)
+    b.redo()
+    # Overlap: a releases arm A, b takes it over and moves it, then gives it back; a takes it again.
+    a.release()
+    b.release()
+    b.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
+    b.deform(translation=(0.0, 0.0, 0.02))
+    b.release()
+    a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
+    a.undo()  # its set_regions
+    a.undo()  # its release: its regions and lock come back
+    hit = _expected_refusal(a.history(), owner.client_id)
+    assert hit is not None and hit[1] == other.client_id
+    version, before = a.version, a.state()
+    with pytest.raises(errors.ConflictError) as refused:
+        a.undo()  # its step: b's later step moved the same surfels
+    assert refused.value.field == "history"
+    assert f"(version {hit[0]})" in str(refused.value) and other.client_id in str(refused.value)
+    after = a.state()
+    assert a.info() is not None and a.version == version
+    np.testing.assert_array_equal(after.positions, before.positions)
