@@ -49,8 +49,21 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
 
 void History::trim(std::size_t limit_bytes) {
   while (!entries_.empty() && bytes_ > limit_bytes) {
-    bytes_ -= entries_.front().bytes;
-    keep_spare(entries_.front());
+    HistoryEntry& front = entries_.front();
+    if (front.item.undone) {
+      // Its author's later undone entries are redone after it: they cannot be redone without it.
+      const std::string author = front.item.author;
+      std::deque<HistoryEntry> kept;
+      for (HistoryEntry& e : entries_) {
+        if (e.item.undone && e.item.author == author) keep_spare(e);
+        else kept.push_back(std::move(e));
+      }
+      entries_ = std::move(kept);
+      recount();
+      continue;
+    }
+    bytes_ -= front.bytes;
+    keep_spare(front);
     entries_.pop_front();
   }
 }

@@ -100,7 +100,7 @@ std::shared_ptr<const DetectorImage> EditSession::step_detector_image(const Sess
   return tool_->journaling ? tool_->detector->journal_image() : before.detector;
 }
 
-SessionImage EditSession::capture_whole(bool clone) const {
+SessionImage EditSession::capture_whole(bool clone) {
   SessionImage image;
   WholeImage w;
   w.model = model_;
@@ -109,8 +109,12 @@ SessionImage EditSession::capture_whole(bool clone) const {
   w.rest_radius = rest_radius_;
   w.history = history_params_;
   // Only the acting tool's detector may change in place during the op (others are never changed by it).
-  for (const auto& [id, t] : tools_) w.tools.emplace(id, t.image(clone && &t == tool_));
-  if (tool_->detector) image.complete = w.tools.at(tool_id_).detector != nullptr;
+  for (const auto& [id, t] : tools_) w.tools.emplace(id, t.image(false));
+  if (clone && tool_->detector) {
+    std::shared_ptr<CollisionDetector> copy(tool_->detector->clone());
+    image.complete = copy != nullptr;
+    if (copy) tool_->detector = std::move(copy);
+  }
   image.whole = std::move(w);
   image.tool = tool_id_;
   return image;

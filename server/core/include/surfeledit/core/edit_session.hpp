@@ -260,7 +260,9 @@ class EditSession {
   SessionImage whole_before_step(const SessionImage& before) const;
   // The detector states of a step's rows image: the journal's while it runs, else the image's own.
   std::shared_ptr<const DetectorImage> step_detector_image(const SessionImage& before) const;
-  SessionImage capture_whole(bool clone) const;
+  // `clone`: the op changes the acting tool's detector in place, so the image keeps the live object (which
+  // the rows images of earlier entries refer to) and the tool goes on with an independent clone.
+  SessionImage capture_whole(bool clone);
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
   // Appends rows (the last parents.size() rows) as extend_rows does, with or without regions.
