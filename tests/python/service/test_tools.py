@@ -167,3 +167,22 @@ def test_each_client_undoes_its_own_op_and_is_refused_when_another_clients_later
     after = a.state()
     assert a.info() is not None and a.version == version
     np.testing.assert_array_equal(after.positions, before.positions)
+
+
+def test_local_session_releases_its_tool() -> None:
+    from surfeledit.local import LocalSession
+
+    positions, normals, radii, part = two_arms()
+    ids = np.arange(len(part))
+    with LocalSession("local", threads=1) as s:
+        s.load_points(positions, normals, radii)
+        assert s.release() is False  # no regions: nothing to release, same version
+        version = s.version
+        assert s.version == version
+        s.set_regions(zero=ids[part != 1], one=ids[part == 1])
+        s.deform(translation=(0.01, 0.0, 0.0))
+        assert s.release() is True and s.history()[-1].op == "release"
+        with pytest.raises(errors.ConflictError):
+            s.deform(translation=(0.01, 0.0, 0.0))  # no regions any more
+        s.undo()  # the release: regions back
+        assert s.deform(translation=(0.01, 0.0, 0.0)).moved > 0
