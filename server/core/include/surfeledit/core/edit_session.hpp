@@ -209,11 +209,12 @@ class EditSession {
   // with a crease. Validates `params` (InvalidArgument naming the field).
   std::vector<Curve> intersection_curves(const CurveParams& params = {}, const std::string& tool = "") const;
 
-  // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
-  // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
-  // returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and approximate
-  // detection included) is restored exactly: later steps give the results a session that never took the
-  // undone op gives.
+  // Undo / redo the session's last applied / last undone change, whoever made it (history.hpp): undo(author)
+  // of that change's author. With one author (or in the session's strict order) the state then equals the
+  // one before / after it bit for bit. Each bumps the version (the restored rows count as changed since)
+  // and returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and
+  // approximate detection included) is restored exactly: later steps give the results a session that never
+  // took the undone op gives.
   std::uint64_t undo();
   std::uint64_t redo();
   // Per author (issue 11 §3): undoes the author's own last applied change / redoes its last undone one.
