@@ -121,6 +121,11 @@ class LocalSession(StateArrays):
         """Removes surfels by (K,) integer id."""
         self.core.remove(ids)
 
+    def release(self) -> bool:
+        """Frees the session's tool: its regions, detector and lock (one history entry, a new version);
+        False (nothing changes) when no regions are set."""
+        return bool(self.core.release())
+
     def undo(self) -> int:
         """Undoes the last change; returns the new version (ConflictError: nothing to undo)."""
         return int(self.core.undo())

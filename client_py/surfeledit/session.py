@@ -22,6 +22,7 @@ from .results import (Backoff, Changes, CollisionStats, Curve, HistoryEntry, Mer
                       StepResult, clips_or_none, merge)
 from .session_blend import BlendOps
 from .session_presence import PresenceOps
+from .session_tools import ToolOps
 from .session_api import StateArrays, settings_doc
 from .presence import PresenceCallback
 from .watcher import Watcher
@@ -100,7 +101,7 @@ def _curves(wire: Any) -> List[Curve]:
     return out
 
 
-class Session(BlendOps, PresenceOps, StateArrays):
+class Session(BlendOps, PresenceOps, ToolOps, StateArrays):
     """An opened or joined editing session; close it (or use ``with``) to detach.
 
     Attributes:
@@ -326,13 +327,15 @@ class Session(BlendOps, PresenceOps, StateArrays):
 
     # -- history -----------------------------------------------------------------------------
     def undo(self, expect_version: Optional[int] = None) -> int:
-        """Undoes the session's last change (any client's; published to watchers with cause
-        ``"undo"``); returns the new version. ConflictError when there is nothing to undo."""
+        """Undoes this client's own last change, not another client's (published to watchers with cause
+        ``"undo"``); returns the new version. ConflictError (field ``"history"``) when there is nothing to
+        undo, or when a later change of another client touched one of its surfels (the message names that
+        change's version and client); nothing changes then."""
         return int(self._request(proto.Op.OP_UNDO, expect_version).version)
 
     def redo(self, expect_version: Optional[int] = None) -> int:
-        """Redoes the last undone change (cause ``"redo"``); returns the new version. ConflictError
-        when there is nothing to redo."""
+        """Redoes this client's last undone change (cause ``"redo"``); returns the new version.
+        ConflictError when there is nothing to redo or another client's later change is in the way."""
         return int(self._request(proto.Op.OP_REDO, expect_version).version)
 
     def history(self) -> List[HistoryEntry]:

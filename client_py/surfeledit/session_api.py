@@ -67,17 +67,24 @@ class EditingSession(Protocol):
         ...
 
     def undo(self) -> int:
-        """Undoes the session's last change (any client's); returns the new version. The state is then
-        bit for bit the one before it. ConflictError when there is nothing to undo."""
+        """Undoes this client's own last change (in-process: the session's last change); returns the new
+        version. The surfels it touched are then bit for bit as before it (alone in the session: the whole
+        state). ConflictError when there is nothing to undo or another client's later change touched
+        them."""
         ...
 
     def redo(self) -> int:
-        """Redoes the last undone change; returns the new version. ConflictError when there is none
-        (a change after an undo drops what could be redone)."""
+        """Redoes this client's last undone change; returns the new version. ConflictError when there is
+        none (a change of the client after an undo drops what it could redo)."""
+        ...
+
+    def release(self) -> bool:
+        """Frees this client's tool: its regions, detector and lock (one history entry, a new version);
+        False, and no change, when it has no regions."""
         ...
 
     def history(self) -> List[HistoryEntry]:
-        """The session's history, oldest first (undone entries last, flagged)."""
+        """The session's history, oldest first (in the order first applied; undone entries flagged)."""
         ...
 
     def merge(self, crease: bool = True) -> MergeResult:

@@ -282,6 +282,8 @@ void bind_edit_session(pyb::module_& m) {
           },
           "Clip lines (points #P by 3, unit directions #P by 3; zero: unclipped), or None without clips")
       .def("undo", [](EditSession& s) { return s.undo(); }, "Undoes the last change; returns the new version")
+      .def("release", [](EditSession& s) { return s.release(); },
+           "Frees the tool's regions, detector and lock; False (no change) when it has no regions")
       .def("redo", [](EditSession& s) { return s.redo(); }, "Redoes the last undone change; returns the new version")
       .def("history", [](const EditSession& s) {
         pyb::list out;

@@ -127,7 +127,7 @@ TEST(Boolean, OneHistoryEntryThenBlendThenUndoExactly) {
   const Snapshot after(session);
   BlendParams p;
   p.iterations = 10;
-  const BlendOutcome b = session.blend(p);  // follows the boolean's features (open region: spring)
+  const BlendOutcome b = session.blend(p, std::nullopt, "eve");  // follows eve's boolean's features (open region: spring)
   EXPECT_GT(b.particles, 0);
   session.undo();
   expect_same(Snapshot(session), after, "undo blend");

@@ -27,7 +27,7 @@ TEST(History, UndoRedoOfStepsIsBitExact) {
   std::vector<Snapshot> after;
   std::vector<StepResult> results;
   for (int k = 0; k < 5; ++k) {  // the 4th and 5th steps collide
-    results.push_back(f.session.deform(down(0.1), "bob"));
+    results.push_back(f.session.deform(down(0.1)));
     after.emplace_back(f.session);
   }
   ASSERT_FALSE(results.back().colliding.empty());
@@ -53,13 +53,15 @@ TEST(History, UndoRedoOfStepsIsBitExact) {
 }
 
 TEST(History, EntriesListVersionOpAuthorTouched) {
-  Fixture f;
+  SessionFixture f("alice");  // bob sets regions of his own tool and steps with it (issue 11)
+  f.session.set_regions({f.zero, {}}, {f.one, {}}, "bob");
   f.session.deform(down(0.1), "bob");
   const std::vector<HistoryItem> h = f.session.history();
   ASSERT_EQ(h.size(), 3u);
   EXPECT_EQ(h[0].op, "load");
   EXPECT_EQ(h[0].author, "alice");
   EXPECT_EQ(h[1].op, "set_regions");
+  EXPECT_EQ(h[1].author, "bob");
   EXPECT_EQ(h[2].op, "deform");
   EXPECT_EQ(h[2].author, "bob");
   EXPECT_EQ(h[2].version, f.session.version());

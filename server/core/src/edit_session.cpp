@@ -19,7 +19,80 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
 }  // namespace
 
 EditSession::EditSession(std::string name, SessionParams params)
-    : name_(std::move(name)), params_(params) {}
+    : name_(std::move(name)), params_(params) {
+  use("");
+}
+
+Tool& EditSession::use(const std::string& author) {
+  auto [it, created] = tools_.try_emplace(author);
+  if (created) it->second.settings.history = history_params_;
+  tool_ = &it->second;
+  tool_id_ = author;
+  return *tool_;
+}
+
+const Tool* EditSession::find_tool(const std::string& author) const {
+  const auto it = tools_.find(author);
+  return it == tools_.end() ? nullptr : &it->second;
+}
+
+SessionSettings EditSession::settings_of(const std::string& author) const {
+  const Tool* t = find_tool(author);
+  SessionSettings s = t ? t->settings : SessionSettings();
+  s.history = history_params_;
+  return s;
+}
+
+SessionSettings EditSession::settings(const std::string& tool) const { return settings_of(tool); }
+
+const DeformationFields* EditSession::fields(const std::string& tool) const {
+  const Tool* t = find_tool(tool);
+  return t ? t->fields.get() : nullptr;
+}
+
+const IdList& EditSession::colliding(const std::string& tool) const {
+  static const IdList none;
+  const Tool* t = find_tool(tool);
+  return t ? t->colliding : none;
+}
+
+std::vector<std::pair<std::string, Index>> EditSession::tools() const {
+  std::vector<std::pair<std::string, Index>> out;
+  for (const auto& [id, t] : tools_)
+    if (t.fields) out.emplace_back(id, static_cast<Index>(t.fields->deformable.size()));
+  return out;
+}
+
+void EditSession::mark_others_stale() {
+  for (auto& [id, t] : tools_)
+    if (&t != tool_ && t.fields) t.stale = true;
+}
+
+void EditSession::sync_tool() {
+  Tool& t = *tool_;
+  if (!t.stale) return;
+  // Rows this tool treats as rigid changed under its detector (another tool's op): it starts again
+  // from the model as it is now (the zero region where it is now; Robust's original model is now).
+  if (t.fields) t.detector = fresh_detector(t.settings, *t.fields);
+  t.colliding.clear();
+  t.stale = false;
+}
+
+void EditSession::check_unlocked(const std::vector<bool>* keep, const IndexList* parents, const char* field) const {
+  for (const auto& [id, t] : tools_) {
+    if (&t == tool_ || !t.fields) continue;
+    std::size_t hit = 0;
+    if (keep)
+      for (std::size_t r = 0; r < keep->size(); ++r) hit += !(*keep)[r] && t.fields->regions[r] != Region::Zero;
+    if (parents)
+      for (Index r : *parents) hit += t.fields->regions[static_cast<std::size_t>(r)] != Region::Zero;
+    if (hit > 0) {
+      throw Error(ErrorCode::Conflict, field,
+                  std::to_string(hit) + " surfel(s) are in the lock of client '" + id +
+                      "' (its deformable region); it must release them first");
+    }
+  }
+}
 
 EditSession::~EditSession() = default;
 
@@ -30,6 +103,7 @@ const SurfelModel& EditSession::model() const {
 
 void EditSession::load(SurfelModel model, const std::string& author) {
   if (model.empty()) throw Error(ErrorCode::InvalidArgument, "positions", "the model is empty (0 surfels)");
+  use(author);
   SessionImage before = capture_whole(false);
   IdList touched = model_.ids();
   touched.insert(touched.end(), model.ids().begin(), model.ids().end());
@@ -38,11 +112,8 @@ void EditSession::load(SurfelModel model, const std::string& author) {
   model_version_ = version_;
   row_version_.assign(static_cast<std::size_t>(model_.size()), version_);
   removed_log_.clear();
-  fields_.reset();
-  detector_.reset();
-  colliding_.clear();
+  for (auto& [id, t] : tools_) t.clear_regions();
   rest_radius_ = Values();
-  merge_ = MergeMemo();
   record("load", author, std::move(touched), std::move(before));
 }
 
@@ -78,12 +149,24 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
     }
     r = Region::One;
   }
+  // The lock: the new deformable rows may not meet another tool's.
+  for (const auto& [id, t] : tools_) {
+    if (id == author || !t.fields) continue;
+    const std::size_t overlap = lock_overlap(regions, t.fields->regions);
+    if (overlap > 0) {
+      throw Error(ErrorCode::Conflict, "regions",
+                  std::to_string(overlap) + " surfel(s) of the deformable region (outside zero) are in the lock of client '" +
+                      id + "' (its deformable region); put them in the zero region or let it release them");
+    }
+  }
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
-  std::shared_ptr<CollisionDetector> detector = fresh_detector(settings_, *fields);
+  std::shared_ptr<CollisionDetector> detector = fresh_detector(settings_of(author), *fields);
+  use(author);
   SessionImage before = capture_whole(false);
-  fields_ = std::move(fields);
-  detector_ = std::move(detector);
-  colliding_.clear();
+  tool_->fields = std::move(fields);
+  tool_->detector = std::move(detector);
+  tool_->colliding.clear();
+  tool_->stale = false;
   take_origins();
   ++version_;
   record("set_regions", author, {}, std::move(before));
@@ -91,27 +174,30 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
 
 StepResult EditSession::deform(const DeformParams& params, const std::string& author) {
   model();  // throws without a model
-  if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
-  validate(params, *fields_);
+  const Tool* own = find_tool(author);
+  if (!own || !own->fields) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
+  validate(params, *own->fields);
+  use(author);
+  sync_tool();
   const std::uint64_t version_before = version_;
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image. Else the
   // deformable rows, and the detector states the step changes (its journal, when it keeps one); a merge
   // after the step (response "merge") upgrades it to a whole image (respond()).
   const auto t_capture = std::chrono::steady_clock::now();
-  const bool whole = settings_.resample.enabled;
+  const bool whole = tool_->settings.resample.enabled;
   // Nothing is kept (history_mb 0) and nothing is taken back (response report): no image at all.
-  const bool none = history_limit() == 0 && settings_.response.mode == Response::Report;
-  journaling_ = !whole && !none && detector_ && detector_->start_journal();
+  const bool none = history_limit() == 0 && tool_->settings.response.mode == Response::Report;
+  tool_->journaling = !whole && !none && tool_->detector && tool_->detector->start_journal();
   struct EndJournal {
     EditSession& s;
     ~EndJournal() {
-      if (s.detector_) s.detector_->stop_journal();
-      s.journaling_ = false;
+      if (s.tool_->detector) s.tool_->detector->stop_journal();
+      s.tool_->journaling = false;
     }
   } end_journal{*this};
   SessionImage before = none    ? SessionImage()
                         : whole ? capture_whole(true)
-                                : capture_rows(fields_->deformable, false, !journaling_);
+                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling);
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   try {
@@ -123,8 +209,9 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
     roll_back(before, version_before);
     throw;
   }
+  if (version_ != version_before) mark_others_stale();
   const auto t_record = std::chrono::steady_clock::now();
-  if (journaling_ && before.rows) before.detector = detector_->journal_image();
+  if (tool_->journaling && before.rows) before.detector = tool_->detector->journal_image();
   if (out.response != "cancelled" && !none) {
     IdList touched;
     touched.reserve(out.moved.size());
@@ -144,26 +231,26 @@ void EditSession::roll_back(SessionImage& before, std::uint64_t version_before) 
   before.complete = true;  // restore() puts back what the image holds; an unsaved detector is rebuilt below
   restore(before, true);
   before.complete = detector_saved;
-  if (!detector_saved && fields_ && !model_.empty()) detector_ = fresh_detector(settings_, *fields_);
+  if (!detector_saved && tool_->fields && !model_.empty()) tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
   while (!removed_log_.empty() && removed_log_.back().first > version_before) removed_log_.pop_back();
   version_ = version_before;
 }
 
 void EditSession::step_once(const DeformParams& params, StepResult& out) {
   SurfelArrays& a = model_.arrays();
-  const bool resample = settings_.resample.enabled;
+  const bool resample = tool_->settings.resample.enabled;
   if (resample) {
     // Tangent axes (kept up to date by apply_step) and rest radii, from when resampling started.
     if (!model_.has_tangents()) make_tangent_frames(a.normals, a.radii, a.tangent_u, a.tangent_v);
     if (rest_radius_.size() != model_.size()) rest_radius_ = a.radii;
   }
-  Points& previous = previous_;  // positions before the step, for each surfel's own displacement
-  if (detector_) previous = a.positions;  // same size as the last step's: no allocation
+  Points& previous = tool_->previous;  // positions before the step, for each surfel's own displacement
+  if (tool_->detector) previous = a.positions;  // same size as the last step's: no allocation
   else previous.resize(0, 3);
   const bool tangents = model_.has_tangents();
   out = StepResult();
   const auto t_deform = std::chrono::steady_clock::now();
-  const DeformResult r = apply_step(*fields_, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+  const DeformResult r = apply_step(*tool_->fields, params, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                     tangents ? &a.tangent_v : nullptr, params_.threads);
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
@@ -176,7 +263,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   }
   ++version_;
   touch_rows(r.moved);
-  out.seq = ++steps_;
+  out.seq = ++tool_->steps;
   out.moved = r.moved;
   out.center = r.center;
   // Applies planned splits: the parent row becomes child A, child B is appended with a new id.
@@ -186,7 +273,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     const Eigen::Index k = static_cast<Eigen::Index>(plan.parents.size());
     const Values b_radii = plan.b.radii;
     out.inserted = model_.insert(std::move(plan.b));  // validates child B before anything else changes
-    DeformationFields& f = *fields_;
+    DeformationFields& f = *tool_->fields;
     const Index rows = old_rows + static_cast<Index>(k);
     f.lambda.conservativeResize(rows);
     f.grad_lambda.conservativeResize(rows, 3);
@@ -213,42 +300,65 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
       row_version_.push_back(version_);
       out.moved.push_back(child);
     }
-    if (detector_) detector_->on_inserted(scene_of(model_, f), plan.parents);
+    // Other tools' fields get the children too (Zero to them: the parents are in this tool's lock).
+    for (auto& [id, t] : tools_)
+      if (&t != tool_ && t.fields) extend_fields(*t.fields, plan.parents);
+    if (tool_->detector) tool_->detector->on_inserted(scene_of(model_, f), plan.parents);
   };
   if (resample) {
     const auto t_resample = std::chrono::steady_clock::now();
-    apply_splits(plan_splits(a, r.moved, rest_radius_, settings_.resample));
+    apply_splits(plan_splits(a, r.moved, rest_radius_, tool_->settings.resample));
     out.resample_ms = ms_since(t_resample);
   }
-  if (detector_) {
-    CollisionResult c = detector_->detect(scene_of(model_, *fields_), previous);
+  if (tool_->detector) {
+    CollisionResult c = tool_->detector->detect(scene_of(model_, *tool_->fields), previous);
     out.detected = true;
     out.colliding.reserve(c.colliding.size());
     for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
     out.depths = std::move(c.depths);
     out.stats = c.stats;
-    colliding_ = out.colliding;
+    tool_->colliding = out.colliding;
   }
 }
 
 void EditSession::configure(const std::vector<NamedSetting>& changes, const std::string& author) {
-  const SessionSettings next = apply_settings(settings_, changes);
+  const SessionSettings next = apply_settings(settings_of(author), changes);
+  const Tool* own = find_tool(author);
   std::shared_ptr<CollisionDetector> detector;
-  if (fields_ && !model_.empty()) detector = fresh_detector(next, *fields_);
+  if (own && own->fields && !model_.empty()) detector = fresh_detector(next, *own->fields);
+  use(author);
   SessionImage before = capture_whole(false);
-  settings_ = next;
-  detector_ = std::move(detector);
-  colliding_.clear();
-  if (fields_) take_origins();
+  tool_->settings = next;
+  history_params_ = next.history;
+  tool_->detector = std::move(detector);
+  tool_->colliding.clear();
+  tool_->stale = false;
+  if (tool_->fields) take_origins();
   record("configure", author, {}, std::move(before));
 }
 
-bool EditSession::rebuild_hierarchies() {
-  if (!detector_ || !fields_) return false;
-  return detector_->start_rebuild(scene_of(model_, *fields_));
+bool EditSession::rebuild_hierarchies(const std::string& tool) {
+  Tool* t = tools_.count(tool) ? &tools_.at(tool) : nullptr;
+  // A stale detector is re-initialised at the tool's next step anyway.
+  if (!t || !t->detector || !t->fields || t->stale) return false;
+  return t->detector->start_rebuild(scene_of(model_, *t->fields));
 }
 
-HierarchyInfo EditSession::hierarchy_info() const { return detector_ ? detector_->hierarchy_info() : HierarchyInfo{}; }
+HierarchyInfo EditSession::hierarchy_info(const std::string& tool) const {
+  const Tool* t = find_tool(tool);
+  return t && t->detector ? t->detector->hierarchy_info() : HierarchyInfo{};
+}
+
+bool EditSession::release(const std::string& author) {
+  const Tool* own = find_tool(author);
+  if (!own || !own->fields) return false;
+  use(author);
+  SessionImage before = capture_whole(false);
+  tool_->clear_regions();
+  ++version_;
+  record("release", author, {}, std::move(before));
+  return true;
+}
 
 void EditSession::remove(const IdList& ids, const std::string& author) {
   const SurfelModel& m = model();
@@ -259,16 +369,18 @@ void EditSession::remove(const IdList& ids, const std::string& author) {
   }
   std::vector<bool> keep(static_cast<std::size_t>(m.size()), true);
   for (Index r : rows) keep[r] = false;
+  use(author);
   check_regions_kept(keep, "ids");
+  check_unlocked(&keep, nullptr, "ids");
   SessionImage before = capture_whole(true);
   ++version_;
   remove_rows(ids, keep);
-  if (detector_) detector_->on_removed(keep);
+  if (tool_->detector) tool_->detector->on_removed(keep);
   IdList gone = ids;
   std::sort(gone.begin(), gone.end());
   IdList still;
-  std::set_difference(colliding_.begin(), colliding_.end(), gone.begin(), gone.end(), std::back_inserter(still));
-  colliding_ = std::move(still);
+  std::set_difference(tool_->colliding.begin(), tool_->colliding.end(), gone.begin(), gone.end(), std::back_inserter(still));
+  tool_->colliding = std::move(still);
   record("remove", author, ids, std::move(before));
 }
 
@@ -283,22 +395,8 @@ void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) 
       if (keep[static_cast<std::size_t>(i)]) rest_radius_[j++] = rest_radius_[i];
     rest_radius_.conservativeResize(j);
   }
-  if (fields_) {
-    DeformationFields& f = *fields_;
-    Eigen::Index j = 0;
-    for (Eigen::Index i = 0; i < f.lambda.size(); ++i) {
-      if (!keep[static_cast<std::size_t>(i)]) continue;
-      f.lambda[j] = f.lambda[i];
-      f.grad_lambda.row(j) = f.grad_lambda.row(i);
-      ++j;
-    }
-    f.lambda.conservativeResize(j);
-    f.grad_lambda.conservativeResize(j, 3);
-    compact(f.regions, keep);
-    f.deformable.clear();
-    for (std::size_t r = 0; r < f.regions.size(); ++r)
-      if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
-  }
+  for (auto& [id, t] : tools_)
+    if (t.fields) compact_fields(*t.fields, keep);
 }
 
 std::shared_ptr<CollisionDetector> EditSession::fresh_detector(const SessionSettings& settings,
@@ -309,15 +407,18 @@ std::shared_ptr<CollisionDetector> EditSession::fresh_detector(const SessionSett
 }
 
 void EditSession::check_regions_kept(const std::vector<bool>& keep, const char* field) const {
-  if (!fields_) return;
-  std::size_t zero_left = 0, one_left = 0;
-  for (std::size_t r = 0; r < keep.size(); ++r) {
-    if (!keep[r]) continue;
-    zero_left += fields_->regions[r] == Region::Zero;
-    one_left += fields_->regions[r] == Region::One;
+  for (const auto& [id, t] : tools_) {
+    if (!t.fields) continue;
+    std::size_t zero_left = 0, one_left = 0;
+    for (std::size_t r = 0; r < keep.size(); ++r) {
+      if (!keep[r]) continue;
+      zero_left += t.fields->regions[r] == Region::Zero;
+      one_left += t.fields->regions[r] == Region::One;
+    }
+    const std::string whose = &t == tool_ ? "" : " of client '" + id + "'";
+    if (zero_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the zero region" + whose + " empty");
+    if (one_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the one region" + whose + " empty");
   }
-  if (zero_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the zero region empty");
-  if (one_left == 0) throw Error(ErrorCode::Conflict, field, "the removal would leave the one region empty");
 }
 
 void EditSession::touch_rows(const IndexList& rows) {
@@ -344,13 +445,16 @@ SessionReport EditSession::report() const {
   rep.structures.push_back({"model", model_.memory_bytes()});
   rep.structures.push_back({"versions", row_version_.size() * sizeof(std::uint64_t) +
                                             removed_log_.size() * sizeof(removed_log_[0])});
-  if (fields_) rep.structures.push_back({"deformation_fields", fields_->memory_bytes()});
-  if (detector_) {
-    for (auto& [name, bytes] : detector_->structures()) rep.structures.push_back({name, bytes});
-    rep.hierarchy_status = detector_->hierarchy_info().status;
-  }
-  if (previous_.size() > 0) {
-    rep.structures.push_back({"step_scratch", static_cast<std::size_t>(previous_.size()) * sizeof(double)});
+  // Every tool's (one entry per structure and tool; a single tool lists exactly what a session without tools did).
+  for (const auto& [id, t] : tools_) {
+    if (t.fields) rep.structures.push_back({"deformation_fields", t.fields->memory_bytes()});
+    if (t.detector) {
+      for (auto& [name, bytes] : t.detector->structures()) rep.structures.push_back({name, bytes});
+      if (rep.hierarchy_status.empty()) rep.hierarchy_status = t.detector->hierarchy_info().status;
+    }
+    if (t.previous.size() > 0) {
+      rep.structures.push_back({"step_scratch", static_cast<std::size_t>(t.previous.size()) * sizeof(double)});
+    }
   }
   if (rest_radius_.size() > 0) {
     rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});

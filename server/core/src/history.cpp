@@ -24,17 +24,22 @@ std::size_t SessionImage::bytes() const {
   }
   if (whole) {
     b += whole->model.memory_bytes() + whole->row_version.capacity() * sizeof(std::uint64_t) +
-         array_bytes(whole->rest_radius) + (whole->fields ? whole->fields->memory_bytes() : 0) +
-         (whole->detector ? whole->detector->memory_bytes() : 0);
+         array_bytes(whole->rest_radius);
+    for (const auto& [id, t] : whole->tools) b += id.capacity() + t.bytes();
   }
   return b;
 }
 
 void History::push(HistoryEntry entry, std::size_t limit_bytes) {
-  for (std::size_t k = applied_; k < entries_.size(); ++k) keep_spare(entries_[k]);
-  entries_.resize(applied_);
+  std::deque<HistoryEntry> kept;
+  for (HistoryEntry& e : entries_) {
+    if (e.item.undone && e.item.author == entry.item.author) keep_spare(e);
+    else kept.push_back(std::move(e));
+  }
+  entries_ = std::move(kept);
+  entry.item.undone = false;
+  entry.stamp = entry.applied_at = entry.item.version;
   entries_.push_back(std::move(entry));
-  applied_ = entries_.size();
   recount();  // the dropped redo tail
   HistoryEntry& e = entries_.back();
   e.bytes = e.image.bytes();
@@ -44,20 +49,55 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
 
 void History::trim(std::size_t limit_bytes) {
   while (!entries_.empty() && bytes_ > limit_bytes) {
-    if (applied_ == 0) {  // only a redo tail is left: its entries need the ones before them
-      clear();
-      return;
+    HistoryEntry& front = entries_.front();
+    if (front.item.undone) {
+      // Its author's later undone entries are redone after it: they cannot be redone without it.
+      const std::string author = front.item.author;
+      std::deque<HistoryEntry> kept;
+      for (HistoryEntry& e : entries_) {
+        if (e.item.undone && e.item.author == author) keep_spare(e);
+        else kept.push_back(std::move(e));
+      }
+      entries_ = std::move(kept);
+      recount();
+      continue;
     }
-    bytes_ -= entries_.front().bytes;
-    keep_spare(entries_.front());
+    bytes_ -= front.bytes;
+    keep_spare(front);
     entries_.pop_front();
-    if (applied_ > 0) --applied_;
   }
 }
 
-HistoryEntry* History::undo_target() { return applied_ > 0 ? &entries_[applied_ - 1] : nullptr; }
+HistoryEntry* History::undo_target(const std::string& author) {
+  for (auto it = entries_.rbegin(); it != entries_.rend(); ++it)
+    if (!it->item.undone && it->item.author == author) return &*it;
+  return nullptr;
+}
 
-HistoryEntry* History::redo_target() { return applied_ < entries_.size() ? &entries_[applied_] : nullptr; }
+HistoryEntry* History::redo_target(const std::string& author) {
+  for (HistoryEntry& e : entries_)
+    if (e.item.undone && e.item.author == author) return &e;
+  return nullptr;
+}
+
+HistoryEntry* History::last_applied() {
+  for (auto it = entries_.rbegin(); it != entries_.rend(); ++it)
+    if (!it->item.undone) return &*it;
+  return nullptr;
+}
+
+HistoryEntry* History::last_undone() {
+  HistoryEntry* best = nullptr;
+  for (HistoryEntry& e : entries_)
+    if (e.item.undone && (!best || e.stamp > best->stamp)) best = &e;
+  return best;
+}
+
+void History::set_undone(HistoryEntry& entry, bool undone, std::uint64_t stamp) {
+  entry.item.undone = undone;
+  entry.stamp = stamp;
+  if (!undone) entry.applied_at = stamp;
+}
 
 void History::keep_spare(HistoryEntry& entry) {
   if (entry.image.rows && spare_.size() < 2) spare_.push_back(std::move(*entry.image.rows));
@@ -72,17 +112,13 @@ RowsImage History::take_spare() {
 
 void History::clear() {
   entries_.clear();
-  applied_ = 0;
   bytes_ = 0;
 }
 
 std::vector<HistoryItem> History::items() const {
   std::vector<HistoryItem> out;
   out.reserve(entries_.size());
-  for (std::size_t k = 0; k < entries_.size(); ++k) {
-    out.push_back(entries_[k].item);
-    out.back().undone = k >= applied_;
-  }
+  for (const HistoryEntry& e : entries_) out.push_back(e.item);
   return out;
 }
 

@@ -62,47 +62,39 @@ IdList still_there(const SurfelModel& model, const IdList& ids) {
 
 }  // namespace
 
-void EditSession::extend_any(const IndexList& parents) {
-  if (fields_) return extend_rows(parents);
-  const Index rows = model_.size();
-  if (rest_radius_.size() > 0) {
-    const Index first = rows - static_cast<Index>(parents.size());
-    rest_radius_.conservativeResize(rows);
-    for (std::size_t k = 0; k < parents.size(); ++k) rest_radius_[first + static_cast<Index>(k)] = rest_radius_[parents[k]];
-  }
-  row_version_.resize(static_cast<std::size_t>(rows), version_);
-}
+void EditSession::extend_any(const IndexList& parents) { extend_rows(parents); }
 
 BlendOutcome EditSession::blend(const BlendParams& requested, const std::optional<IdList>& features,
                                 const std::string& author) {
   const auto start = std::chrono::steady_clock::now();
   const SurfelModel& m = model();
+  use(author);
   BlendParams params = requested;
-  params.neighbour_factor = settings_.blend.neighbour_factor;
-  params.gamma = settings_.blend.gamma;
+  params.neighbour_factor = tool_->settings.blend.neighbour_factor;
+  params.gamma = tool_->settings.blend.gamma;
   params.threads = params_.threads;
-  if (merge_.open_region && !features) {
-    params.spring_r0 = settings_.blend.spring_r0;
-    if (settings_.blend.open_region == OpenRegionForce::Spring) params.repulsion = RepulsionKind::Spring;
-    if (settings_.blend.open_region == OpenRegionForce::None) params.repulsion = RepulsionKind::None;
+  if (tool_->merge.open_region && !features) {
+    params.spring_r0 = tool_->settings.blend.spring_r0;
+    if (tool_->settings.blend.open_region == OpenRegionForce::Spring) params.repulsion = RepulsionKind::Spring;
+    if (tool_->settings.blend.open_region == OpenRegionForce::None) params.repulsion = RepulsionKind::None;
   }
   validate(params);
   if (features && features->empty()) throw Error(ErrorCode::InvalidArgument, "features", "features is empty");
-  if (!features && merge_.features.empty())
+  if (!features && tool_->merge.features.empty())
     throw Error(ErrorCode::Conflict, "features",
                 "no merge or boolean with feature surfels in session '" + name_ + "' yet: pass features=ids");
-  const IdList& seed_ids = features ? *features : merge_.features;
+  const IdList& seed_ids = features ? *features : tool_->merge.features;
   const IndexList seed_rows = m.rows_of(seed_ids, "features");
   const BlendRegion region = blend_region(m, seed_rows, params.range_factor);
 
   // Undo the crease in the region (§12.3.1): moved surfels back, copies out (not particles).
   std::vector<Index> crease_from_row(static_cast<std::size_t>(m.size()), -1);
-  for (std::size_t k = 0; k < merge_.crease_moved.size(); ++k) {
-    const Index r = m.row_of(merge_.crease_moved[k]);
+  for (std::size_t k = 0; k < tool_->merge.crease_moved.size(); ++k) {
+    const Index r = m.row_of(tool_->merge.crease_moved[k]);
     if (r >= 0) crease_from_row[r] = static_cast<Index>(k);
   }
   std::vector<bool> is_copy(static_cast<std::size_t>(m.size()), false);
-  for (SurfelId id : merge_.crease_copies)
+  for (SurfelId id : tool_->merge.crease_copies)
     if (m.row_of(id) >= 0) is_copy[m.row_of(id)] = true;
   IndexList rows;  // the particles' rows
   IdList removed;
@@ -113,7 +105,7 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   Points x(static_cast<Eigen::Index>(rows.size()), 3), n(x.rows(), 3);
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const Index r = rows[k], c = crease_from_row[r];
-    if (c >= 0) x.row(static_cast<Eigen::Index>(k)) = merge_.crease_from.row(c);
+    if (c >= 0) x.row(static_cast<Eigen::Index>(k)) = tool_->merge.crease_from.row(c);
     else x.row(static_cast<Eigen::Index>(k)) = m.positions().row(r);
     n.row(static_cast<Eigen::Index>(k)) = m.normals().row(r);
   }
@@ -151,6 +143,11 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   std::vector<bool> keep(static_cast<std::size_t>(m.size()), true);
   for (Index r : m.rows_of(removed, "removed")) keep[r] = false;
   check_regions_kept(keep, "blend");
+  {
+    IndexList changed = rows;  // the particles move; split-off ones copy their surfel
+    changed.insert(changed.end(), parents.begin(), parents.end());
+    check_unlocked(&keep, &changed, "blend");
+  }
   Points sp(static_cast<Eigen::Index>(split_particles.size()), 3), sn(sp.rows(), 3);
   Values sr(sp.rows());
   for (std::size_t k = 0; k < split_particles.size(); ++k) {
@@ -193,25 +190,25 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   for (Index r : parents) parent_rows.push_back(new_row[r]);
   extend_any(parent_rows);
   out.removed = removed;
-  if (fields_) {
-    detector_ = fresh_detector(settings_, *fields_);
+  if (tool_->fields) {
+    tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
     take_origins();
   }
-  colliding_.clear();
+  tool_->colliding.clear();
   // The crease is undone where the blend ran; the features stay (a second call continues the blend).
   IdList moved_left, copies_left;
   Points from_left(0, 3);
-  for (std::size_t k = 0; k < merge_.crease_moved.size(); ++k) {
-    const Index r = model_.row_of(merge_.crease_moved[k]);
-    if (r < 0 || std::binary_search(blended.begin(), blended.end(), merge_.crease_moved[k])) continue;
-    moved_left.push_back(merge_.crease_moved[k]);
+  for (std::size_t k = 0; k < tool_->merge.crease_moved.size(); ++k) {
+    const Index r = model_.row_of(tool_->merge.crease_moved[k]);
+    if (r < 0 || std::binary_search(blended.begin(), blended.end(), tool_->merge.crease_moved[k])) continue;
+    moved_left.push_back(tool_->merge.crease_moved[k]);
     from_left.conservativeResize(from_left.rows() + 1, 3);
-    from_left.row(from_left.rows() - 1) = merge_.crease_from.row(static_cast<Eigen::Index>(k));
+    from_left.row(from_left.rows() - 1) = tool_->merge.crease_from.row(static_cast<Eigen::Index>(k));
   }
-  merge_.crease_moved = moved_left;
-  merge_.crease_from = from_left;
-  merge_.crease_copies = still_there(model_, merge_.crease_copies);
-  merge_.features = still_there(model_, merge_.features);
+  tool_->merge.crease_moved = moved_left;
+  tool_->merge.crease_from = from_left;
+  tool_->merge.crease_copies = still_there(model_, tool_->merge.crease_copies);
+  tool_->merge.features = still_there(model_, tool_->merge.features);
   IdList touched = out.moved;
   touched.insert(touched.end(), out.inserted.begin(), out.inserted.end());
   touched.insert(touched.end(), out.removed.begin(), out.removed.end());
@@ -274,11 +271,10 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   for (Index r : c.features_a) features_a.push_back(m.ids()[r]);
 
   // Apply: B's surfels appended, A's dropped ones removed, regions cleared.
+  use(author);
   SessionImage before = capture_whole(false);
   ++version_;
-  fields_.reset();
-  detector_.reset();
-  colliding_.clear();
+  for (auto& [id, t] : tools_) t.clear_regions();  // the model's shape changed as by a load
   rest_radius_ = Values();
   out.inserted = nb > 0 ? model_.insert(std::move(added)) : IdList{};
   row_version_.resize(static_cast<std::size_t>(model_.size()), version_);
@@ -289,9 +285,9 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   for (std::size_t k = 0; k < b_rows.size(); ++k) b_new[b_rows[k]] = static_cast<Index>(k);
   for (Index r : c.features_b) out.features.push_back(out.inserted[b_new[r]]);
   std::sort(out.features.begin(), out.features.end());
-  merge_ = MergeMemo();
-  merge_.features = out.features;
-  merge_.open_region = true;
+  tool_->merge = MergeMemo();
+  tool_->merge.features = out.features;
+  tool_->merge.open_region = true;
   IdList touched = out.removed;
   touched.insert(touched.end(), out.inserted.begin(), out.inserted.end());
   record("boolean", author, std::move(touched), std::move(before));
@@ -341,15 +337,17 @@ FillOutcome EditSession::fill_holes(const HoleParams& requested, const std::opti
   }
   SurfelArrays added = new_surfels(m, pos, nrm, rad, parents);
   validate_arrays(added, m.has_tangents(), m.has_colors());
+  use(author);
+  check_unlocked(nullptr, &parents, "boundary");
   SessionImage before = capture_whole(false);
   ++version_;
   out.inserted = model_.insert(std::move(added));
   extend_any(parents);
-  if (fields_) {
-    detector_ = fresh_detector(settings_, *fields_);
+  if (tool_->fields) {
+    tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
     take_origins();
   }
-  colliding_.clear();
+  tool_->colliding.clear();
   std::size_t at = 0;
   for (std::size_t k = 0; k < out.holes.size(); ++k) {
     out.holes[k].inserted.assign(out.inserted.begin() + at, out.inserted.begin() + at + count[k]);

@@ -44,8 +44,8 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
   SessionImage image;
   RowsImage r = history_.take_spare();
   // The row list is shared while it does not change (the deformable rows, step after step).
-  if (!shared_rows_ || *shared_rows_ != rows) shared_rows_ = std::make_shared<const IndexList>(rows);
-  r.rows = shared_rows_;
+  if (!tool_->shared_rows || *tool_->shared_rows != rows) tool_->shared_rows = std::make_shared<const IndexList>(rows);
+  r.rows = tool_->shared_rows;
   const SurfelArrays& a = model_.arrays();
   take_rows(a.positions, rows, r.positions);
   take_rows(a.normals, rows, r.normals);
@@ -58,12 +58,15 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
     else r.version_runs.emplace_back(v, 1u);
   }
   image.rows = std::move(r);
-  if (detector_ && detector) {
-    image.detector = detector_->save_image(subset ? &rows : nullptr);
+  image.tool = tool_id_;
+  image.detector_object = tool_->detector;
+  image.stale = tool_->stale;
+  if (tool_->detector && detector) {
+    image.detector = tool_->detector->save_image(subset ? &rows : nullptr);
     image.complete = image.detector != nullptr;
   }
-  image.colliding = colliding_;
-  image.steps = steps_;
+  image.colliding = tool_->colliding;
+  image.steps = tool_->steps;
   return image;
 }
 
@@ -80,43 +83,46 @@ SessionImage EditSession::whole_before_step(const SessionImage& before) const {
   w.model_version = model_version_;
   w.row_version = row_version_;
   put_versions(w.row_version, *r.rows, r.version_runs);
-  if (fields_) w.fields = *fields_;
-  w.settings = settings_;
   w.rest_radius = rest_radius_;
-  w.merge = merge_;
-  w.detector = detector_;  // the caller puts its state back once it is no longer the live one
+  w.history = history_params_;
+  for (const auto& [id, t] : tools_) w.tools.emplace(id, t.image(false));
+  // The acting tool's detector is the live one: the caller puts its state back once it is no longer live.
+  ToolImage& own = w.tools.at(tool_id_);
+  own.colliding = before.colliding;
+  own.steps = before.steps;
+  own.stale = before.stale;
   image.whole = std::move(w);
-  image.colliding = before.colliding;
-  image.steps = before.steps;
+  image.tool = tool_id_;
   return image;
 }
 
 std::shared_ptr<const DetectorImage> EditSession::step_detector_image(const SessionImage& before) const {
-  return journaling_ ? detector_->journal_image() : before.detector;
+  return tool_->journaling ? tool_->detector->journal_image() : before.detector;
 }
 
-SessionImage EditSession::capture_whole(bool clone) const {
+SessionImage EditSession::capture_whole(bool clone) {
   SessionImage image;
   WholeImage w;
   w.model = model_;
   w.model_version = model_version_;
   w.row_version = row_version_;
-  if (fields_) w.fields = *fields_;
-  w.settings = settings_;
   w.rest_radius = rest_radius_;
-  w.merge = merge_;
-  if (detector_) {
-    w.detector = clone ? std::shared_ptr<CollisionDetector>(detector_->clone()) : detector_;
-    image.complete = w.detector != nullptr;
+  w.history = history_params_;
+  // Only the acting tool's detector may change in place during the op (others are never changed by it).
+  for (const auto& [id, t] : tools_) w.tools.emplace(id, t.image(false));
+  if (clone && tool_->detector) {
+    std::shared_ptr<CollisionDetector> copy(tool_->detector->clone());
+    image.complete = copy != nullptr;
+    if (copy) tool_->detector = std::move(copy);
   }
   image.whole = std::move(w);
-  image.colliding = colliding_;
-  image.steps = steps_;
+  image.tool = tool_id_;
   return image;
 }
 
 void EditSession::restore(const SessionImage& image, bool clone) {
   if (!image.complete) throw Error(ErrorCode::Internal, "history", "the image holds no detector state");
+  Tool& t = use(image.tool);
   if (image.rows) {
     const RowsImage& r = *image.rows;
     SurfelArrays& a = model_.arrays();
@@ -125,27 +131,28 @@ void EditSession::restore(const SessionImage& image, bool clone) {
     put_rows(a.tangent_u, *r.rows, r.tangent_u);
     put_rows(a.tangent_v, *r.rows, r.tangent_v);
     put_versions(row_version_, *r.rows, r.version_runs);
+    // The detector object the states belong to (the tool may have re-initialised its detector since).
+    t.detector = image.detector_object;
+    t.stale = image.stale;
     // A step's image without detector states while the journal runs: the journal holds them.
-    if (image.detector) detector_->restore_image(*image.detector);
-    else if (detector_ && journaling_) detector_->restore_journal();
+    if (image.detector) t.detector->restore_image(*image.detector);
+    else if (t.detector && t.journaling) t.detector->restore_journal();
+    t.colliding = image.colliding;
+    t.steps = image.steps;
   } else {
     const WholeImage& w = *image.whole;
     model_ = w.model;
     model_version_ = w.model_version;
     row_version_ = w.row_version;
-    if (w.fields) fields_ = std::make_unique<DeformationFields>(*w.fields);
-    else fields_.reset();
-    settings_ = w.settings;
     rest_radius_ = w.rest_radius;
-    merge_ = w.merge;
-    detector_ = clone && w.detector ? std::shared_ptr<CollisionDetector>(w.detector->clone()) : w.detector;
+    history_params_ = w.history;
+    // Tools made after the image (by use()) hold nothing the image's op could have seen: kept as they are.
+    for (const auto& [id, ti] : w.tools) tools_[id].restore(ti, clone && id == image.tool);
   }
-  colliding_ = image.colliding;
-  steps_ = image.steps;
 }
 
 std::size_t EditSession::history_limit() const {
-  return static_cast<std::size_t>(settings_.history.history_mb * 1024.0 * 1024.0);
+  return static_cast<std::size_t>(history_params_.history_mb * 1024.0 * 1024.0);
 }
 
 void EditSession::record(const char* op, const std::string& author, IdList touched, SessionImage before) {
@@ -154,6 +161,7 @@ void EditSession::record(const char* op, const std::string& author, IdList touch
   HistoryEntry e;
   e.item = {version_, op, author, std::move(touched), false};
   e.image = std::move(before);
+  if (!e.item.touched.empty()) mark_others_stale();
   history_.push(std::move(e), history_limit());
 }
 
@@ -163,9 +171,12 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
                 std::string("cannot ") + what + " '" + entry.item.op +
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
+  use(entry.image.tool);
   SessionImage now = entry.image.rows ? capture_rows(*entry.image.rows->rows) : capture_whole(false);
   const IdList ids_before = model_.ids();
   restore(entry.image, false);
+  // A step's rows moved under the other tools' detectors (a whole image puts every tool back as it was).
+  if (entry.image.rows) mark_others_stale();
   history_.replace_image(entry, std::move(now));
   // The restored rows count as changed now; ids that went away are logged as removed.
   ++version_;
@@ -179,20 +190,119 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   return version_;
 }
 
-std::uint64_t EditSession::undo() {
-  HistoryEntry* e = history_.undo_target();
-  if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to undo in session '" + name_ + "'");
-  const std::uint64_t v = swap_entry(*e, "undo");
-  history_.undone();
+namespace {
+
+bool meet(const IdList& a, const IdList& b) {  // both ascending
+  auto i = a.begin(), j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (*i == *j) return true;
+    if (*i < *j) ++i;
+    else ++j;
+  }
+  return false;
+}
+
+// An entry whose op inserted or removed surfels (a whole image with touched surfels): rows renumbered.
+bool renumbers(const HistoryEntry& e) { return e.image.whole && !e.item.touched.empty(); }
+
+// Whether another author's entry `o` is in effect now and was not at `e`'s last swap, or the other way
+// round: applied or redone since, or in effect then and undone since. (Applied and undone again since
+// leaves the surfels as they were; an undo is exact on what it touched.)
+bool changed_since(const HistoryEntry& o, const HistoryEntry& e) {
+  if (&o == &e || o.item.author == e.item.author || o.stamp <= e.stamp) return false;
+  return !o.item.undone || o.applied_at < e.stamp;
+}
+
+}  // namespace
+
+std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
+  const char* what = undo ? "undo" : "redo";
+  const auto& entries = history_.entries();
+  // Whole: no other author's entry changed state since this one's last swap (changed_since), so the
+  // session is exactly as it left it but for the author's own later entries, all undone (last in, first
+  // out per author). A single author's history is always this case, and so is undo() in strict global
+  // order.
+  bool whole = true;
+  for (const HistoryEntry& o : entries)
+    if (changed_since(o, e)) whole = false;
+  if (!whole) {
+    for (const HistoryEntry& o : entries) {
+      if (!changed_since(o, e)) continue;
+      const bool hit = renumbers(o) || renumbers(e) || meet(o.item.touched, e.item.touched);
+      if (!hit) continue;
+      std::string why = renumbers(e) ? "it inserted or removed surfels and cannot come back alone"
+                        : renumbers(o) ? "that op inserted or removed surfels since"
+                                       : "that op changed surfels it changed since";
+      throw Error(ErrorCode::Conflict, "history",
+                  std::string("cannot ") + what + " '" + e.item.op + "' (version " + std::to_string(e.item.version) +
+                      ") of client '" + e.item.author + "': client '" + o.item.author + "' " +
+                      (o.item.undone ? "undid" : "applied") + " '" + o.item.op + "' (version " +
+                      std::to_string(o.item.version) + ") after it; " + why);
+    }
+  }
+  if (!e.image.complete) {
+    throw Error(ErrorCode::Conflict, "history",
+                std::string("cannot ") + what + " '" + e.item.op +
+                    "': its detector state was not saved (hierarchies and approximate detection keep no history)");
+  }
+  std::uint64_t v = 0;
+  if (whole || e.image.rows) {
+    v = swap_entry(e, what);
+    // Its tool's detector saw the rows other tools moved since as they were then.
+    if (!whole) tools_.at(e.image.tool).stale = true;
+  } else {
+    // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
+    const ToolImage& t = e.image.whole->tools.at(e.image.tool);
+    if (t.fields && t.fields->regions.size() != static_cast<std::size_t>(model_.size()))
+      throw Error(ErrorCode::Internal, "history", "the tool image does not fit the model");
+    for (const auto& [id, other] : tools_) {
+      if (id == e.image.tool || !other.fields || !t.fields) continue;
+      const std::size_t overlap = lock_overlap(t.fields->regions, other.fields->regions);
+      if (overlap > 0) {
+        throw Error(ErrorCode::Conflict, "history",
+                    std::string("cannot ") + what + " '" + e.item.op + "' of client '" + e.item.author + "': " +
+                        std::to_string(overlap) + " surfel(s) of its regions are in the lock of client '" + id + "'");
+      }
+    }
+    use(e.image.tool);
+    SessionImage now = capture_whole(false);
+    tool_->restore(t, false);
+    tool_->stale = true;
+    history_.replace_image(e, std::move(now));
+    v = ++version_;
+  }
+  history_.set_undone(e, undo, v);
   return v;
 }
 
+std::uint64_t EditSession::undo() {
+  HistoryEntry* e = history_.last_applied();
+  if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to undo in session '" + name_ + "'");
+  return swap_own(*e, true);
+}
+
 std::uint64_t EditSession::redo() {
-  HistoryEntry* e = history_.redo_target();
+  HistoryEntry* e = history_.last_undone();
   if (!e) throw Error(ErrorCode::Conflict, "history", "nothing to redo in session '" + name_ + "'");
-  const std::uint64_t v = swap_entry(*e, "redo");
-  history_.redone();
-  return v;
+  return swap_own(*e, false);
+}
+
+std::uint64_t EditSession::undo(const std::string& author) {
+  HistoryEntry* e = history_.undo_target(author);
+  if (!e) {
+    throw Error(ErrorCode::Conflict, "history",
+                "nothing of client '" + author + "' to undo in session '" + name_ + "'");
+  }
+  return swap_own(*e, true);
+}
+
+std::uint64_t EditSession::redo(const std::string& author) {
+  HistoryEntry* e = history_.redo_target(author);
+  if (!e) {
+    throw Error(ErrorCode::Conflict, "history",
+                "nothing of client '" + author + "' to redo in session '" + name_ + "'");
+  }
+  return swap_own(*e, false);
 }
 
 }  // namespace surfeledit

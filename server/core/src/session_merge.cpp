@@ -22,31 +22,27 @@ Points gather(const Points& a, const IndexList& rows) {
 }  // namespace
 
 void EditSession::take_origins() {
-  merge_.origin_positions = gather(model_.positions(), fields_->deformable);
-  merge_.origin_normals = gather(model_.normals(), fields_->deformable);
+  tool_->merge.origin_positions = gather(model_.positions(), tool_->fields->deformable);
+  tool_->merge.origin_normals = gather(model_.normals(), tool_->fields->deformable);
 }
 
-void EditSession::extend_rows(const IndexList& parents) {
+void EditSession::extend_rows(const IndexList& parents, bool skip_acting) {
   const Index rows = model_.size();
   const Index first = rows - static_cast<Index>(parents.size());
-  DeformationFields& f = *fields_;
-  f.lambda.conservativeResize(rows);
-  f.grad_lambda.conservativeResize(rows, 3);
-  if (rest_radius_.size() > 0) rest_radius_.conservativeResize(rows);
-  for (std::size_t k = 0; k < parents.size(); ++k) {
-    const Index parent = parents[k], child = first + static_cast<Index>(k);
-    f.regions.push_back(f.regions[parent]);
-    f.lambda[child] = f.lambda[parent];
-    f.grad_lambda.row(child) = f.grad_lambda.row(parent);
-    if (f.regions[parent] != Region::Zero) f.deformable.push_back(child);
-    if (rest_radius_.size() > 0) rest_radius_[child] = rest_radius_[parent];
-    row_version_.push_back(version_);
+  for (auto& [id, t] : tools_)
+    if (t.fields && !(skip_acting && &t == tool_)) extend_fields(*t.fields, parents);
+  if (rest_radius_.size() > 0) {
+    rest_radius_.conservativeResize(rows);
+    for (std::size_t k = 0; k < parents.size(); ++k) rest_radius_[first + static_cast<Index>(k)] = rest_radius_[parents[k]];
   }
+  row_version_.resize(static_cast<std::size_t>(rows), version_);
 }
 
 MergeOutcome EditSession::merge(bool crease, const std::string& author) {
   model();  // throws without a model
-  if (!fields_) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before merging");
+  const Tool* own = find_tool(author);
+  if (!own || !own->fields) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before merging");
+  use(author);
   const std::uint64_t version_before = version_;
   // The detector is replaced (reset from the merged model): the live one can be the image's.
   SessionImage before = capture_whole(false);
@@ -62,11 +58,11 @@ MergeOutcome EditSession::merge(bool crease, const std::string& author) {
 MergeOutcome EditSession::merge_now(bool crease_on) {
   const auto start = std::chrono::steady_clock::now();
   MergeOutcome out;
-  if (colliding_.empty()) return out;
+  if (tool_->colliding.empty()) return out;
   // Everything is computed and validated on the model as it is; only then does the session change.
   auto t = std::chrono::steady_clock::now();
-  const MergeResult m = merge_regions(model_, fields_->regions, merge_.origin_positions, merge_.origin_normals,
-                                      colliding_);
+  const MergeResult m = merge_regions(model_, tool_->fields->regions, tool_->merge.origin_positions, tool_->merge.origin_normals,
+                                      tool_->colliding);
   out.merge_ms = ms_since(t);
   std::vector<bool> keep(static_cast<std::size_t>(model_.size()), true);
   for (Index r : model_.rows_of(m.removed, "removed")) keep[r] = false;
@@ -74,6 +70,13 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   t = std::chrono::steady_clock::now();
   CreaseResult c;
   if (crease_on) c = crease(model_, m.features_deformable, m.features_zero);
+  {
+    // Nothing another tool's lock holds is removed, moved by the crease or copied.
+    IndexList changed = model_.rows_of(c.moved, "moved");
+    const IndexList copied = model_.rows_of(c.inserted_parents, "inserted_parents");
+    changed.insert(changed.end(), copied.begin(), copied.end());
+    check_unlocked(&keep, &changed, "merge");
+  }
   Points crease_from(static_cast<Eigen::Index>(c.moved.size()), 3);
   for (std::size_t k = 0; k < c.moved.size(); ++k)
     crease_from.row(static_cast<Eigen::Index>(k)) = model_.positions().row(model_.row_of(c.moved[k]));
@@ -88,31 +91,32 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   extend_rows(parents);
   touch_rows(model_.rows_of(c.moved, "moved"));
   out.crease_ms = ms_since(t);
-  detector_ = fresh_detector(settings_, *fields_);
+  tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
   take_origins();
-  colliding_.clear();
-  merge_.crease_positions = c.positions;
-  merge_.features = out.features;
-  merge_.crease_moved = c.moved;
-  merge_.crease_from = std::move(crease_from);
-  merge_.crease_copies = out.inserted;
-  merge_.open_region = false;
-  merge_.crease_radii.resize(static_cast<Eigen::Index>(c.moved.size()));
+  tool_->colliding.clear();
+  tool_->merge.crease_positions = c.positions;
+  tool_->merge.features = out.features;
+  tool_->merge.crease_moved = c.moved;
+  tool_->merge.crease_from = std::move(crease_from);
+  tool_->merge.crease_copies = out.inserted;
+  tool_->merge.open_region = false;
+  tool_->merge.crease_radii.resize(static_cast<Eigen::Index>(c.moved.size()));
   const IndexList moved_rows = model_.rows_of(c.moved, "moved");
   for (std::size_t k = 0; k < moved_rows.size(); ++k)
-    merge_.crease_radii[static_cast<Eigen::Index>(k)] = model_.radii()[moved_rows[k]];
+    tool_->merge.crease_radii[static_cast<Eigen::Index>(k)] = model_.radii()[moved_rows[k]];
   t = std::chrono::steady_clock::now();
-  if (merge_.crease_positions.rows() > 0) out.curves = intersection_curves();
+  if (tool_->merge.crease_positions.rows() > 0) out.curves = intersection_curves({}, tool_id_);
   out.curves_ms = ms_since(t);
   out.total_ms = ms_since(start);
   return out;
 }
 
-std::vector<Curve> EditSession::intersection_curves(const CurveParams& params) const {
+std::vector<Curve> EditSession::intersection_curves(const CurveParams& params, const std::string& tool) const {
   validate(params);
-  if (merge_.crease_positions.rows() == 0)
+  const Tool* t = find_tool(tool);
+  if (!t || t->merge.crease_positions.rows() == 0)
     throw Error(ErrorCode::Conflict, "merge", "no merge with a crease in session '" + name_ + "' yet");
-  return surfeledit::intersection_curves(merge_.crease_positions, merge_.crease_radii, params);
+  return surfeledit::intersection_curves(t->merge.crease_positions, t->merge.crease_radii, params);
 }
 
 }  // namespace surfeledit

@@ -29,7 +29,7 @@ double largest_move(const RowsImage& before, const Points& now) {
 void EditSession::respond(const DeformParams& params, SessionImage& before, std::uint64_t version_before,
                           StepResult& out) {
   if (!out.detected || out.colliding.empty()) return;  // response "none"
-  const ResponseParams& rp = settings_.response;
+  const ResponseParams& rp = tool_->settings.response;
   if (rp.mode == Response::Report) {
     out.response = "reported";
     return;
@@ -47,7 +47,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     // image; the detector after the step is replaced by the merge and becomes the image's once its
     // states before the step are back. A refused merge takes the step back.
     SessionImage whole = before.rows ? whole_before_step(before) : SessionImage();
-    const std::shared_ptr<const DetectorImage> states = before.rows && detector_ ? step_detector_image(before) : nullptr;
+    const std::shared_ptr<const DetectorImage> states = before.rows && tool_->detector ? step_detector_image(before) : nullptr;
     MergeOutcome m;
     try {
       m = merge_now(true);
@@ -56,8 +56,9 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
       throw;
     }
     if (before.rows) {
-      if (states) whole.whole->detector->restore_image(*states);
-      if (whole.whole->detector) whole.whole->detector->stop_journal();
+      const std::shared_ptr<CollisionDetector>& d = whole.whole->tools.at(whole.tool).detector;
+      if (states) d->restore_image(*states);
+      if (d) d->stop_journal();
       before = std::move(whole);
     }
     out.features = m.features;
@@ -108,12 +109,12 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
   // positions before it (`previous`); only they move (fraction f) and are tested.
   IndexList rows;
   SessionImage small;
-  const Points& previous = previous_;  // step_once() left the positions before the step there
+  const Points& previous = tool_->previous;  // step_once() left the positions before the step there
   auto prepare = [&] {
     take_back();
     applied = 0.0;
     rows.clear();
-    for (Index r : fields_->deformable)
+    for (Index r : tool_->fields->deformable)
       if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
     small = capture_rows(rows, true);
   };
@@ -124,19 +125,19 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     p.angle = params.angle * f;
     SurfelArrays& a = model_.arrays();
     const bool tangents = model_.has_tangents();
-    std::swap(fields_->deformable, rows);  // apply_step moves fields.deformable only
+    std::swap(tool_->fields->deformable, rows);  // apply_step moves fields.deformable only
     struct SwapBack {
       IndexList& x;
       IndexList& y;
       ~SwapBack() { std::swap(x, y); }
-    } swap_back{fields_->deformable, rows};
-    apply_step(*fields_, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+    } swap_back{tool_->fields->deformable, rows};
+    apply_step(*tool_->fields, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                tangents ? &a.tangent_v : nullptr, 1);
   };
   auto detect_candidates = [&] {
     if (!partial) return;
-    const CollisionResult c = detector_->detect_only(
-        CollisionScene{model_.positions(), model_.normals(), model_.radii(), fields_->regions}, previous, candidate);
+    const CollisionResult c = tool_->detector->detect_only(
+        CollisionScene{model_.positions(), model_.normals(), model_.radii(), tool_->fields->regions}, previous, candidate);
     out.colliding.clear();
     for (Index r : c.colliding) out.colliding.push_back(model_.ids()[r]);
     out.depths = c.depths;
@@ -149,7 +150,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
         if (depth < eps || out.colliding.empty()) return;
         const auto deepest = std::max_element(out.depths.begin(), out.depths.end()) - out.depths.begin();
         const Index row = model_.row_of(out.colliding[static_cast<std::size_t>(deepest)]);
-        const double s = blend_value(params.blend, fields_->lambda[row]);
+        const double s = blend_value(params.blend, tool_->fields->lambda[row]);
         if (s <= 0.0 || t_len <= 0.0) return;
         kept = std::max(0.0, kept - depth / (s * t_len));
       } else {
@@ -172,7 +173,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
   // ball): its state is that of before the step, as a step of the kept fraction would leave it.
   std::vector<std::uint8_t> final_rows;
   const bool quick = partial && !rotation &&
-                     (final_rows = candidate, detector_->journal_tested(final_rows));
+                     (final_rows = candidate, tool_->detector->journal_tested(final_rows));
   auto finish = [&](double f) {
     take_back();
     applied = f;
@@ -180,19 +181,19 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     p.angle = 0.0;
     SurfelArrays& a = model_.arrays();
     const bool tangents = model_.has_tangents();
-    const DeformResult r = apply_step(*fields_, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
+    const DeformResult r = apply_step(*tool_->fields, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
                                       tangents ? &a.tangent_v : nullptr, params_.threads);
     ++version_;
     touch_rows(r.moved);
-    out.seq = ++steps_;
+    out.seq = ++tool_->steps;
     out.moved = r.moved;
-    const CollisionResult c = detector_->detect_only(
-        CollisionScene{model_.positions(), model_.normals(), model_.radii(), fields_->regions}, previous, final_rows);
+    const CollisionResult c = tool_->detector->detect_only(
+        CollisionScene{model_.positions(), model_.normals(), model_.radii(), tool_->fields->regions}, previous, final_rows);
     out.colliding.clear();
     for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
     out.depths = c.depths;
     out.stats = c.stats;
-    colliding_ = out.colliding;
+    tool_->colliding = out.colliding;
     depth = largest(out.depths);
   };
   // Re-testing only the candidates can miss a surfel that did not collide after the whole step but does

@@ -38,7 +38,7 @@ void detach_client(HandlerState& s, const std::string& client, LeaseClock::time_
   s.away[client] = now;  // before the presence updates: they list it as away
   for (const std::string& name : sessions) {
     SessionEntry& entry = *s.sessions.find(name);
-    release_tool(entry, client);
+    release_tool(entry, name, client, updates);
     if (s.sessions.leave(name, client)) {
       entry.orphaned_since = now;
       logger()->info("session '{}' kept for {} ms: its last client {} was detached", name,

@@ -79,7 +79,8 @@ static_assert(static_cast<std::uint32_t>(Op::Blend) == surfeledit_proto_OP_BLEND
 static_assert(static_cast<std::uint32_t>(Op::Boolean) == surfeledit_proto_OP_BOOLEAN, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::FillHoles) == surfeledit_proto_OP_FILL_HOLES, "Op numbers");
 static_assert(static_cast<std::uint32_t>(Op::Peers) == surfeledit_proto_OP_PEERS, "Op numbers");
-static_assert(kOpCount == surfeledit_proto_OP_PEERS + 1, "kOpCount: one past the last proto Op");
+static_assert(static_cast<std::uint32_t>(Op::Release) == surfeledit_proto_OP_RELEASE, "Op numbers");
+static_assert(kOpCount == surfeledit_proto_OP_RELEASE + 1, "kOpCount: one past the last proto Op");
 
 // The one element of an op's argument sequence; InvalidArgument naming the sequence otherwise.
 template <typename Seq>

@@ -72,23 +72,28 @@ void serve_remove(OpContext& c) {
 
 namespace {
 
-// Undo or redo (`cause`): what changed since is published like any change, with the collision state.
-void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(), const char* cause) {
+// Undo or redo (`cause`) of the caller's own last change (issue 11 §3): what changed since is published
+// like any change, with the collision state of the caller's tool.
+void serve_swap(OpContext& c, std::uint64_t (EditSession::*swap)(const std::string&), const char* cause) {
   EditSession& s = *c.entry->session;
   const std::uint64_t before = s.version();
-  (s.*swap)();
+  (s.*swap)(c.command.client_id);
   UpdateEvent event = changes_event(s, c.command.session, before);
   event.cause = cause;
   event.detected = true;
-  event.colliding = s.colliding();
+  event.colliding = s.colliding(c.command.client_id);
   c.updates.push_back(std::move(event));
 }
 
 }  // namespace
 
-void serve_undo(OpContext& c) { serve_swap(c, &EditSession::undo, "undo"); }
+void serve_undo(OpContext& c) {
+  serve_swap(c, static_cast<std::uint64_t (EditSession::*)(const std::string&)>(&EditSession::undo), "undo");
+}
 
-void serve_redo(OpContext& c) { serve_swap(c, &EditSession::redo, "redo"); }
+void serve_redo(OpContext& c) {
+  serve_swap(c, static_cast<std::uint64_t (EditSession::*)(const std::string&)>(&EditSession::redo), "redo");
+}
 
 namespace {
 
@@ -114,7 +119,7 @@ void serve_merge(OpContext& c) {
     UpdateEvent event = changes_event(s, c.command.session, before);
     event.cause = "merge";
     event.detected = true;
-    event.colliding = s.colliding();
+    event.colliding = s.colliding(c.command.client_id);
     c.updates.push_back(std::move(event));
   }
 }
@@ -122,7 +127,7 @@ void serve_merge(OpContext& c) {
 void serve_curves(OpContext& c) {
   CurveParams p;
   p.refine_angle = args_of<CurvesArgs>(c).refine_angle;
-  c.reply.curves = to_reply(prefixed("curves", [&] { return c.entry->session->intersection_curves(p); }));
+  c.reply.curves = to_reply(prefixed("curves", [&] { return c.entry->session->intersection_curves(p, c.command.client_id); }));
 }
 
 void serve_history(OpContext& c) {

@@ -43,6 +43,7 @@ std::array<OpEntry, kOpCount> make_op_table() {
   row(Op::Boolean, {"OP_BOOLEAN", serve_boolean, true, T::VersionAndSessionInfo, true});
   row(Op::FillHoles, {"OP_FILL_HOLES", serve_fill_holes, true, T::VersionAndSessionInfo, true});
   row(Op::Peers, {"OP_PEERS", serve_peers, true, T::Version, false});
+  row(Op::Release, {"OP_RELEASE", serve_release, true, T::VersionAndSessionInfo, true});
   return t;
 }
 
@@ -92,7 +93,7 @@ bool dispatch(HandlerState& state, const Command& command, Reply& reply, std::ve
     note_activity(*context.entry, command.client_id, command.op, before, Clock::now());
   }
   if (context.deferred) return true;
-  if (context.entry) fill_reply_tail(reply, *context.entry, op->tail);
+  if (context.entry) fill_reply_tail(reply, *context.entry, op->tail, command.client_id);
   return false;
 }
 
@@ -276,9 +277,9 @@ void Handler::set_next_token(std::string token) { state_->next_token = std::move
 
 void Handler::set_on_load_done(std::function<void()> on_done) { state_->loads.set_on_done(std::move(on_done)); }
 
-void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail) {
+void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail, const std::string& client) {
   reply.version = entry.session->version();
-  if (tail == ReplyTail::VersionAndSessionInfo) reply.session_info = session_info(entry);
+  if (tail == ReplyTail::VersionAndSessionInfo) reply.session_info = session_info(entry, client);
 }
 
 }  // namespace surfeledit::service

@@ -76,15 +76,16 @@ struct OpEntry {
 // The row of `op`, or nullptr for a value outside the table.
 const OpEntry* find_op(Op op);
 
-// The reply tail: the session's version, and its SessionInfo when `tail` says so.
-void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail);
+// The reply tail: the session's version, and its SessionInfo (as `client` sees it) when `tail` says so.
+void fill_reply_tail(Reply& reply, const SessionEntry& entry, ReplyTail tail, const std::string& client);
 
 // Refuses (PermissionDenied) a command whose op needs a stronger role in the session than the
 // client has (client_ops.cpp).
 void check_role(const SessionEntry& entry, const Command& command);
 
-// The session's description for replies (session_ops.cpp).
-SessionInfo session_info(const SessionEntry& entry);
+// The session's description for replies to `client` (session_ops.cpp): the settings are those of the
+// client's tool; has_regions: some tool has regions.
+SessionInfo session_info(const SessionEntry& entry, const std::string& client);
 
 // Presence (presence_ops.cpp).
 // The sizes of a client's tool in the session: its zero, one and deformable (s > 0) regions.
@@ -93,11 +94,13 @@ struct ToolSummary {
   std::uint64_t one = 0;         // surfels of the one region
   std::uint64_t deformable = 0;  // surfels it may move (the one region and the band between)
 };
-// `client`'s tool in the session (today one shared set of regions: the session's for everyone).
+// `client`'s tool in the session (EditSession::fields of its tool; zeros when it has no regions).
 ToolSummary tool_summary(const SessionEntry& entry, const std::string& client);
-// Frees what `client`'s tool holds in the session (its regions, its locks) when it leaves the session
-// or its lease ends; called before the client is detached. Today: nothing (the regions are shared).
-void release_tool(SessionEntry& entry, const std::string& client);
+// Frees `client`'s tool in the session (its regions, detector and lock: EditSession::release) when it
+// leaves the session or its lease ends, before it is detached; appends a "release" update to `updates`
+// when that changed the session (the tool held regions).
+void release_tool(SessionEntry& entry, const std::string& session, const std::string& client,
+                  std::vector<UpdateEvent>& updates);
 // Records a served request of `client` (its time; op and version when it changed the version).
 void note_activity(SessionEntry& entry, const std::string& client, Op op, std::uint64_t version_before,
                    std::chrono::steady_clock::time_point now);
@@ -137,6 +140,8 @@ void serve_boolean(OpContext& c);
 void serve_fill_holes(OpContext& c);
 // presence_ops.cpp
 void serve_peers(OpContext& c);
+// tool_ops.cpp
+void serve_release(OpContext& c);
 
 // The op's argument (the Command's variant holds it once find_op's row is served).
 template <typename Args>

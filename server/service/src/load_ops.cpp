@@ -103,7 +103,7 @@ void finish_load_file(HandlerState& state, FileLoad& load, Reply& reply, std::ve
   const std::uint64_t version_before = c.entry->session->version();
   replace_model(c, std::move(model));
   note_activity(*c.entry, load.client_id, Op::LoadFile, version_before, std::chrono::steady_clock::now());
-  fill_reply_tail(reply, *c.entry, ReplyTail::VersionAndSessionInfo);
+  fill_reply_tail(reply, *c.entry, ReplyTail::VersionAndSessionInfo, load.client_id);
 }
 
 }  // namespace surfeledit::service

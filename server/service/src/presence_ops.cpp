@@ -9,9 +9,8 @@
 namespace surfeledit::service {
 
 ToolSummary tool_summary(const SessionEntry& entry, const std::string& client) {
-  (void)client;  // one shared set of regions today: every client's tool is the session's
   ToolSummary out;
-  const DeformationFields* fields = entry.session->fields();
+  const DeformationFields* fields = entry.session->fields(client);
   if (!fields) return out;
   for (Region r : fields->regions) {
     if (r == Region::Zero) ++out.zero;
@@ -21,10 +20,13 @@ ToolSummary tool_summary(const SessionEntry& entry, const std::string& client) {
   return out;
 }
 
-void release_tool(SessionEntry& entry, const std::string& client) {
-  // The regions are the session's, shared by every client: nothing is the leaving client's alone.
-  (void)entry;
-  (void)client;
+void release_tool(SessionEntry& entry, const std::string& session, const std::string& client,
+                  std::vector<UpdateEvent>& updates) {
+  EditSession& s = *entry.session;
+  if (!s.release(client)) return;  // a tool without regions holds no lock: nothing changes
+  UpdateEvent event = make_update_event(session, s.version(), "release");
+  event.author = client;
+  updates.push_back(std::move(event));
 }
 
 void note_activity(SessionEntry& entry, const std::string& client, Op op, std::uint64_t version_before,

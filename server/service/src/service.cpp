@@ -342,7 +342,7 @@ void Service::Impl::publish(const UpdateEvent& event) {
 void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
   // Causes whose updates add up to "what changed since" (a load replaces the model and a close
   // ends the session: those are never merged).
-  static const std::vector<std::string> kIncremental = {"deform", "remove", "regions"};
+  static const std::vector<std::string> kIncremental = {"deform", "remove", "regions", "release"};
   const std::size_t queued = publisher->queued_bytes();
   std::vector<PreparedUpdate> pending =
       std::find(kIncremental.begin(), kIncremental.end(), event.cause) == kIncremental.end()

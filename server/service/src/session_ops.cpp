@@ -10,11 +10,11 @@
 
 namespace surfeledit::service {
 
-SessionInfo session_info(const SessionEntry& entry) {
+SessionInfo session_info(const SessionEntry& entry, const std::string& client) {
   const EditSession& s = *entry.session;
   SessionInfo info;
   info.name = s.name();
-  info.has_regions = s.has_regions();
+  info.has_regions = !s.tools().empty();  // some client's tool has regions (the settings are the caller's)
   info.clients = static_cast<std::uint32_t>(entry.clients.size());
   if (s.has_model()) {
     info.surfels = static_cast<std::uint64_t>(s.model().size());
@@ -23,7 +23,7 @@ SessionInfo session_info(const SessionEntry& entry) {
     info.bytes_per_surfel = report.bytes_per_surfel;
     for (const StructureInfo& st : report.structures) info.structures.emplace_back(st.name, st.bytes);
   }
-  for (const NamedSetting& setting : describe(s.settings())) info.settings.push_back(to_reply(setting));
+  for (const NamedSetting& setting : describe(s.settings(client))) info.settings.push_back(to_reply(setting));
   return info;
 }
 
@@ -80,9 +80,9 @@ void serve_join_session(OpContext& c) {
 void serve_close_session(OpContext& c) {
   const std::string& session = c.command.session;
   const std::string& client = c.command.client_id;
-  const std::uint64_t version = c.entry->session->version();
   c.state.uploads.erase(client, session);
-  release_tool(*c.entry, client);
+  release_tool(*c.entry, session, client, c.updates);
+  const std::uint64_t version = c.entry->session->version();
   // A member detached by its lease may still come back: the session then waits for it (grace period).
   const bool awaited = std::any_of(c.entry->members.begin(), c.entry->members.end(), [&](const auto& member) {
     return member.first != client && c.state.away.count(member.first) > 0;

@@ -95,10 +95,10 @@ TEST(Blend, OneHistoryEntryUndoneAndRedoneExactly) {
   BlendParams p;
   p.iterations = 10;
   p.adaptive = true;
-  const BlendOutcome b = s.session.blend(p, std::nullopt, "dora");
+  const BlendOutcome b = s.session.blend(p, std::nullopt);  // the tool that merged blends (its features)
   EXPECT_EQ(s.session.version(), v + 1);
   EXPECT_EQ(s.session.history().back().op, "blend");
-  EXPECT_EQ(s.session.history().back().author, "dora");
+  EXPECT_EQ(s.session.history().back().author, "");
   for (SurfelId id : b.inserted) EXPECT_GE(s.session.model().row_of(id), 0);
   for (SurfelId id : b.removed) EXPECT_LT(s.session.model().row_of(id), 0);
   EXPECT_FALSE(b.removed.empty());  // the crease's gap-covering copies at least

@@ -108,6 +108,10 @@ def test_private_sessions_need_a_token_and_refuse_like_a_missing_session(
     # With an editor token: joined, listed, and it may edit.
     editor = other.join_session("private", token=s.invite("editor"))
     assert "private" in other.info().sessions and s.info().clients == 2
+    # Its own tool (issue 11): the owner releases the sphere, the editor takes it.
+    assert s.release()
+    positions, normals, radii, part = generated_scene()
+    editor.set_regions(zero=np.flatnonzero(part == 0), one=np.flatnonzero(part == 1))
     step = editor.deform(translation=(0.0, 0.0, -0.01))
     assert step.moved > 0
     assert s.history()[-1].client == other.client_id

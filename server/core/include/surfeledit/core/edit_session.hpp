@@ -1,5 +1,7 @@
-// An editing session: one surfel model, its regions and deformation fields, a version
-// counter, and the acceleration structures it needed so far (built lazily).
+// An editing session: one surfel model, a version counter, the edit history, and one editing tool
+// per author (tool.hpp: regions, deformation fields, collision detector and settings). Every call
+// that acts on a tool takes its author (a client id; "" in-process, the default tool): a single
+// author works exactly as a session with one set of regions (docs/collaboration.md).
 //
 // Every mutating call validates everything first and throws before changing anything,
 // so a failed request leaves the session exactly as it was. Not thread-safe: the owner
@@ -20,6 +22,7 @@
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
+#include "surfeledit/core/tool.hpp"
 
 namespace surfeledit {
 
@@ -132,14 +135,19 @@ class EditSession {
   bool has_model() const { return !model_.empty(); }
   // Throws Conflict ("no model loaded") when empty.
   const SurfelModel& model() const;
-  bool has_regions() const { return fields_ != nullptr; }
-  const DeformationFields* fields() const { return fields_.get(); }
+  // The tool of `tool` (an author; "" the default tool): regions and fields (nullptr without).
+  bool has_regions(const std::string& tool = "") const { return fields(tool) != nullptr; }
+  const DeformationFields* fields(const std::string& tool = "") const;
+  // Authors that have a tool, ascending, and how many rows each one's lock holds (its deformable rows).
+  std::vector<std::pair<std::string, Index>> tools() const;
 
-  // Replaces the model; regions are cleared. Bumps the version.
+  // Replaces the model; every tool's regions are cleared. Bumps the version.
   // Every mutating call takes the author of the change (a client id; "" in-process) for history().
   void load(SurfelModel model, const std::string& author = "");
   // Resolves both specs, checks they are non-empty and disjoint, computes the deformation
-  // fields. Surfels in neither region blend between them. Bumps the version.
+  // fields of the author's tool. Surfels in neither region blend between them. Lock: Conflict (field
+  // "regions", naming the other author and how many surfels overlap) when the new deformable rows
+  // (every row outside `zero`) meet another tool's; nothing changes then. Bumps the version.
   void set_regions(const RegionSpec& zero, const RegionSpec& one, const std::string& author = "");
   // Ids matching a spec (ids validated, selectors applied to current positions), ascending.
   IdList resolve(const RegionSpec& spec, const std::string& field) const;
@@ -151,18 +159,24 @@ class EditSession {
   // Session settings (collision algorithm, heuristics, resampling); validated before anything
   // changes. Re-initialises the detector from the current model when regions are set (its
   // "original" model is the current one); the model and the version do not change.
+  // Settings act on the author's tool, but for history_mb, which is the session's.
   void configure(const std::vector<NamedSetting>& changes, const std::string& author = "");
-  const SessionSettings& settings() const { return settings_; }
+  SessionSettings settings(const std::string& tool = "") const;
+  // Frees the author's tool: its regions, detector and lock (its settings stay). One history entry
+  // ("release", no surfel touched; undo takes the regions and the lock back) and a new version;
+  // false and no change when the tool has no regions.
+  bool release(const std::string& author = "");
   // Starts a background rebuild of the deformable tree from the model as it is now (rebuild on
   // idle, e.g. when a drag ends); the next step that finds it finished swaps it in. Never waits.
   // False when there is no deformable tree or a rebuild is under way.
-  bool rebuild_hierarchies();
+  bool rebuild_hierarchies(const std::string& tool = "");
   // Status and build times of the detector's trees (empty without a hierarchy).
-  HierarchyInfo hierarchy_info() const;
-  // Colliding ids after the last step (empty before any step / after a reset), ascending.
-  const IdList& colliding() const { return colliding_; }
-  // Removes surfels (validated first: unknown ids, or leaving the zero or one region empty, throw
-  // and change nothing); the detector keeps the state of the others. Bumps the version.
+  HierarchyInfo hierarchy_info(const std::string& tool = "") const;
+  // Colliding ids after the tool's last step (empty before any step / after a reset), ascending.
+  const IdList& colliding(const std::string& tool = "") const;
+  // Removes surfels (validated first: unknown ids, leaving a tool's zero or one region empty, or
+  // surfels another tool's lock holds (Conflict, field "ids"), throw and change nothing); the author's
+  // detector keeps the state of the others. Bumps the version.
   void remove(const IdList& ids, const std::string& author = "");
 
   // Merge (union) of the deformed region with the zero region (§7 d): removes the colliding deformable
@@ -193,16 +207,27 @@ class EditSession {
 
   // Curves through the surfels the last merge moved onto the intersection; Conflict before any merge
   // with a crease. Validates `params` (InvalidArgument naming the field).
-  std::vector<Curve> intersection_curves(const CurveParams& params = {}) const;
+  std::vector<Curve> intersection_curves(const CurveParams& params = {}, const std::string& tool = "") const;
 
-  // Undo / redo the last applied / undone change (history.hpp); the state then equals the one before
-  // / after it bit for bit. Each bumps the version (the restored rows count as changed since) and
-  // returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and approximate
-  // detection included) is restored exactly: later steps give the results a session that never took the
-  // undone op gives.
+  // Undo / redo the session's last applied / last undone change, whoever made it (history.hpp): undo(author)
+  // of that change's author. With one author (or in the session's strict order) the state then equals the
+  // one before / after it bit for bit. Each bumps the version (the restored rows count as changed since)
+  // and returns it. Conflict when there is nothing to undo / redo. Every detector (hierarchies and
+  // approximate detection included) is restored exactly: later steps give the results a session that never
+  // took the undone op gives.
   std::uint64_t undo();
   std::uint64_t redo();
-  // The entries, oldest first (undone ones last, flagged).
+  // Per author (issue 11 §3): undoes the author's own last applied change / redoes its last undone one.
+  // While no other author's entry was applied, undone or redone after it, exactly undo() / redo().
+  // Otherwise only the entry's own part comes back -- its surfels bit for bit and its author's tool (whose
+  // detector is then re-initialised at its next step) -- and it is refused (Conflict, field "history",
+  // naming the other op's version and author) when such a later entry touched any surfel the entry
+  // touched, or inserted or removed surfels (rows renumbered), or when the entry itself inserted or removed
+  // surfels (those can only come back whole), or when its regions would overlap another tool's lock.
+  // Refused: nothing changes.
+  std::uint64_t undo(const std::string& author);
+  std::uint64_t redo(const std::string& author);
+  // The entries, oldest first (in the order first applied; undone ones flagged).
   std::vector<HistoryItem> history() const { return history_.items(); }
 
   // Changes since version `since` (since >= version() gives none).
@@ -212,6 +237,19 @@ class EditSession {
 
  private:
   void touch_rows(const IndexList& rows);
+  // Tools (tool.hpp). use(): the author's tool becomes the acting one (tool_), created with the default
+  // settings (and the session's history bound) when it has none. find_tool(): nullptr when none.
+  Tool& use(const std::string& author);
+  const Tool* find_tool(const std::string& author) const;
+  // The author's tool's settings (defaults when it has none), with the session's history bound.
+  SessionSettings settings_of(const std::string& author) const;
+  // Every tool but the acting one treats rows the acting op changed as rigid: stale (re-initialised
+  // before its next step). sync_tool(): re-initialises the acting tool's detector when stale.
+  void mark_others_stale();
+  void sync_tool();
+  // Conflict (naming `field` and the other author) when a row with keep[r] false, or a row of
+  // `parents` (rows that will get children), is in another tool's lock.
+  void check_unlocked(const std::vector<bool>* keep, const IndexList* parents, const char* field) const;
   // History (session_history.cpp). An image of the rows a step may move (the deformable rows), or of
   // everything (`clone`: the detector is cloned, else the live object is shared).
   // `subset`: the detector saves only `rows` too (else every deformable row).
@@ -223,7 +261,9 @@ class EditSession {
   SessionImage whole_before_step(const SessionImage& before) const;
   // The detector states of a step's rows image: the journal's while it runs, else the image's own.
   std::shared_ptr<const DetectorImage> step_detector_image(const SessionImage& before) const;
-  SessionImage capture_whole(bool clone) const;
+  // `clone`: the op changes the acting tool's detector in place, so the image keeps the live object (which
+  // the rows images of earlier entries refer to) and the tool goes on with an independent clone.
+  SessionImage capture_whole(bool clone);
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
   // Appends rows (the last parents.size() rows) as extend_rows does, with or without regions.
@@ -231,6 +271,8 @@ class EditSession {
   // Appends the entry of an op that just bumped the version; `before` is the image before it.
   void record(const char* op, const std::string& author, IdList touched, SessionImage before);
   std::uint64_t swap_entry(HistoryEntry& entry, const char* what);
+  // Undo / redo of an author's entry (undo(author)): the whole swap or the entry's own part (see undo()).
+  std::uint64_t swap_own(HistoryEntry& entry, bool undo);
   std::size_t history_limit() const;
   // Responses (session_response.cpp): the step is applied and detected; `before` is its image.
   // A merge makes `before` a whole image.
@@ -249,11 +291,12 @@ class EditSession {
   void take_origins();
   // Removes the rows with keep[r] false from the model and every per-row array (validated by the caller).
   void remove_rows(const IdList& ids, const std::vector<bool>& keep);
-  // Conflict (naming `field`) when keeping only the rows with keep[r] leaves the zero or one region empty.
+  // Conflict (naming `field`) when keeping only the rows with keep[r] leaves a tool's zero or one region empty.
   void check_regions_kept(const std::vector<bool>& keep, const char* field) const;
   // Rows appended to the model (the last parents.size() rows), each inheriting its parent row's
-  // region, fields and rest radius; their row versions are the current version.
-  void extend_rows(const IndexList& parents);
+  // region and fields (in every tool with regions) and rest radius; their row versions are the current
+  // version. `skip_acting`: the acting tool's fields were extended already (resampling's splits).
+  void extend_rows(const IndexList& parents, bool skip_acting = false);
 
   std::string name_;
   SessionParams params_;
@@ -262,17 +305,12 @@ class EditSession {
   SurfelModel model_;
   std::vector<std::uint64_t> row_version_;  // per row: version of its last change
   std::vector<std::pair<std::uint64_t, SurfelId>> removed_log_;
-  std::unique_ptr<DeformationFields> fields_;
-  SessionSettings settings_;
-  std::shared_ptr<CollisionDetector> detector_;  // built when regions are set and algorithm != none
-  IdList colliding_;
-  Values rest_radius_;  // per row, for resampling (built when resampling is enabled)
-  std::uint64_t steps_ = 0;
-  MergeMemo merge_;  // origins and last crease (session_merge.cpp)
+  Values rest_radius_;  // per row, for resampling (built when a tool enables resampling)
+  std::map<std::string, Tool> tools_;  // by author ("" the default tool); nodes are stable
+  Tool* tool_ = nullptr;               // the acting tool (use()); rows images restore into their own
+  std::string tool_id_;                // its author
+  HistoryParams history_params_;       // the history bound (setting history_mb), the session's
   History history_;
-  bool journaling_ = false;  // during deform(): the detector's journal holds the step's before-states
-  Points previous_;          // #P by 3: positions before the current step (reused between steps)
-  std::shared_ptr<const IndexList> shared_rows_;  // the row list of the last rows image (shared by images)
 };
 
 }  // namespace surfeledit

@@ -8,15 +8,20 @@
 //    tangents, per-row versions as runs) and the detector's per-row states (DetectorImage) -- for row
 //    detectors only the states the step changed (the detector's journal); buffers of dropped entries
 //    are reused. A step whose response merges upgrades its image to a whole one then;
-//  - Whole: every other change (load, set_regions, configure, remove, a step with resampling): the
-//    whole model, regions and fields, settings, and the detector object itself (the live one after
-//    a change that replaced it, else an independent clone()).
-// Undo and redo are strictly last-in first-out, so a detector object an image refers to is in the
-// state the image needs whenever it is swapped back in.
+//  - Whole: every other change (load, set_regions, configure, remove, a step with resampling, release):
+//    the whole model and every tool (tool.hpp: regions and fields, settings, and the detector object
+//    itself: the live one after a change that replaced it, else an independent clone() of the acting
+//    tool's; another tool's detector is never changed in place by an op that is not its own).
+// Undo and redo are last-in first-out per author (issue 11 §3): an author undoes its own last applied
+// entry and redoes its own last undone one. While no other author's entry changed state after it, the
+// whole image is swapped (exactly as a single author's history); otherwise only the entry's own part is
+// (its rows and its author's tool), and only when no other author's later entry touched those surfels
+// or renumbered rows (EditSession::swap_own).
 #pragma once
 
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,6 +31,7 @@
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
+#include "surfeledit/core/tool.hpp"
 
 namespace surfeledit {
 
@@ -40,38 +46,27 @@ struct RowsImage {
   std::vector<std::pair<std::uint64_t, std::uint32_t>> version_runs;
 };
 
-// What the session keeps for merges: the deformable surfels when the detector was last reset (the
-// "original" surfaces of merge_regions), and the crease points of the last merge (intersection_curves).
-struct MergeMemo {
-  Points origin_positions;  // #D by 3: deformable surfels at the last reset (set_regions, configure, merge)
-  Points origin_normals;    // #D by 3, unit
-  Points crease_positions;  // #K by 3: surfels the last merge's crease moved, on the intersection
-  Values crease_radii;      // #K: their radii
-  // The blend tool's inputs (session_blend.cpp): what blend() starts from and what it restores.
-  IdList features;          // feature surfel ids of the last merge or boolean (blend's default), ascending
-  IdList crease_moved;      // ids the last crease moved and clipped (not yet restored by a blend)
-  Points crease_from;       // #crease_moved by 3: their positions before the crease
-  IdList crease_copies;     // ids of the last crease's gap-covering copies (not yet removed by a blend)
-  bool open_region = false; // the features come from a boolean (open blend region, §12.4.1)
-};
-
 // Everything a session holds, copied.
 struct WholeImage {
   SurfelModel model;
   std::uint64_t model_version = 0;
   std::vector<std::uint64_t> row_version;              // #P
-  std::optional<DeformationFields> fields;             // none before set_regions
-  SessionSettings settings;
   Values rest_radius;                                  // resampling's rest radii (empty when unused)
-  std::shared_ptr<CollisionDetector> detector;         // the detector object (may be null)
-  MergeMemo merge;                                     // merge origins and last crease
+  HistoryParams history;                               // the session's history bound
+  std::map<std::string, ToolImage> tools;              // every tool, by author (detectors: the objects
+                                                       // themselves, the acting tool's cloned when asked)
 };
 
 // One side (before or after) of an entry.
 struct SessionImage {
   std::optional<RowsImage> rows;    // exactly one of rows / whole
   std::optional<WholeImage> whole;
-  std::shared_ptr<const DetectorImage> detector;  // Rows: the detector's per-row states (null: no detector)
+  // Rows images: the state of the tool `tool` that they belong to (a step changes only its own tool).
+  std::string tool;                 // author of the step (whole images: the acting tool)
+  std::shared_ptr<const DetectorImage> detector;  // the detector's per-row states (null: no detector)
+  std::shared_ptr<CollisionDetector> detector_object;  // the object those states belong to (a tool whose
+                                    // detector was re-initialised since holds another one)
+  bool stale = false;               // the tool's `stale` flag
   IdList colliding;                 // colliding ids
   std::uint64_t steps = 0;          // step counter
   bool complete = true;             // false when the detector could not be saved (a detector without
@@ -83,7 +78,7 @@ struct SessionImage {
 // What history() lists of an entry.
 struct HistoryItem {
   std::uint64_t version = 0;  // the session's version after the op
-  std::string op;             // "load", "set_regions", "deform", "configure", "remove", "merge"
+  std::string op;             // "load", "set_regions", "deform", "configure", "remove", "merge", "release", ...
   std::string author;         // client id ("" in-process)
   IdList touched;             // ids of the surfels it changed, inserted or removed, ascending
   bool undone = false;        // in the redo tail
@@ -93,21 +88,29 @@ struct HistoryEntry {
   HistoryItem item;
   SessionImage image;  // before the op while applied, after it once undone
   std::size_t bytes = 0;  // image.bytes(), kept by History
+  std::uint64_t stamp = 0;       // the session version of its last apply, undo or redo
+  std::uint64_t applied_at = 0;  // the session version of its last apply or redo
 };
 
-// The entries of one session, oldest first, with the undo cursor and the memory bound.
+// The entries of one session, oldest first (in the order they were first applied), each flagged undone
+// or not, and the memory bound.
 class History {
  public:
-  // Appends an applied entry: drops the redo tail, then the oldest entries beyond `limit_bytes`.
+  // Appends an applied entry (stamp: its version): drops its author's undone entries (the author's redo
+  // tail), then the oldest entries beyond `limit_bytes`.
   void push(HistoryEntry entry, std::size_t limit_bytes);
   // Drops oldest entries until at most `limit_bytes` are held.
   void trim(std::size_t limit_bytes);
-  // The entry undo() acts on / redo() acts on; nullptr when there is none.
-  HistoryEntry* undo_target();
-  HistoryEntry* redo_target();
-  // Moves the cursor after a successful undo / redo.
-  void undone() { --applied_; }
-  void redone() { ++applied_; }
+  // The entry undo(author) acts on (the author's last applied one) / redo(author) acts on (the author's
+  // first undone one); nullptr when there is none.
+  HistoryEntry* undo_target(const std::string& author);
+  HistoryEntry* redo_target(const std::string& author);
+  // Any author's: the last applied entry / the entry undone last (highest stamp).
+  HistoryEntry* last_applied();
+  HistoryEntry* last_undone();
+  // Flags an entry undone or applied again (redone) at version `stamp`.
+  void set_undone(HistoryEntry& entry, bool undone, std::uint64_t stamp);
+  const std::deque<HistoryEntry>& entries() const { return entries_; }
   void clear();
 
   std::vector<HistoryItem> items() const;
@@ -126,7 +129,6 @@ class History {
   void recount();
 
   std::deque<HistoryEntry> entries_;
-  std::size_t applied_ = 0;  // entries_[0, applied_) are applied; the rest is the redo tail
   std::size_t bytes_ = 0;
   std::vector<RowsImage> spare_;  // buffers of dropped entries
 };

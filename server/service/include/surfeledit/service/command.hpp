@@ -42,9 +42,10 @@ enum class Op : std::uint32_t {
   Blend = 19,
   Boolean = 20,
   FillHoles = 21,
-  Peers = 22,
+  Peers = FillHoles + 1,  // the IDL's ops after FillHoles (numbered there; convert.cpp checks them)
+  Release = Peers + 1,
 };
-constexpr std::size_t kOpCount = 23;  // ops 0 .. kOpCount-1
+constexpr std::size_t kOpCount = static_cast<std::size_t>(Op::Release) + 1;  // ops 0 .. kOpCount-1
 
 // OP_LOAD_BEGIN: an inline upload of `total` surfels follows.
 struct LoadBeginArgs {

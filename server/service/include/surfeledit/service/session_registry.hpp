@@ -55,7 +55,8 @@ class SessionRegistry {
   // The session the client is attached to; throws Conflict (field "session") otherwise, with the
   // same message whether the session exists or not.
   SessionEntry& attached(const std::string& name, const std::string& client);
-  // Detaches the client (Conflict if not attached); returns true when that dropped the session.
+  // Detaches the client (Conflict if not attached); returns true when that dropped the session. The
+  // caller releases the client's tool first (release_tool, handler_ops.hpp).
   bool close(const std::string& name, const std::string& client);
   // Detaches the client without dropping the session (Conflict if not attached); returns true when
   // no client is attached any more (the caller keeps it for the grace period, then drop()s it).

@@ -1,0 +1,87 @@
+// One client's editing tool in a session (issue 11 §1, docs/collaboration.md): its regions and
+// deformation fields, its collision detector and settings, what it found colliding, its step counter
+// and merge memo. The model, the version, the row versions and the history belong to the session;
+// a session holds one Tool per author (client id; "" in-process is the default tool).
+//
+// Lock: the rows a tool can move are its deformable rows (every row outside its zero region, i.e.
+// every surfel with s > 0); they are disjoint from every other tool's (EditSession::set_regions).
+// Everything else is rigid to the tool. When another tool's op changes rows the tool treats as rigid
+// (moves, inserts or removes them), the tool is `stale`: its detector is re-initialised from the model
+// as it is then before the tool's next step (EditSession::sync_tool).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "surfeledit/core/collision.hpp"
+#include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/settings.hpp"
+#include "surfeledit/core/surfel_model.hpp"
+
+namespace surfeledit {
+
+// What a tool keeps for merges: its deformable surfels when its detector was last reset (the
+// "original" surfaces of merge_regions), and the crease points of its last merge (intersection_curves).
+struct MergeMemo {
+  Points origin_positions;  // #D by 3: deformable surfels at the last reset (set_regions, configure, merge)
+  Points origin_normals;    // #D by 3, unit
+  Points crease_positions;  // #K by 3: surfels the last merge's crease moved, on the intersection
+  Values crease_radii;      // #K: their radii
+  // The blend tool's inputs (session_blend.cpp): what blend() starts from and what it restores.
+  IdList features;          // feature surfel ids of the last merge or boolean (blend's default), ascending
+  IdList crease_moved;      // ids the last crease moved and clipped (not yet restored by a blend)
+  Points crease_from;       // #crease_moved by 3: their positions before the crease
+  IdList crease_copies;     // ids of the last crease's gap-covering copies (not yet removed by a blend)
+  bool open_region = false; // the features come from a boolean (open blend region, §12.4.1)
+};
+
+// A tool's state as a history image holds it (history.hpp: WholeImage keeps every tool's).
+struct ToolImage {
+  std::optional<DeformationFields> fields;      // none before set_regions / after a release
+  SessionSettings settings;                     // its settings (history_mb is the session's, see below)
+  std::shared_ptr<CollisionDetector> detector;  // the detector object (may be null)
+  MergeMemo merge;
+  IdList colliding;
+  std::uint64_t steps = 0;
+  bool stale = false;
+
+  std::size_t bytes() const;
+};
+
+struct Tool {
+  // Per tool: regions, fields, detector and every setting but `history` (history_mb: the undo
+  // history is the session's; EditSession keeps it and settings() reports it in every tool's).
+  std::unique_ptr<DeformationFields> fields;    // built by set_regions; null: no regions, no lock
+  SessionSettings settings;                     // collision, hierarchy, simplification, resampling, response, blend
+  std::shared_ptr<CollisionDetector> detector;  // built when regions are set and algorithm != none
+  IdList colliding;                             // colliding ids after its last step, ascending
+  std::uint64_t steps = 0;                      // its steps so far (StepResult::seq)
+  MergeMemo merge;                              // origins and last crease (session_merge.cpp)
+  bool stale = false;  // rows it treats as rigid changed under its detector since the detector was built
+  // Scratch, not part of the state (never in an image):
+  bool journaling = false;  // during deform(): the detector's journal holds the step's before-states
+  Points previous;          // #P by 3: positions before the current step (reused between steps)
+  std::shared_ptr<const IndexList> shared_rows;  // the row list of its last rows image (shared by images)
+
+  bool has_regions() const { return fields != nullptr; }
+  // Copies the state (the detector object itself, or an independent clone when `clone`: nullptr
+  // when the detector cannot be cloned).
+  ToolImage image(bool clone) const;
+  // Puts an image back (`clone`: the image's detector is cloned, so the image can be reused).
+  void restore(const ToolImage& image, bool clone);
+  // Frees the regions, the detector and what they found (the settings stay).
+  void clear_regions();
+};
+
+// Appends one row per parent (a row of `f`) inheriting its region and fields (the model got them appended).
+void extend_fields(DeformationFields& f, const IndexList& parents);
+// Keeps the rows with keep[r] (one flag per row of `f`), in order.
+void compact_fields(DeformationFields& f, const std::vector<bool>& keep);
+
+// How many rows are deformable (not Zero) in both `a` and `b` (#P each).
+std::size_t lock_overlap(const std::vector<Region>& a, const std::vector<Region>& b);
+
+}  // namespace surfeledit

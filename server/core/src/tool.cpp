@@ -1,0 +1,83 @@
+#include "surfeledit/core/tool.hpp"
+
+#include <algorithm>
+
+namespace surfeledit {
+
+std::size_t ToolImage::bytes() const {
+  return sizeof(*this) + colliding.capacity() * sizeof(SurfelId) + (fields ? fields->memory_bytes() : 0) +
+         (detector ? detector->memory_bytes() : 0);
+}
+
+ToolImage Tool::image(bool clone) const {
+  ToolImage t;
+  if (fields) t.fields = *fields;
+  t.settings = settings;
+  if (detector) t.detector = clone ? std::shared_ptr<CollisionDetector>(detector->clone()) : detector;
+  t.merge = merge;
+  t.colliding = colliding;
+  t.steps = steps;
+  t.stale = stale;
+  return t;
+}
+
+void Tool::restore(const ToolImage& t, bool clone) {
+  if (t.fields) fields = std::make_unique<DeformationFields>(*t.fields);
+  else fields.reset();
+  settings = t.settings;
+  detector = clone && t.detector ? std::shared_ptr<CollisionDetector>(t.detector->clone()) : t.detector;
+  merge = t.merge;
+  colliding = t.colliding;
+  steps = t.steps;
+  stale = t.stale;
+}
+
+void Tool::clear_regions() {
+  fields.reset();
+  detector.reset();
+  colliding.clear();
+  merge = MergeMemo();
+  stale = false;
+}
+
+void extend_fields(DeformationFields& f, const IndexList& parents) {
+  const Index first = static_cast<Index>(f.regions.size());
+  const Index rows = first + static_cast<Index>(parents.size());
+  f.lambda.conservativeResize(rows);
+  f.grad_lambda.conservativeResize(rows, 3);
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index parent = parents[k], child = first + static_cast<Index>(k);
+    f.regions.push_back(f.regions[static_cast<std::size_t>(parent)]);
+    f.lambda[child] = f.lambda[parent];
+    f.grad_lambda.row(child) = f.grad_lambda.row(parent);
+    if (f.regions[static_cast<std::size_t>(parent)] != Region::Zero) f.deformable.push_back(child);
+  }
+}
+
+void compact_fields(DeformationFields& f, const std::vector<bool>& keep) {
+  Eigen::Index j = 0;
+  for (Eigen::Index i = 0; i < f.lambda.size(); ++i) {
+    if (!keep[static_cast<std::size_t>(i)]) continue;
+    f.lambda[j] = f.lambda[i];
+    f.grad_lambda.row(j) = f.grad_lambda.row(i);
+    ++j;
+  }
+  f.lambda.conservativeResize(j);
+  f.grad_lambda.conservativeResize(j, 3);
+  std::size_t w = 0;
+  for (std::size_t r = 0; r < f.regions.size(); ++r)
+    if (keep[r]) f.regions[w++] = f.regions[r];
+  f.regions.resize(w);
+  f.deformable.clear();
+  for (std::size_t r = 0; r < f.regions.size(); ++r)
+    if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
+}
+
+std::size_t lock_overlap(const std::vector<Region>& a, const std::vector<Region>& b) {
+  const std::size_t n = std::min(a.size(), b.size());
+  std::size_t both = 0;
+  for (std::size_t r = 0; r < n; ++r) both += a[r] != Region::Zero && b[r] != Region::Zero;
+  return both;
+}
+
+}  // namespace surfeledit
