@@ -110,18 +110,20 @@ TEST_F(Collaboration, PeersAndPresenceNameTheClientsTheirRolesLastOpsAndTools) {
   EXPECT_EQ(b.state, "attached");
   EXPECT_EQ(b.last_op, "set_regions");
   EXPECT_EQ(b.last_version, set->version);
-  for (const PeerInfo& p : peers->peers) {
-    EXPECT_EQ(p.zero, zero_ids.size());
-    EXPECT_EQ(p.one, one_ids.size());
-    EXPECT_EQ(p.deformable, 40u - zero_ids.size());  // every surfel outside the zero region moves
-  }
+  // Tools are per client: b's holds the regions it set, a has none.
+  EXPECT_EQ(b.zero, zero_ids.size());
+  EXPECT_EQ(b.one, one_ids.size());
+  EXPECT_EQ(b.deformable, 40u - zero_ids.size());  // every surfel outside the zero region moves
+  EXPECT_EQ(a.zero + a.one + a.deformable, 0u);
   rb.client = "client-b";
   updates.clear();
   ASSERT_EQ(send_as(surfeledit_proto_OP_CLOSE_SESSION, 0)->status, Status::Ok);
-  ASSERT_EQ(updates.size(), 1u);
-  EXPECT_EQ(updates[0].presence, "leave");
-  ASSERT_EQ(updates[0].peers.size(), 1u);
-  EXPECT_EQ(updates[0].peers[0].client_id, "client-a");
+  ASSERT_EQ(updates.size(), 2u);  // leaving releases b's tool (one history entry), then the presence change
+  EXPECT_EQ(updates[0].cause, "release");
+  EXPECT_EQ(updates[0].author, "client-b");
+  EXPECT_EQ(updates[1].presence, "leave");
+  ASSERT_EQ(updates[1].peers.size(), 1u);
+  EXPECT_EQ(updates[1].peers[0].client_id, "client-a");
 }
 
 TEST(CollaborationGrace, ASessionLeftByALeaseIsKeptForTheGracePeriodThenDropped) {
