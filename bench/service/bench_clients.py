@@ -8,7 +8,8 @@ Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
 
 Each run starts a fresh server on a fresh DDS domain and k client processes (tests/python/service/
 collab_peer.py, mode "edit" without a watcher: the real Python client). "one": the bench process opens one session with the
-demo scene (sampled at --spacing; slab = zero region, sphere = one region, default collision settings) and
+demo scene (sampled at --spacing; slab = zero region, sphere = one region, default collision settings; in "one" each client's tool moves one
+sector of the sphere, the rest rigid to it) and
 invites the k clients as editors; "separate": each client opens its own session with the same scene. Once
 all are ready they start together and send deform steps (small random translations, one at a time each,
 waiting for the reply) for --seconds; ops/s = acknowledged steps of all clients / the longest client's
@@ -70,16 +71,17 @@ def one_run(exe: str, k: int, shared: bool, seconds: float, spacing: float) -> T
         owner = connect(domain)
         token = ""
         if shared:
-            from surfeledit.demo import default_scene
+            from surfeledit.demo import default_scene, sphere_sectors
             s = owner.open_session("bench")
             pos, nrm, rad, part = default_scene(spacing)
             s.load_points(pos, nrm, rad)
-            ids = s.ids()
-            s.set_regions(zero=ids[part == 0], one=ids[part == 1])
+            tools = sphere_sectors(pos, part, s.ids(), k)  # one sector of the sphere per client: disjoint locks
             token = s.invite("editor")
         for i in range(k):
             args = dict(session="bench" if shared else f"bench-{i}", token=token, steps=10**9, seconds=seconds,
                         seed=i, scene=spacing, watch=False)
+            if shared:
+                args["one"] = tools[i]
             peers.append(subprocess.Popen([sys.executable, str(PEER), "edit", str(domain), json.dumps(args)],
                                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                           text=True, start_new_session=True))

@@ -33,6 +33,16 @@ def default_scene(spacing: float = 0.05) -> Tuple[np.ndarray, np.ndarray, np.nda
             np.asarray(s.radii, np.float64), np.asarray(s.part))
 
 
+def sphere_sectors(positions: np.ndarray, part: np.ndarray, ids: np.ndarray, n: int) -> list:
+    """The ids of the demo scene's sphere (``part`` 1) cut into ``n`` sectors by the angle around its centre in
+    the x-y plane: ``n`` disjoint lists, one client's tool each (a tool's lock must not overlap another's)."""
+    sphere = part == 1
+    c = positions[sphere].mean(axis=0)
+    angle = np.arctan2(positions[sphere, 1] - c[1], positions[sphere, 0] - c[0])
+    k = np.minimum(((angle + np.pi) / (2 * np.pi) * n).astype(int), n - 1)
+    return [ids[sphere][k == j].tolist() for j in range(n)]
+
+
 def curve_length(curves: Sequence[Curve]) -> float:
     """Total length of intersection curves, model units (closed ones include the closing edge)."""
     total = 0.0

@@ -4,7 +4,8 @@ Modes (first argument), each followed by the domain and a JSON argument; output 
 
 ``edit DOMAIN '{"session", "token", "steps", "seconds", "seed", "scene", "watch"}'``
     joins the session with the token (empty: opens it as its own and, with ``scene`` = a spacing, loads
-    the demo scene sampled at it with the slab as zero and the sphere as one region), starts (unless
+    the demo scene sampled at it with the slab as zero and the sphere as one region; with ``one`` = a list
+    of ids instead, its own tool moves just those: zero region = every other surfel), starts (unless
     ``watch`` is false: then ``final`` is not offered) a watcher on it from the
     state it fetched, prints ``{"ready": true, "client_id": ...}`` and waits for a line ``go`` on stdin.
     Then sends deform steps (small random translations) until ``steps`` were acknowledged or ``seconds``
@@ -92,6 +93,10 @@ def _edit(domain: int, args: Dict[str, Any]) -> None:
         session.load_points(pos, nrm, rad)
         ids = session.ids()
         session.set_regions(zero=ids[part == 0], one=ids[part == 1])
+    elif args.get("one"):  # a tool of its own on these ids, rigid to the rest
+        ids = session.ids()
+        one = np.asarray(args["one"], dtype=ids.dtype)
+        session.set_regions(zero=np.setdiff1d(ids, one), one=one)
     watcher = watch(session) if args.get("watch", True) else None
     view = fresh_state(session)  # after the watcher exists: no update is missed
     emit({"ready": True, "client_id": client.client_id})

@@ -16,6 +16,8 @@ import pytest
 
 import surfeledit
 
+from surfeledit.demo import sphere_sectors
+
 from .collab_peer import apply, digest, fresh_state, same, watch
 from .conftest import ServerProcess, generated_scene
 
@@ -24,9 +26,9 @@ STEPS = 25          # deform steps per client
 SECONDS = 30.0      # bound on each client's editing time
 
 
-def start_peers(srv: ServerProcess, n: int, session: str, token: str) -> List[subprocess.Popen]:
+def start_peers(srv: ServerProcess, n: int, session: str, token: str, tools: List[List[int]]) -> List[subprocess.Popen]:
     return [subprocess.Popen([sys.executable, str(PEER), "edit", str(srv.domain), json.dumps(
-        dict(session=session, token=token, steps=STEPS, seconds=SECONDS, seed=100 + k))],
+        dict(session=session, token=token, steps=STEPS, seconds=SECONDS, seed=100 + k, one=tools[k]))],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
         for k in range(n)]
 
@@ -53,13 +55,13 @@ def test_clients_in_separate_processes_edit_one_session(n: int, client: surfeled
     watcher = watch(owner)
     owner.load_points(pos, nrm, rad)
     ids = owner.state().ids
-    owner.set_regions(zero=ids[part == 0], one=ids[part == 1])
-    start = fresh_state(owner)
     token = owner.invite("editor")
-    peers = start_peers(server, n, "together", token)
+    # Disjoint tools (issue 11 §1): each client moves one sector of the sphere, the rest is rigid to it.
+    peers = start_peers(server, n, "together", token, sphere_sectors(pos, part, ids, n))
     try:
         ready = [read(p) for p in peers]
         assert all(r["ready"] for r in ready)
+        start = fresh_state(owner)  # after every client set its regions
         names = [r["client_id"] for r in ready]
         joined = set()
         deadline = time.monotonic() + 10.0
@@ -96,7 +98,8 @@ def test_clients_in_separate_processes_edit_one_session(n: int, client: surfeled
             assert f["version"] == truth.version, f
             assert f["view_equal"] and f["state_equal"], f
             assert f["digest"] == digest(truth)
-            assert all(acked[int(v)] == a for v, a in f["authors"].items())
+            # Updates before the start: the other clients' set_regions.
+            assert all(acked[int(v)] == a for v, a in f["authors"].items() if int(v) > start.version)
 
         # This process's watcher: every model update, in version order, authors as acknowledged.
         events = []
