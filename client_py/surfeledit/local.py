@@ -96,16 +96,19 @@ class LocalSession(StateArrays):
         """Replaces the model: positions (P, 3), normals (P, 3), radii (P,) or None (estimated)."""
         self.core.load_points(positions, normals, radii)
 
-    def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None) -> None:
-        """Sets the zero and the one region by (K,) integer ids."""
-        self.core.set_regions(zero=zero, one=one)
+    def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None, author: str = "") -> None:
+        """Sets the zero and the one region by (K,) integer ids, of the tool of ``author`` (a client id; the
+        default tool ``""`` when a single user edits: several authors replay what several clients did)."""
+        self.core.set_regions(zero=zero, one=one, author=author)
 
     def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
-               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth") -> StepResult:
-        """One deformation step (see :meth:`surfeledit.session_api.EditingSession.deform`);
+               angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth",
+               author: str = "") -> StepResult:
+        """One deformation step of the tool of ``author`` (see :meth:`surfeledit.session_api.EditingSession.deform`);
         ``round_trip_ms`` and ``timings["total"]`` are the whole call."""
         t0 = time.perf_counter()
-        o = self.core.deform(translation=translation, axis=axis, angle=angle, center=center, blend=blend)
+        o = self.core.deform(translation=translation, axis=axis, angle=angle, center=center, blend=blend,
+                             author=author)
         call_ms = (time.perf_counter() - t0) * 1e3
         return _step_result(o, self.version, call_ms)
 
@@ -121,10 +124,10 @@ class LocalSession(StateArrays):
         """Removes surfels by (K,) integer id."""
         self.core.remove(ids)
 
-    def release(self) -> bool:
-        """Frees the session's tool: its regions, detector and lock (one history entry, a new version);
-        False (nothing changes) when no regions are set."""
-        return bool(self.core.release())
+    def release(self, author: str = "") -> bool:
+        """Frees the tool of ``author``: its regions, detector and lock (one history entry, a new version);
+        False (nothing changes) when it has no regions."""
+        return bool(self.core.release(author=author))
 
     def undo(self) -> int:
         """Undoes the last change; returns the new version (ConflictError: nothing to undo)."""

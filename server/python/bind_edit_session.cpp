@@ -195,23 +195,26 @@ void bind_edit_session(pyb::module_& m) {
           pyb::arg("positions"), pyb::arg("normals"), pyb::arg("radii") = pyb::none())
       .def(
           "set_regions",
-          [](EditSession& s, const pyb::handle& zero, const pyb::handle& one) {
+          [](EditSession& s, const pyb::handle& zero, const pyb::handle& one, const std::string& author) {
             RegionSpec z{to_ids(zero, "zero"), {}}, o{to_ids(one, "one"), {}};
             pyb::gil_scoped_release release;
-            s.set_regions(z, o);
+            s.set_regions(z, o, author);
           },
-          pyb::kw_only(), pyb::arg("zero"), pyb::arg("one"))
+          pyb::kw_only(), pyb::arg("zero"), pyb::arg("one"), pyb::arg("author") = "",
+          "Sets the zero and one regions of the tool of `author` (a client id; \"\" the default tool)")
       .def(
           "deform",
           [](EditSession& s, const Vec3& translation, const Vec3& axis, double angle, std::optional<Vec3> center,
-             const std::string& blend) {
+             const std::string& blend, const std::string& author) {
             const DeformParams p = make_deform_params(translation, axis, angle, center, blend);
             pyb::gil_scoped_release release;
-            return s.deform(p);
+            return s.deform(p, author);
           },
           pyb::kw_only(), pyb::arg("translation") = Vec3::Zero(), pyb::arg("axis") = Vec3::UnitZ(),
           pyb::arg("angle") = 0.0, pyb::arg("center") = pyb::none(), pyb::arg("blend") = "smooth",
-          "One step, then resampling and collision detection as configured; returns a StepResult")
+          pyb::arg("author") = "",
+          "One step of the tool of `author`, then resampling and collision detection as configured; returns a "
+          "StepResult")
       .def(
           "configure",
           [](EditSession& s, const pyb::kwargs& kwargs) {
@@ -282,8 +285,9 @@ void bind_edit_session(pyb::module_& m) {
           },
           "Clip lines (points #P by 3, unit directions #P by 3; zero: unclipped), or None without clips")
       .def("undo", [](EditSession& s) { return s.undo(); }, "Undoes the last change; returns the new version")
-      .def("release", [](EditSession& s) { return s.release(); },
-           "Frees the tool's regions, detector and lock; False (no change) when it has no regions")
+      .def("release", [](EditSession& s, const std::string& author) { return s.release(author); },
+           pyb::kw_only(), pyb::arg("author") = "",
+           "Frees the regions, detector and lock of the tool of `author`; False (no change) when it has no regions")
       .def("redo", [](EditSession& s) { return s.redo(); }, "Redoes the last undone change; returns the new version")
       .def("history", [](const EditSession& s) {
         pyb::list out;

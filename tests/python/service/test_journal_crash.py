@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 import surfeledit
+from surfeledit.demo import sphere_sectors
 from surfeledit.local import LocalSession
 
 from .conftest import ServerProcess, free_domain, generated_scene, server_executable
@@ -65,15 +66,18 @@ def _run(tmp_path: Path, sync: Tuple[str, ...], kills: int) -> None:
         _wait_ready(srv)
         positions, normals, radii, part = generated_scene(0.1)
         ids = np.arange(len(positions), dtype=np.uint64)  # the server numbers a loaded model 0..P-1
-        zero, one = ids[part == 0], ids[part == 1]
+        # Two tools (issue 11 §1): each editing client moves one half of the sphere, the rest is rigid to it.
+        halves = [np.asarray(t, dtype=np.uint64) for t in sphere_sectors(positions, part, ids, 2)]
+        tools = [(np.setdiff1d(ids, h), h) for h in halves]
         for _ in range(3):
             clients.append(surfeledit.connect(domain=domain, spawn=False, timeout=10.0, reconnect=RECONNECT_S))
         owner = clients[0].open_session("crash")
         owner.load_points(positions, normals, radii)
-        owner.set_regions(zero=zero, one=one)
+        owner.set_regions(zero=tools[0][0], one=tools[0][1])
         editor = clients[1].join_session("crash", token=owner.invite("editor"))
+        editor.set_regions(zero=tools[1][0], one=tools[1][1])
         viewer = clients[2].join_session("crash", token=owner.invite("viewer"))
-        setup_version = owner.version
+        setup_version = editor.version
 
         acked: Dict[int, Tuple[int, int]] = {}  # version -> (client, op index)
         lock = threading.Lock()
@@ -131,11 +135,13 @@ def _run(tmp_path: Path, sync: Tuple[str, ...], kills: int) -> None:
         # The independent replay: the same model and regions, the acknowledged steps in version order.
         local = LocalSession("replay", threads=1)
         local.load_points(positions, normals, radii)
-        local.set_regions(zero=zero, one=one)
+        client_ids = [clients[0].client_id, clients[1].client_id]
+        for c in range(2):
+            local.set_regions(zero=tools[c][0], one=tools[c][1], author=client_ids[c])
         hash_at: Dict[int, int] = {setup_version: int(local.core.state_hash)}
         for v in versions:
             c, i = acked[v]
-            local.deform(translation=_translation(c, i))
+            local.deform(translation=_translation(c, i), author=client_ids[c])
             hash_at[v] = int(local.core.state_hash)
         for before, recovered, recovered_hash in restarts:
             assert recovered >= before, f"acknowledged version {before} lost: recovered {recovered}"
