@@ -31,8 +31,8 @@ echo "== ThreadSanitizer: background hierarchy rebuilds while steps run"
 # The suppression covers a load-time mutex misuse in libOpenNI2, which PCL pulls in (tests/tsan_suppressions.txt).
 TSAN_BUILD="${SURFELEDIT_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
 export TSAN_OPTIONS="suppressions=$ROOT/tests/tsan_suppressions.txt halt_on_error=1"
-sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_core_tests
-"$TSAN_BUILD/tests/surfeledit_core_tests" \
+sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_tsan_tests
+"$TSAN_BUILD/tests/surfeledit_tsan_tests" \
   --gtest_filter='BvhRebuild.*:BvhUpdate.StatusFreshRefitRebuilding:CollisionBvh.BackgroundRebuildWhileStepsArrive' \
   --gtest_brief=1
 unset TSAN_OPTIONS
