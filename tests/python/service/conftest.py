@@ -142,6 +142,23 @@ def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ServerPro
     assert srv.alive, f"surfeledit-server died during the test:\n{srv.log_tail()}"
 
 
+@pytest.fixture
+def start_server(tmp_path: Path) -> Iterator[Callable[..., ServerProcess]]:
+    """Starts servers on fresh domains with extra command-line options (``start_server("--client-lease-ms",
+    "500")``, no data root); every one is stopped at teardown."""
+    started: List[ServerProcess] = []
+
+    def start(*options: str) -> ServerProcess:
+        domain = free_domain()
+        srv = ServerProcess(server_executable(), domain, tmp_path / f"server-{domain}.log", None, options)
+        started.append(srv)
+        return srv
+
+    yield start
+    for srv in started:
+        srv.stop()
+
+
 def connect_to(srv: ServerProcess, timeout: float = 20.0) -> surfeledit.Client:
     """Connects (spawn=False) to ``srv``, retrying while it starts up."""
     deadline = time.monotonic() + timeout

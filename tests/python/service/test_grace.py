@@ -21,33 +21,11 @@ import surfeledit
 from surfeledit.connection import wait_matched
 
 from .collab_peer import watch
-from .conftest import ServerProcess, connect_to, free_domain, server_executable
+from .conftest import ServerProcess, connect_to
 from .test_presence import presence_until
 
 PEER = Path(__file__).with_name("collab_peer.py")
 LEASE_MS = 1000
-
-
-class OptionServer(ServerProcess):
-    def __init__(self, exe: str, domain: int, log: Path, *options: str) -> None:
-        self.domain = domain
-        self.data_root = None
-        super(ServerProcess, self).__init__([exe, "--domain", str(domain), *options], log)
-
-
-@pytest.fixture
-def start_server(tmp_path: Path) -> Iterator[Callable[..., ServerProcess]]:
-    started: List[ServerProcess] = []
-
-    def start(*options: str) -> ServerProcess:
-        domain = free_domain()
-        srv = OptionServer(server_executable(), domain, tmp_path / f"server-{domain}.log", *options)
-        started.append(srv)
-        return srv
-
-    yield start
-    for srv in started:
-        srv.stop()
 
 
 @pytest.fixture

@@ -21,35 +21,12 @@ import surfeledit
 from surfeledit import errors
 from surfeledit._protocol import proto
 
-from .conftest import ServerProcess, connect_to, free_domain, server_executable
+from .conftest import ServerProcess, connect_to
 
 PEER = Path(__file__).with_name("peer_process.py")
 ROW_BYTES = 7 * 8  # one surfel with a radius: positions, normals, radius as doubles
 LEASE_MS = 1000
 CLIENT_LIVELINESS_S = surfeledit.connection.CLIENT_LIVELINESS_S
-
-
-class LimitedServer(ServerProcess):
-    """A server with extra command-line options."""
-
-    def __init__(self, exe: str, domain: int, log: Path, *options: str) -> None:
-        self.domain = domain
-        super(ServerProcess, self).__init__([exe, "--domain", str(domain), *options], log)
-
-
-@pytest.fixture
-def start_server(tmp_path: Path) -> Iterator[Callable[..., ServerProcess]]:
-    started: List[ServerProcess] = []
-
-    def start(*options: str) -> ServerProcess:
-        domain = free_domain()
-        srv = LimitedServer(server_executable(), domain, tmp_path / f"server-{domain}.log", *options)
-        started.append(srv)
-        return srv
-
-    yield start
-    for srv in started:
-        srv.stop()
 
 
 def chunk(offset: int, n: int) -> "proto.LoadChunk":
