@@ -139,7 +139,8 @@ TEST(HistoryClients, RefusedExactlyWhenAnotherClientsLaterOpTouchedItsSurfels) {
   }
   ASSERT_NE(s.session.fields("a"), nullptr);  // the release undone: a holds arm A again
   // a's step: b's later step touched the same surfels -- refused, naming it; nothing changes.
-  const HistoryItem* hit = expected_refusal(s.session.history(), "a");
+  const std::vector<HistoryItem> history = s.session.history();  // kept: `hit` points into it
+  const HistoryItem* hit = expected_refusal(history, "a");
   ASSERT_NE(hit, nullptr);
   EXPECT_EQ(hit->version, b_step);
   const auto before = s.rows(s.a);
