@@ -181,6 +181,7 @@ std::vector<std::uint8_t> request_cdr(const surfeledit_proto_Request& request) {
 }
 
 RequestSample::RequestSample(std::vector<std::uint8_t> cdr) {
+  if (cdr.empty()) throw JournalError("journal request record holds no Request sample");
   if (cdr.size() > std::numeric_limits<std::uint32_t>::max()) throw JournalError("journal request too large");
   const auto size = static_cast<std::uint32_t>(cdr.size());
   std::uint32_t offset = 0;
