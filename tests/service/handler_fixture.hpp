@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -43,6 +44,31 @@ class HandlerTest : public ::testing::Test {
     const auto r = send(surfeledit_proto_OP_LOAD_COMMIT);
     ASSERT_EQ(r->status, Status::Ok) << r->field << ": " << r->message;
   }
+};
+
+// A handler with the given lease and grace period, driven by requests from several DDS writers
+// (`sender`: the publication handle the service would see for the request's writer).
+struct LeasedHandler {
+  static HandlerConfig config(std::chrono::milliseconds lease, std::chrono::milliseconds grace) {
+    HandlerConfig c{4, 1000, 1};
+    c.client_lease = lease;
+    c.session_grace = grace;
+    return c;
+  }
+
+  LeasedHandler(std::chrono::milliseconds lease, std::chrono::milliseconds grace) : handler(config(lease, grace)) {}
+
+  // The builder's request `op` from writer `sender`, with request id `id` (0: the next one).
+  std::shared_ptr<const Reply> send_from(surfeledit_proto_Op op, std::uint64_t sender, std::uint64_t id = 0) {
+    Command c = decode(rb.make(op, id ? id : next_id++));
+    c.sender = sender;
+    return handler.handle(c, updates);
+  }
+
+  Handler handler;
+  RequestBuilder rb;
+  std::vector<UpdateEvent> updates;
+  std::uint64_t next_id = 1;
 };
 
 }  // namespace surfeledit::service::test

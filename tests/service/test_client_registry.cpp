@@ -93,12 +93,10 @@ TEST(HandlerIdentity, ASpoofedIdGetsNoReplyAndCannotReachTheCache) {
 }
 
 TEST(HandlerIdentity, AnExpiredLeaseDetachesTheClientAndFreesItsUpload) {
-  HandlerConfig config{4, 1000, 1};
-  config.client_lease = 1ms;
-  config.session_grace = 1ms;
-  Handler h(config);
-  RequestBuilder rb;
-  std::vector<UpdateEvent> updates;
+  LeasedHandler lh(1ms, 1ms);
+  Handler& h = lh.handler;
+  RequestBuilder& rb = lh.rb;
+  std::vector<UpdateEvent>& updates = lh.updates;
   ASSERT_EQ(send_from(h, rb, surfeledit_proto_OP_OPEN_SESSION, 1, 100, updates)->status, Status::Ok);
   rb.token = send_from(h, rb, surfeledit_proto_OP_INVITE, 2, 100, updates)->token;
   rb.client = "client-b";

@@ -127,18 +127,11 @@ TEST_F(Collaboration, PeersAndPresenceNameTheClientsTheirRolesLastOpsAndTools) {
 }
 
 TEST(CollaborationGrace, ASessionLeftByALeaseIsKeptForTheGracePeriodThenDropped) {
-  HandlerConfig config{4, 1000, 1};
-  config.client_lease = 1ms;
-  config.session_grace = 200ms;
-  Handler h(config);
-  RequestBuilder rb;
-  std::vector<UpdateEvent> updates;
-  std::uint64_t id = 1;
-  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) {
-    Command c = decode(rb.make(op, id++));
-    c.sender = sender;
-    return h.handle(c, updates);
-  };
+  LeasedHandler lh(1ms, 200ms);
+  Handler& h = lh.handler;
+  RequestBuilder& rb = lh.rb;
+  std::vector<UpdateEvent>& updates = lh.updates;
+  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) { return lh.send_from(op, sender); };
   ASSERT_EQ(send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
   h.writer_lost(100);
   std::this_thread::sleep_for(5ms);
@@ -219,18 +212,11 @@ TEST(CollaborationWire, PeersAndAuthorsReachTheSamples) {
 }
 
 TEST(CollaborationGrace, TheLastCloseKeepsASessionWhileAMemberIsAway) {
-  HandlerConfig config{4, 1000, 1};
-  config.client_lease = 1ms;
-  config.session_grace = 10s;
-  Handler h(config);
-  RequestBuilder rb;
-  std::vector<UpdateEvent> updates;
-  std::uint64_t id = 1;
-  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) {
-    Command c = decode(rb.make(op, id++));
-    c.sender = sender;
-    return h.handle(c, updates);
-  };
+  LeasedHandler lh(1ms, 10s);
+  Handler& h = lh.handler;
+  RequestBuilder& rb = lh.rb;
+  std::vector<UpdateEvent>& updates = lh.updates;
+  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) { return lh.send_from(op, sender); };
   ASSERT_EQ(send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
   rb.token = send_from(surfeledit_proto_OP_INVITE, 100)->token;
   rb.client = "client-b";
