@@ -39,17 +39,12 @@ import surfeledit  # noqa: E402
 
 from service.conftest import free_domain  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import connect_when_up  # noqa: E402
+
 PEER = ROOT / "tests" / "python" / "service" / "collab_peer.py"
 
 
-def connect(domain: int) -> surfeledit.Client:
-    deadline = time.monotonic() + 30
-    while True:
-        try:
-            return surfeledit.connect(domain=domain, spawn=False, timeout=10.0)
-        except surfeledit.ServerStartError:
-            if time.monotonic() > deadline:
-                raise
 
 
 def read(p: subprocess.Popen) -> Dict:
@@ -68,7 +63,7 @@ def one_run(exe: str, k: int, shared: bool, seconds: float, spacing: float) -> T
     owner = None
     peers: List[subprocess.Popen] = []
     try:
-        owner = connect(domain)
+        owner = connect_when_up(domain)
         token = ""
         if shared:
             from surfeledit.demo import default_scene, sphere_sectors

@@ -40,6 +40,9 @@ from surfeledit import errors  # noqa: E402
 
 from service.conftest import free_domain  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import connect_when_up  # noqa: E402
+
 PEER = ROOT / "tests" / "python" / "service" / "peer_process.py"
 
 
@@ -49,20 +52,12 @@ def start_server(exe: str, domain: int, *options: str) -> subprocess.Popen:
                             start_new_session=True)
 
 
-def connect(domain: int) -> surfeledit.Client:
-    deadline = time.monotonic() + 20
-    while True:
-        try:
-            return surfeledit.connect(domain=domain, spawn=False, timeout=10.0)
-        except surfeledit.ServerStartError:
-            if time.monotonic() > deadline:
-                raise
 
 
 def one_run(exe: str, lease_ms: int) -> Dict[str, float]:
     domain = free_domain()
     srv = start_server(exe, domain, "--client-lease-ms", str(lease_ms))
-    connect(domain).close()  # the server is up
+    connect_when_up(domain, 20).close()  # the server is up
     owner = surfeledit.Client(domain)
     try:
         if not owner.wait_for_server(10.0):
