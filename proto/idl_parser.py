@@ -36,7 +36,7 @@ class IdlError(Exception):
 # IDL primitive spelling -> expression of the cyclonedds-python type.
 PRIMITIVES: Dict[str, str] = {
     "boolean": "bool",
-    "octet": "_t.uint8",
+    "octet": "_t.byte",  # XTypes TK_BYTE, as idlc types IDL octet (uint8 would be TK_UINT8: no match)
     "char": "_t.char",
     "short": "_t.int16",
     "unsigned short": "_t.uint16",

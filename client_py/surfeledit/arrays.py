@@ -14,6 +14,7 @@ import numpy as np
 
 from . import errors
 from ._protocol import proto
+from .compact import compact_surfels, is_compact
 
 __all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
            "join_clips", "readonly", "NO_IDS"]
@@ -89,9 +90,16 @@ def concat(parts: Sequence[Any], field: str, dtype: Any) -> np.ndarray:
 
 def join_surfels(parts: Sequence[Any]) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64) of wire samples that
-    carry surfels in pieces (state pages, update parts), in the order given."""
-    return (concat(parts, "ids", np.uint64), concat(parts, "positions", np.float64).reshape(-1, 3),
-            concat(parts, "normals", np.float64).reshape(-1, 3), concat(parts, "radii", np.float64))
+    carry surfels in pieces (state pages, update parts; either encoding), in the order given."""
+    ids = concat(parts, "ids", np.uint64)
+    if not any(is_compact(p) for p in parts):
+        return (ids, concat(parts, "positions", np.float64).reshape(-1, 3),
+                concat(parts, "normals", np.float64).reshape(-1, 3), concat(parts, "radii", np.float64))
+    decoded = [compact_surfels(p) if is_compact(p) else
+               (np.asarray(p.positions, np.float64).reshape(-1, 3), np.asarray(p.normals, np.float64).reshape(-1, 3),
+                np.asarray(p.radii, np.float64)) for p in parts]
+    return (ids, np.concatenate([d[0] for d in decoded]), np.concatenate([d[1] for d in decoded]),
+            np.concatenate([d[2] for d in decoded]))
 
 
 def join_clips(parts: Sequence[Any]) -> Optional[np.ndarray]:

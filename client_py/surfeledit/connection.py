@@ -51,6 +51,10 @@ def reply_partition(client_id: str) -> str:
     return "surfeledit.reply." + client_id
 
 
+# The partition the server writes the compact encoding of updates in (PROTOCOL.md, "Updates, compact").
+COMPACT_UPDATE_PARTITION = "surfeledit.update.compact"
+
+
 def _reply_reader_qos() -> Qos:
     """The protocol's reply QoS, transient-local: the server's per-client reply writer is made at the
     first reply, and the reply written before this reader matched it still arrives."""
@@ -123,26 +127,53 @@ class Inbox:
     """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
 
     def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any,
-                 parent: Optional[Subscriber] = None) -> None:
+                 parent: Optional[Subscriber] = None, partition: Optional[str] = None) -> None:
+        """``parent``: a subscriber to read in (its partitions); ``partition``: read in this partition
+        (a subscriber of the inbox's own, deleted with it)."""
+        self._own_sub = None
+        if partition is not None:
+            parent = self._own_sub = Subscriber(participant, qos=Qos(Policy.Partition(partitions=[partition])))
         self.reader = DataReader(parent if parent is not None else participant, topic, qos=qos)
         self._cond = ReadCondition(self.reader, _ANY_NEW)
         self._waitset = WaitSet(participant)
         self._waitset.attach(self._cond)
+        self._early: List[Any] = []  # samples that arrived before the greeting (await_greeting)
+        self.greeted = False
 
     def take(self, n: int = 64) -> List[Any]:
         """Up to ``n`` new samples (instance-state changes without data included; check their type)."""
+        if self._early:
+            out, self._early = self._early[:n], self._early[n:]
+            return out
         return self.reader.take(N=n, condition=self._cond)
 
     def wait(self, timeout: float) -> None:
         """Blocks until a new sample arrives or ``timeout`` seconds pass."""
-        self._waitset.wait(_ns(timeout))
+        if not self._early:
+            self._waitset.wait(_ns(timeout))
+
+    def await_greeting(self, timeout: float) -> bool:
+        """Waits up to ``timeout`` seconds for an ``Update`` with cause ``"watch"`` (PROTOCOL.md "Updates":
+        the server writes one to each new watcher once its writer matched it; from then on the server
+        writes every update to this reader). Other samples that arrive first are kept for :meth:`take`."""
+        deadline = time.monotonic() + timeout
+        while True:
+            for s in self.reader.take(N=64, condition=self._cond):
+                if isinstance(s, proto.Update) and s.cause == "watch" and not s.session:
+                    self.greeted = True
+                    return True
+                self._early.append(s)
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return False
+            self._waitset.wait(_ns(remaining))
 
     def matched(self) -> int:
         """Number of matched writers."""
         return _matched(self.reader)
 
     def close(self) -> None:
-        _delete(self._waitset, self._cond, self.reader)
+        _delete(self._waitset, self._cond, self.reader, self._own_sub)
 
 
 class Client:
@@ -231,14 +262,20 @@ class Client:
         client is made at the first reply)."""
         return wait_matched(self._participant, (self._writer,), timeout)
 
-    def update_inbox(self, match_timeout: float = _WATCH_MATCH_S) -> Inbox:
-        """A new reader of ``surfeledit_update`` (all sessions), returned once the server's update
-        writer is discovered or after ``match_timeout`` seconds (updates are volatile: earlier ones are
-        never seen). The caller closes it; check ``matched()`` to know whether the wait succeeded."""
+    def update_inbox(self, match_timeout: float = _WATCH_MATCH_S, compact: bool = False) -> Inbox:
+        """A new reader of ``surfeledit_update`` (all sessions), returned once the server greeted it (its
+        update writer matched the reader, so every later update reaches it) or after ``match_timeout``
+        seconds (updates are volatile: earlier ones are never seen). The caller closes it; ``greeted``
+        tells whether the wait succeeded. Greetings are ``Update`` samples with cause ``"watch"`` and no
+        session; later ones (greeting other readers) may arrive too.
+        ``compact``: read the compact encoding (PROTOCOL.md "Updates, compact") instead of doubles."""
         if self._upd_topic is None:
             self._upd_topic = Topic(self._participant, TOPIC_UPDATE, proto.Update)
-        inbox = Inbox(self._participant, self._upd_topic, update_qos())
-        wait_matched(self._participant, (inbox.reader,), match_timeout)
+        inbox = Inbox(self._participant, self._upd_topic, update_qos(),
+                      partition=COMPACT_UPDATE_PARTITION if compact else None)
+        deadline = time.monotonic() + match_timeout
+        if wait_matched(self._participant, (inbox.reader,), match_timeout):
+            inbox.await_greeting(max(0.0, deadline - time.monotonic()))
         return inbox
 
     # -- low-level request API -----------------------------------------------------------------

@@ -430,10 +430,11 @@ class Session(BlendOps, PresenceOps, ToolOps, StateArrays):
         return new
 
     # -- updates -----------------------------------------------------------------------------
-    def watch(self, on_presence: Optional[PresenceCallback] = None) -> Watcher:
+    def watch(self, on_presence: Optional[PresenceCallback] = None, encoding: str = "full") -> Watcher:
         """Starts receiving this session's Update samples (from now on; fetch ``state()`` for the past);
-        presence changes go to ``watcher.presence()`` and ``on_presence``, not into the model updates."""
-        return Watcher(self.client, self.name, on_presence=on_presence)
+        presence changes go to ``watcher.presence()`` and ``on_presence``, not into the model updates.
+        ``encoding``: ``"full"`` (exact doubles) or ``"compact"`` (see :class:`~surfeledit.watcher.Watcher`)."""
+        return Watcher(self.client, self.name, on_presence=on_presence, encoding=encoding)
 
 
 Session.configure.__doc__ = (Session.configure.__doc__ or "") + settings_doc()

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, Dict, Iterator, List, Optional
 
 import numpy as np
 
+from . import errors
 from ._protocol import proto
 from .arrays import concat, join_clips, join_surfels
 from .presence import PresenceCallback, PresenceEvent, presence_of
@@ -17,7 +18,10 @@ from .results import UpdateEvent
 if TYPE_CHECKING:
     from .connection import Client
 
-__all__ = ["Watcher"]
+__all__ = ["Watcher", "ENCODINGS"]
+
+#: The update encodings a watcher can choose (PROTOCOL.md "Updates" and "Updates, compact").
+ENCODINGS = ("full", "compact")
 
 _log = logging.getLogger("surfeledit")
 _TAKE = 64  # samples taken from the reader at a time
@@ -34,14 +38,23 @@ class Watcher:
     are kept apart from the model's updates, so that applying what :meth:`get` returns reconstructs the
     model exactly: :meth:`presence` returns them, and ``on_presence`` (if given) is called with each as
     it is received (on the thread that drains: get, poll or presence).
+
+    ``encoding``: ``"full"`` (default; doubles, exact) or ``"compact"`` (float32 positions relative to each
+    part's box centre, octahedral 16-bit normals, float32 radii: about 28 instead of 64 bytes per surfel;
+    error bounds in :mod:`surfeledit.compact`). The server encodes each only while a watcher reads it.
     """
 
-    def __init__(self, client: "Client", session: str, on_presence: Optional[PresenceCallback] = None) -> None:
+    def __init__(self, client: "Client", session: str, on_presence: Optional[PresenceCallback] = None,
+                 encoding: str = "full") -> None:
+        if encoding not in ENCODINGS:
+            raise errors.InvalidArgumentError(f"unknown update encoding {encoding!r} (one of {', '.join(ENCODINGS)})",
+                                              field="encoding")
         self.client = client
         self.session = session
-        self._inbox = client.update_inbox()
-        if not self._inbox.matched():
-            _log.warning("watcher of %r: no update writer discovered in time", session)
+        self.encoding = encoding
+        self._inbox = client.update_inbox(compact=encoding == "compact")
+        if not self._inbox.greeted:
+            _log.warning("watcher of %r: the server did not greet it in time (updates may be missed)", session)
         self._pending: Dict[int, Dict[int, "proto.Update"]] = {}
         self._ready: List[UpdateEvent] = []
         self._presence: List[PresenceEvent] = []

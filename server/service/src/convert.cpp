@@ -535,7 +535,7 @@ ReplyView::ReplyView(const Reply& reply) {
   msg_.peers = borrow<dds_sequence_surfeledit_proto_Peer>(peers_);
 }
 
-UpdateView::UpdateView(const UpdateChunk& c) {
+UpdateView::UpdateView(const UpdateChunk& c, bool compact) {
   if (!c.update) throw std::invalid_argument("update chunk without its update");
   const PreparedUpdate& u = *c.update;
   if (c.begin + c.count > u.surfels()) throw std::out_of_range("update chunk beyond its update");
@@ -547,9 +547,17 @@ UpdateView::UpdateView(const UpdateChunk& c) {
   msg_.parts = c.parts;
   msg_.step = u.step;
   msg_.ids = borrow_range<dds_sequence_unsigned_long_long>(u.ids.data() + c.begin, c.count);
-  msg_.positions = borrow_range<dds_sequence_double>(u.positions.data() + 3 * c.begin, 3 * c.count);
-  msg_.normals = borrow_range<dds_sequence_double>(u.normals.data() + 3 * c.begin, 3 * c.count);
-  msg_.radii = borrow_range<dds_sequence_double>(u.radii.data() + c.begin, c.count);
+  if (compact) {
+    compact_ = encode_compact(u, c.begin, c.count);
+    msg_.origin = borrow_range<dds_sequence_double>(compact_.origin.data(), 3);
+    msg_.positions_f32 = borrow<dds_sequence_octet>(compact_.positions);
+    msg_.normals_oct16 = borrow<dds_sequence_octet>(compact_.normals);
+    msg_.radii_f32 = borrow<dds_sequence_octet>(compact_.radii);
+  } else {
+    msg_.positions = borrow_range<dds_sequence_double>(u.positions.data() + 3 * c.begin, 3 * c.count);
+    msg_.normals = borrow_range<dds_sequence_double>(u.normals.data() + 3 * c.begin, 3 * c.count);
+    msg_.radii = borrow_range<dds_sequence_double>(u.radii.data() + c.begin, c.count);
+  }
   const bool first = c.part == 0;
   msg_.removed = first ? borrow<dds_sequence_unsigned_long_long>(u.removed) : dds_sequence_unsigned_long_long{};
   msg_.detected = first && u.detected;

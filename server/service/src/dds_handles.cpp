@@ -129,6 +129,22 @@ Entity make_publisher(const Entity& participant, const Qos& qos) {
   return Entity(dds_create_publisher(participant.get(), qos.get(), nullptr), "dds_create_publisher");
 }
 
+std::uint32_t matched_readers(const Entity& writer) {
+  dds_publication_matched_status_t status{};
+  check(dds_get_publication_matched_status(writer.get(), &status), "dds_get_publication_matched_status");
+  return status.current_count;
+}
+
+void notify_matches(const Entity& writer) {
+  check(dds_set_status_mask(writer.get(), DDS_PUBLICATION_MATCHED_STATUS), "dds_set_status_mask");
+}
+
+std::uint32_t new_matches(const Entity& writer) {
+  dds_publication_matched_status_t status{};
+  check(dds_get_publication_matched_status(writer.get(), &status), "dds_get_publication_matched_status");
+  return status.total_count_change;
+}
+
 Entity make_read_condition(const Entity& reader) {
   return Entity(dds_create_readcondition(reader.get(), DDS_ANY_STATE), "dds_create_readcondition");
 }

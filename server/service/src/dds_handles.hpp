@@ -86,6 +86,12 @@ Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qo
 Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos);
 // A publisher whose QoS names its partition.
 Entity make_publisher(const Entity& participant, const Qos& qos);
+// The number of readers the writer is matched with now.
+std::uint32_t matched_readers(const Entity& writer);
+// Makes the writer's status condition (an entity attached to a waitset) trigger on new matches.
+void notify_matches(const Entity& writer);
+// The readers the writer matched since the last call (resets the status and its trigger).
+std::uint32_t new_matches(const Entity& writer);
 // A read condition on every sample of the reader (any sample, view and instance state).
 Entity make_read_condition(const Entity& reader);
 

@@ -26,12 +26,15 @@ namespace {
 constexpr const char* kRequestTopic = "surfeledit_request";
 constexpr const char* kReplyTopic = "surfeledit_reply";
 constexpr const char* kUpdateTopic = "surfeledit_update";
+// Watchers that choose the compact encoding read updates in this partition (PROTOCOL.md).
+constexpr const char* kCompactUpdatePartition = "surfeledit.update.compact";
 
 // Waitset tags.
 constexpr dds_attach_t kRequestsTag = 1;
 constexpr dds_attach_t kStopTag = 2;
 constexpr dds_attach_t kLoadsTag = 3;
 constexpr dds_attach_t kWritersTag = 4;
+constexpr dds_attach_t kWatchersTag = 5;  // an update writer matched a new watcher
 
 // Topic types with their XTypes type information (PROTOCOL.md, "Topics and QoS"), so that DDS tools
 // (`cyclonedds typeof`, `cyclonedds ls`) can show them. Request has no enum-typed member (op and kinds
@@ -95,6 +98,8 @@ struct Service::Impl {
         reply_writer(dds::make_writer(participant, reply_topic, reply_qos.automatic_liveliness(kServerLiveliness))),
         client_replies(participant, reply_topic, kServerLiveliness),
         update_writer(dds::make_writer(participant, update_topic, qos)),
+        compact_publisher(dds::make_publisher(participant, dds::Qos().partition(kCompactUpdatePartition))),
+        compact_update_writer(dds::make_writer(compact_publisher, update_topic, qos)),
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
         loads_guard(participant),
@@ -104,6 +109,10 @@ struct Service::Impl {
     waitset.attach(stop_guard.entity(), kStopTag);
     waitset.attach(loads_guard.entity(), kLoadsTag);
     waitset.attach(writer_wake.entity(), kWritersTag);
+    for (const dds::Entity* w : {&update_writer, &compact_update_writer}) {
+      dds::notify_matches(*w);
+      waitset.attach(*w, kWatchersTag);
+    }
     if (!c.journal.dir.empty()) {
       journal = std::make_unique<Journal>(c.journal, handler);  // recovery: replays the log into the handler
       handler.set_on_stored([this](const Reply& reply) { journal->on_stored(reply); });
@@ -143,6 +152,9 @@ struct Service::Impl {
   void coalesce(const UpdateEvent& event, PreparedUpdate& update);
   // Publisher thread: writes every sample of one update.
   void write_update(const PreparedUpdate& update);
+  // Writes a "watch" sample to the watchers an update writer matched since the last call: a watcher
+  // waits for it, so it knows the server will write to it (PROTOCOL.md "Updates").
+  void greet_watchers();
   void stop_publisher();
 
   ServiceConfig config;
@@ -161,6 +173,8 @@ struct Service::Impl {
   dds::Entity reply_writer;          // default partition: replies without a client id
   ReplyWriters client_replies;       // one writer per client, in the client's partition
   dds::Entity update_writer;
+  dds::Entity compact_publisher;      // partition kCompactUpdatePartition
+  dds::Entity compact_update_writer;  // the compact encoding, written while a watcher reads it
   dds::Entity requests;  // read condition: the reader holds samples
   dds::GuardCondition stop_guard;
   dds::GuardCondition loads_guard;  // a file load finished (FileLoads, on its thread)
@@ -380,12 +394,28 @@ void Service::Impl::coalesce(const UpdateEvent& event, PreparedUpdate& update) {
 }
 
 void Service::Impl::write_update(const PreparedUpdate& update) {
+  // Each encoding costs its serialisation only while some watcher reads it (updates are volatile: a
+  // reader that is not matched yet would not get the sample either).
   const std::uint32_t parts = update_parts(update, config.max_chunk_surfels);
+  const bool full = dds::matched_readers(update_writer) > 0;
+  const bool compact = dds::matched_readers(compact_update_writer) > 0;
   for (std::uint32_t part = 0; part < parts; ++part) {
-    const UpdateView view(update_chunk(update, part, config.max_chunk_surfels));
-    dds::write(update_writer, view.get(), "dds_write(update)");
+    const UpdateChunk chunk = update_chunk(update, part, config.max_chunk_surfels);
+    if (full) dds::write(update_writer, UpdateView(chunk).get(), "dds_write(update)");
+    if (compact) dds::write(compact_update_writer, UpdateView(chunk, true).get(), "dds_write(compact update)");
   }
-  logger()->debug("update '{}' v{} {}: {} part(s)", update.session, update.version, update.cause, parts);
+  logger()->debug("update '{}' v{} {}: {} part(s){}{}", update.session, update.version, update.cause, parts,
+                  full ? ", full" : "", compact ? ", compact" : "");
+}
+
+void Service::Impl::greet_watchers() {
+  for (const dds::Entity* w : {&update_writer, &compact_update_writer}) {
+    if (dds::new_matches(*w) == 0) continue;
+    PreparedUpdate hello;
+    hello.cause = "watch";
+    const UpdateView view(update_chunk(hello, 0, config.max_chunk_surfels), w == &compact_update_writer);
+    dds::write(*w, view.get(), "dds_write(watch)");
+  }
 }
 
 void Service::Impl::stop_publisher() {
@@ -407,6 +437,7 @@ void Service::run() {
     s.waitset.wait(sleep);
     if (s.stopping.load()) break;
     s.flush_journal(false);
+    s.greet_watchers();
     s.finish_loads();
     s.serve_available();
     sleep = s.check_leases();

@@ -40,6 +40,8 @@ def random_value(tp: Any, rng: random.Random, depth: int = 0) -> Any:
         return rng.randrange(1, 2**32)
     if marker == "int32":  # enum numbers carried as long, also outside their enum (PROTOCOL.md), and signed counts
         return rng.choice([rng.randrange(1, 2**31), -rng.randrange(1, 2**31), 99, -2**31, 2**31 - 1])
+    if marker == "byte":  # IDL octet
+        return rng.choice([rng.randrange(1, 255), 255, 0x80])
     if marker == "float64":
         return rng.choice([rng.uniform(-1e6, 1e6), rng.uniform(1e-300, 1e-9), 1.0 / 3.0, -2.5e300])
     if tp is bool:

@@ -13,6 +13,7 @@
 #include "surfeledit/service/command.hpp"
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/update.hpp"
+#include "surfeledit/service/update_compact.hpp"
 
 namespace surfeledit::service {
 
@@ -85,10 +86,11 @@ class ReplyView {
 };
 
 // Presents an UpdateChunk as a generated C sample whose sequences are slices of the chunk's
-// PreparedUpdate (same rules as ReplyView).
+// PreparedUpdate (same rules as ReplyView). With `compact`, the chunk's surfels go in the compact
+// encoding (update_compact.hpp), encoded into the view.
 class UpdateView {
  public:
-  explicit UpdateView(const UpdateChunk& chunk);
+  explicit UpdateView(const UpdateChunk& chunk, bool compact = false);
   UpdateView(const UpdateView&) = delete;
   UpdateView& operator=(const UpdateView&) = delete;
   const surfeledit_proto_Update* get() const { return &msg_; }
@@ -96,6 +98,7 @@ class UpdateView {
  private:
   surfeledit_proto_Update msg_{};
   std::vector<surfeledit_proto_Peer> peers_;
+  CompactSurfels compact_;
 };
 
 }  // namespace surfeledit::service
