@@ -16,18 +16,18 @@ import threading
 import time
 import uuid
 from pathlib import Path
-from typing import Any, Iterable, List, Optional, Union
+from typing import Any, List, Optional, Union
 
-from cyclonedds.core import DDSStatus, InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.qos import Policy, Qos
-from cyclonedds.sub import DataReader, Subscriber
+from cyclonedds.sub import Subscriber
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from . import errors
 from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
+from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
 from .server_process import exit_message, spawn_server, stop_process
 from .session import Session
@@ -36,7 +36,6 @@ __all__ = ["Client", "connect", "Inbox"]
 
 _log = logging.getLogger("surfeledit")
 
-_ANY_NEW = SampleState.NotRead | ViewState.Any | InstanceState.Any
 _PROBE_S = 1.5  # how long connect() looks for an already running server before spawning one
 _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's update writer
 # Liveliness lease the request writer offers (automatic: Cyclone asserts it while the process
@@ -67,113 +66,12 @@ def _request_writer_qos() -> Qos:
     return Qos(*request_qos().policies, Policy.Liveliness.Automatic(duration(seconds=CLIENT_LIVELINESS_S)))
 
 
-def _ns(seconds: float) -> int:
-    return max(0, int(seconds * 1e9))
-
-
-def _delete(*entities: Any) -> None:
-    """Deletes DDS entities now instead of at garbage collection (Entity.__del__ is idempotent)."""
-    for e in entities:
-        if e is not None:
-            try:
-                e.__del__()
-            except Exception:  # pragma: no cover - best effort at teardown
-                _log.debug("deleting %r failed", e, exc_info=True)
-
-
-def _matched(entity: Any) -> int:
-    """Number of matched remote endpoints of a writer (publications) or a reader (subscriptions)."""
-    if isinstance(entity, DataWriter):
-        return int(entity.get_publication_matched_status().current_count)
-    return int(entity.get_subscription_matched_status().current_count)
-
-
 def _op_label(op: int) -> str:
     """The name of an op number for messages ("OP_DEFORM"), or "op 99" for a number outside proto.Op."""
     try:
         return proto.Op(int(op)).name
     except ValueError:
         return f"op {int(op)}"
-
-
-def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeout: float) -> bool:
-    """Waits up to ``timeout`` seconds until every writer / reader in ``entities`` has a match; True if so."""
-    entities = list(entities)
-    deadline = time.monotonic() + timeout
-    ws = WaitSet(participant)
-    try:
-        for e in entities:
-            e.set_status_mask(DDSStatus.PublicationMatched if isinstance(e, DataWriter)
-                              else DDSStatus.SubscriptionMatched)
-            ws.attach(e)
-        while True:
-            if all(_matched(e) > 0 for e in entities):
-                return True
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return False
-            ws.wait(_ns(min(remaining, 0.05)))
-    finally:
-        for e in entities:
-            try:
-                ws.detach(e)
-                e.set_status_mask(0)
-            except Exception:  # pragma: no cover
-                pass
-        _delete(ws)
-
-
-class Inbox:
-    """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
-
-    def __init__(self, participant: DomainParticipant, topic: Topic, qos: Any,
-                 parent: Optional[Subscriber] = None, partition: Optional[str] = None) -> None:
-        """``parent``: a subscriber to read in (its partitions); ``partition``: read in this partition
-        (a subscriber of the inbox's own, deleted with it)."""
-        self._own_sub = None
-        if partition is not None:
-            parent = self._own_sub = Subscriber(participant, qos=Qos(Policy.Partition(partitions=[partition])))
-        self.reader = DataReader(parent if parent is not None else participant, topic, qos=qos)
-        self._cond = ReadCondition(self.reader, _ANY_NEW)
-        self._waitset = WaitSet(participant)
-        self._waitset.attach(self._cond)
-        self._early: List[Any] = []  # samples that arrived before the greeting (await_greeting)
-        self.greeted = False
-
-    def take(self, n: int = 64) -> List[Any]:
-        """Up to ``n`` new samples (instance-state changes without data included; check their type)."""
-        if self._early:
-            out, self._early = self._early[:n], self._early[n:]
-            return out
-        return self.reader.take(N=n, condition=self._cond)
-
-    def wait(self, timeout: float) -> None:
-        """Blocks until a new sample arrives or ``timeout`` seconds pass."""
-        if not self._early:
-            self._waitset.wait(_ns(timeout))
-
-    def await_greeting(self, timeout: float) -> bool:
-        """Waits up to ``timeout`` seconds for an ``Update`` with cause ``"watch"`` (PROTOCOL.md "Updates":
-        the server writes one to each new watcher once its writer matched it; from then on the server
-        writes every update to this reader). Other samples that arrive first are kept for :meth:`take`."""
-        deadline = time.monotonic() + timeout
-        while True:
-            for s in self.reader.take(N=64, condition=self._cond):
-                if isinstance(s, proto.Update) and s.cause == "watch" and not s.session:
-                    self.greeted = True
-                    return True
-                self._early.append(s)
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return False
-            self._waitset.wait(_ns(remaining))
-
-    def matched(self) -> int:
-        """Number of matched writers."""
-        return _matched(self.reader)
-
-    def close(self) -> None:
-        _delete(self._waitset, self._cond, self.reader, self._own_sub)
 
 
 class Client:
