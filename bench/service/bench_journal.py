@@ -5,18 +5,21 @@
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
     .venv/bin/python bench/service/bench_journal.py [--build-dir build] [--steps 200] [--blocks 5]
         [--group-ms 2] [--clients 4] [--seconds 5] [--lengths 250,1000,4000] [--journal-root DIR]
-        [--json-out r.json]
+        [--baseline-exe OLD_SERVER] [--json-out r.json]
 
 Round trip: three servers (no journal; --journal-sync group --journal-group-ms G; --journal-sync op),
 each on its own DDS domain with `--threads 1`, each with one session of the small scene
 (make_default_scene() at spacing 0.05, ~9.9k surfels; collision algorithm "none", so the step is the
 deformation alone). The client sends --steps OP_DEFORM back to back to one server, then to the next,
 for --blocks rounds; Session.deform's round trip (client side, time.perf_counter) is recorded per op.
-Medians and 90th percentiles per configuration. Then throughput: --clients clients (threads of this
+Medians and 90th percentiles per configuration. --baseline-exe adds a fourth server, another build
+of surfeledit-server (e.g. a copy of the one before a change) with the same group commit settings, to
+the same interleaved blocks: an A/B in the same period on a shared machine. Then throughput: --clients clients (threads of this
 process, one connection and one session each) step back to back for --seconds against each server.
 
 Recovery: for each length L of --lengths, a fresh journal of L steps (plus the load and the regions)
-is written by a server which is then SIGKILLed; a new server on the same directory recovers it. Reported:
+is written by a server which is then SIGKILLed; a new server on the same directory recovers it
+(--lengths "" skips this part). Reported:
 the server's own replay time (its "recovered ... in X ms" log line), the wall time from starting the
 process to its "ready" log line, and the journal's size. The journals live below --journal-root
 (default: a temporary directory under build/, the same disk as the build: fsync costs what it costs there).
@@ -120,6 +123,7 @@ def main() -> None:
     ap.add_argument("--domain", type=int, default=150 + os.getpid() % 40)
     ap.add_argument("--clients", type=int, default=4)
     ap.add_argument("--seconds", type=float, default=5.0)
+    ap.add_argument("--baseline-exe", help="another surfeledit-server build, run with the group commit settings")
     ap.add_argument("--json-out")
     args = ap.parse_args()
     build = benchlib.build_dir(args.build_dir)
@@ -129,18 +133,21 @@ def main() -> None:
     print(benchlib.machine_line())
     print(f"journal directories below {root}")
     scene = small_scene()
+    group = ["--journal-sync", "group", "--journal-group-ms", str(args.group_ms)]
     configs = {
-        "off": [],
-        f"group {args.group_ms} ms": ["--journal", str(root / "group"), "--journal-sync", "group",
-                                      "--journal-group-ms", str(args.group_ms)],
-        "fsync per op": ["--journal", str(root / "op"), "--journal-sync", "op"],
+        "off": (exe, []),
+        f"group {args.group_ms} ms": (exe, ["--journal", str(root / "group")] + group),
+        "fsync per op": (exe, ["--journal", str(root / "op"), "--journal-sync", "op"]),
     }
+    if args.baseline_exe:
+        configs[f"group {args.group_ms} ms (baseline exe)"] = (Path(args.baseline_exe),
+                                                             ["--journal", str(root / "group-baseline")] + group)
     servers: List[Server] = []
     results: Dict[str, object] = {"machine": benchlib.machine_line()}
     try:
         sessions = {}
-        for k, (name, extra) in enumerate(configs.items()):
-            srv = Server(exe, args.domain + k, root / f"rtt-{k}.log", extra)
+        for k, (name, (server_exe, extra)) in enumerate(configs.items()):
+            srv = Server(server_exe, args.domain + k, root / f"rtt-{k}.log", extra)
             servers.append(srv)
             srv.wait_ready()
             sessions[name] = open_session(srv.domain, scene)
@@ -194,7 +201,7 @@ def main() -> None:
 
         rec_rows = []
         results["recovery"] = []
-        for n, length in enumerate(int(x) for x in args.lengths.split(",")):
+        for n, length in enumerate(int(x) for x in args.lengths.split(",") if x.strip()):
             jdir = root / f"recovery-{length}"
             extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
             srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-a.log", extra)
