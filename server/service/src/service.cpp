@@ -312,9 +312,9 @@ void Service::Impl::check_leases() {
   std::vector<Expiry> expiries;
   const std::vector<std::string> expired = handler.expire_leases(events, journal ? &expiries : nullptr);
   for (const Expiry& e : expiries) journal->on_expired(e);
-  // Presence first (when nothing waits for a group commit): deleting a dead client's reply writer can block
-  // for Cyclone's writer linger duration (1 s by default) while it waits for acknowledgements that never come.
   emit(nullptr, events);
+  // Returns at once: the writer is deleted on ReplyWriters' deleter thread (a dead client's writer
+  // lingers in dds_delete for Cyclone's WriterLingerDuration, 1 s by default).
   for (const std::string& client : expired) client_replies.drop(client);
 }
 
