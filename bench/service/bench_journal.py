@@ -12,10 +12,14 @@ each on its own DDS domain with `--threads 1`, each with one session of the smal
 (make_default_scene() at spacing 0.05, ~9.9k surfels; collision algorithm "none", so the step is the
 deformation alone). The client sends --steps OP_DEFORM back to back to one server, then to the next,
 for --blocks rounds; Session.deform's round trip (client side, time.perf_counter) is recorded per op.
-Medians and 90th percentiles per configuration. --baseline-exe adds a fourth server, another build
+Medians and 90th percentiles per configuration (wall time: on a shared machine it carries the others'
+load, and fdatasync's time carries their disk writes; --journal-root on a tmpfs such as /dev/shm takes
+the disk out and leaves the code path). --baseline-exe adds a fourth server, another build
 of surfeledit-server (e.g. a copy of the one before a change) with the same group commit settings, to
 the same interleaved blocks: an A/B in the same period on a shared machine. Then throughput: --clients clients (threads of this
-process, one connection and one session each) step back to back for --seconds against each server.
+process, one connection and one session each) step back to back for --seconds against each server;
+reported with the server's CPU time per step (user + system of all its threads, from /proc), which
+the other processes' load disturbs far less than the rate.
 
 Recovery: for each length L of --lengths, a fresh journal of L steps (plus the load and the regions)
 is written by a server which is then SIGKILLed; a new server on the same directory recovers it
@@ -70,6 +74,11 @@ class Server:
                                          stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
                                          start_new_session=True)
         self.domain = domain
+
+    def cpu_s(self) -> float:
+        """The server process's CPU time so far (user + system, all threads), seconds."""
+        fields = Path(f"/proc/{self.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
     def text(self) -> str:
         return self.log.read_text(errors="replace")
@@ -184,17 +193,20 @@ def main() -> None:
                 counts[c] = i
 
             threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
+            cpu0 = servers[k].cpu_s()
             for t in threads:
                 t.start()
             for t in threads:
                 t.join()
+            cpu_ms = (servers[k].cpu_s() - cpu0) * 1e3 / max(sum(counts), 1)
             rate = sum(counts) / args.seconds
-            tput_rows.append([name, args.clients, f"{rate:.0f}"])
+            tput_rows.append([name, args.clients, f"{rate:.0f}", f"{cpu_ms:.3f}"])
             results["throughput"][name] = rate
+            results.setdefault("server_cpu_ms_per_step", {})[name] = cpu_ms
             for s in many:
                 s.client.close()
         print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
-        print(benchlib.table(["journal", "clients", "steps/s (all clients)"], tput_rows))
+        print(benchlib.table(["journal", "clients", "steps/s (all clients)", "server CPU ms / step"], tput_rows))
         for srv in servers:
             srv.stop()
         servers.clear()
