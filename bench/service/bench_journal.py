@@ -5,18 +5,25 @@
 Run (after scripts/setup.sh; needs build/server/app/surfeledit-server):
     .venv/bin/python bench/service/bench_journal.py [--build-dir build] [--steps 200] [--blocks 5]
         [--group-ms 2] [--clients 4] [--seconds 5] [--lengths 250,1000,4000] [--journal-root DIR]
-        [--json-out r.json]
+        [--baseline-exe OLD_SERVER] [--json-out r.json]
 
 Round trip: three servers (no journal; --journal-sync group --journal-group-ms G; --journal-sync op),
 each on its own DDS domain with `--threads 1`, each with one session of the small scene
 (make_default_scene() at spacing 0.05, ~9.9k surfels; collision algorithm "none", so the step is the
 deformation alone). The client sends --steps OP_DEFORM back to back to one server, then to the next,
 for --blocks rounds; Session.deform's round trip (client side, time.perf_counter) is recorded per op.
-Medians and 90th percentiles per configuration. Then throughput: --clients clients (threads of this
-process, one connection and one session each) step back to back for --seconds against each server.
+Medians and 90th percentiles per configuration (wall time: on a shared machine it carries the others'
+load, and fdatasync's time carries their disk writes; --journal-root on a tmpfs such as /dev/shm takes
+the disk out and leaves the code path). --baseline-exe adds a fourth server, another build
+of surfeledit-server (e.g. a copy of the one before a change) with the same group commit settings, to
+the same interleaved blocks: an A/B in the same period on a shared machine. Then throughput: --clients clients (threads of this
+process, one connection and one session each) step back to back for --seconds against each server;
+reported with the server's CPU time per step (user + system of all its threads, from /proc), which
+the other processes' load disturbs far less than the rate.
 
 Recovery: for each length L of --lengths, a fresh journal of L steps (plus the load and the regions)
-is written by a server which is then SIGKILLed; a new server on the same directory recovers it. Reported:
+is written by a server which is then SIGKILLed; a new server on the same directory recovers it
+(--lengths "" skips this part). Reported:
 the server's own replay time (its "recovered ... in X ms" log line), the wall time from starting the
 process to its "ready" log line, and the journal's size. The journals live below --journal-root
 (default: a temporary directory under build/, the same disk as the build: fsync costs what it costs there).
@@ -67,6 +74,11 @@ class Server:
                                          stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
                                          start_new_session=True)
         self.domain = domain
+
+    def cpu_s(self) -> float:
+        """The server process's CPU time so far (user + system, all threads), seconds."""
+        fields = Path(f"/proc/{self.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
     def text(self) -> str:
         return self.log.read_text(errors="replace")
@@ -120,6 +132,7 @@ def main() -> None:
     ap.add_argument("--domain", type=int, default=150 + os.getpid() % 40)
     ap.add_argument("--clients", type=int, default=4)
     ap.add_argument("--seconds", type=float, default=5.0)
+    ap.add_argument("--baseline-exe", help="another surfeledit-server build, run with the group commit settings")
     ap.add_argument("--json-out")
     args = ap.parse_args()
     build = benchlib.build_dir(args.build_dir)
@@ -129,18 +142,21 @@ def main() -> None:
     print(benchlib.machine_line())
     print(f"journal directories below {root}")
     scene = small_scene()
+    group = ["--journal-sync", "group", "--journal-group-ms", str(args.group_ms)]
     configs = {
-        "off": [],
-        f"group {args.group_ms} ms": ["--journal", str(root / "group"), "--journal-sync", "group",
-                                      "--journal-group-ms", str(args.group_ms)],
-        "fsync per op": ["--journal", str(root / "op"), "--journal-sync", "op"],
+        "off": (exe, []),
+        f"group {args.group_ms} ms": (exe, ["--journal", str(root / "group")] + group),
+        "fsync per op": (exe, ["--journal", str(root / "op"), "--journal-sync", "op"]),
     }
+    if args.baseline_exe:
+        configs[f"group {args.group_ms} ms (baseline exe)"] = (Path(args.baseline_exe),
+                                                             ["--journal", str(root / "group-baseline")] + group)
     servers: List[Server] = []
     results: Dict[str, object] = {"machine": benchlib.machine_line()}
     try:
         sessions = {}
-        for k, (name, extra) in enumerate(configs.items()):
-            srv = Server(exe, args.domain + k, root / f"rtt-{k}.log", extra)
+        for k, (name, (server_exe, extra)) in enumerate(configs.items()):
+            srv = Server(server_exe, args.domain + k, root / f"rtt-{k}.log", extra)
             servers.append(srv)
             srv.wait_ready()
             sessions[name] = open_session(srv.domain, scene)
@@ -177,24 +193,27 @@ def main() -> None:
                 counts[c] = i
 
             threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
+            cpu0 = servers[k].cpu_s()
             for t in threads:
                 t.start()
             for t in threads:
                 t.join()
+            cpu_ms = (servers[k].cpu_s() - cpu0) * 1e3 / max(sum(counts), 1)
             rate = sum(counts) / args.seconds
-            tput_rows.append([name, args.clients, f"{rate:.0f}"])
+            tput_rows.append([name, args.clients, f"{rate:.0f}", f"{cpu_ms:.3f}"])
             results["throughput"][name] = rate
+            results.setdefault("server_cpu_ms_per_step", {})[name] = cpu_ms
             for s in many:
                 s.client.close()
         print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
-        print(benchlib.table(["journal", "clients", "steps/s (all clients)"], tput_rows))
+        print(benchlib.table(["journal", "clients", "steps/s (all clients)", "server CPU ms / step"], tput_rows))
         for srv in servers:
             srv.stop()
         servers.clear()
 
         rec_rows = []
         results["recovery"] = []
-        for n, length in enumerate(int(x) for x in args.lengths.split(",")):
+        for n, length in enumerate(int(x) for x in args.lengths.split(",") if x.strip()):
             jdir = root / f"recovery-{length}"
             extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
             srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-a.log", extra)

@@ -106,8 +106,9 @@ int main(int argc, char** argv) {
                  "missing; one server per directory)");
   std::string journal_sync = "op";
   app.add_option("--journal-sync", journal_sync,
-                 "When journal records reach the disk: fsync before every reply (op), or one fsync per group of "
-                 "--journal-group-ms whose replies wait for it (group)")
+                 "When journal records reach the disk: fsync before every reply (op), or one fsync per group, "
+                 "committed when no more requests are ready or after --journal-group-ms, whose replies wait "
+                 "for it (group)")
       ->capture_default_str()
       ->check(CLI::IsMember({"op", "group"}));
   app.add_option("--journal-group-ms", config.journal.group_ms,

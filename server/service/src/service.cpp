@@ -141,8 +141,10 @@ struct Service::Impl {
   // The journal's group deadline and fsync failure: throws JournalError when it failed.
   void flush_journal(bool force);
   // Applies the queued liveliness / match changes of request writers and detaches clients whose
-  // lease ran out; returns how long the waitset may sleep before the next lease check.
-  dds_duration_t check_leases();
+  // lease ran out.
+  void check_leases();
+  // How long the waitset may sleep: until the next lease check or the open group's deadline.
+  dds_duration_t next_wake() const;
 
   void serve_available();
   void serve(const surfeledit_proto_Request& request, dds_instance_handle_t sender);
@@ -311,7 +313,7 @@ void Service::Impl::finish_loads() {
   emit(replies.empty() ? nullptr : replies.back(), events);
 }
 
-dds_duration_t Service::Impl::check_leases() {
+void Service::Impl::check_leases() {
   writer_wake.clear();
   for (const dds::WriterEvents::Event& e : writer_events.take()) {
     if (e.alive) {
@@ -324,10 +326,13 @@ dds_duration_t Service::Impl::check_leases() {
   std::vector<Expiry> expiries;
   const std::vector<std::string> expired = handler.expire_leases(events, journal ? &expiries : nullptr);
   for (const Expiry& e : expiries) journal->on_expired(e);
-  // Presence first (when nothing waits for a group commit): deleting a dead client's reply writer can block
-  // for Cyclone's writer linger duration (1 s by default) while it waits for acknowledgements that never come.
   emit(nullptr, events);
+  // Returns at once: the writer is deleted on ReplyWriters' deleter thread (a dead client's writer
+  // lingers in dds_delete for Cyclone's WriterLingerDuration, 1 s by default).
   for (const std::string& client : expired) client_replies.drop(client);
+}
+
+dds_duration_t Service::Impl::next_wake() const {
   dds_duration_t sleep = DDS_INFINITY;
   if (const auto next = handler.next_lease_check()) sleep = DDS_MSECS(next->count() + 1);
   if (journal && journal->deadline()) {
@@ -432,16 +437,20 @@ Service::~Service() = default;
 void Service::run() {
   Impl& s = *impl_;
   logger()->debug("serving requests on domain {}", s.config.domain);
-  dds_duration_t sleep = s.check_leases();  // leases of clients recovered from the journal run already
+  s.check_leases();  // leases of clients recovered from the journal run already
+  s.flush_journal(true);
   while (!s.stopping.load()) {
-    s.waitset.wait(sleep);
+    s.waitset.wait(s.next_wake());
     if (s.stopping.load()) break;
     s.flush_journal(false);
     s.greet_watchers();
     s.finish_loads();
     s.serve_available();
-    sleep = s.check_leases();
-    s.flush_journal(false);
+    s.check_leases();
+    // The request reader is empty (serve_available took until nothing was left): the open group is
+    // committed now rather than at its deadline, so a lone client does not wait for group_ms; requests
+    // that arrive during this fsync form the next group (PROTOCOL.md "Journal").
+    s.flush_journal(true);
   }
   s.flush_journal(true);  // the last group's replies go out before stopping
   s.stop_publisher();
