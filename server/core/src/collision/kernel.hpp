@@ -32,9 +32,8 @@
 //     // One step for a point the broad phase ruled out (no zero surfel within its step). Returns
 //     // the queries made.
 //     Index not_candidate(State& s, const TestPoint& pt) const;
-//     // A point not tested this step because its cluster is inactive (it keeps "not colliding"); `pt`
-//     // where it is now.
-//     void skip(State& s, const TestPoint& pt) const;
+//     // A point not tested this step because its cluster is inactive (it keeps "not colliding").
+//     void skip(State& s) const;
 //     // The state of a child split from `parent`, the child at p (§4.4, thesis §6.5); then the
 //     // parent's own state once it sits at p. Called through split_states() (children first).
 //     State child(const State& parent, const Vec3& p) const;
@@ -65,9 +64,6 @@ struct TestPoint {
   Vec3 p;                        // position now
   const double* r = nullptr;     // -> disc radius (model units)
   const double* prev = nullptr;  // -> position before the step (3 doubles, for the step bound)
-  // The driver guarantees that `prev` is where the point was at the end of its last update (a row of the
-  // model: `previous` holds the positions before the step, and every step updates or skips every row).
-  bool tracked = false;
 
   double radius() const { return *r; }
   Vec3 previous() const { return Vec3(prev[0], prev[1], prev[2]); }
@@ -75,7 +71,7 @@ struct TestPoint {
 
 // The TestPoint of row r of a step (`previous`: #P by 3, row-major).
 inline TestPoint row_point(const CollisionScene& scene, const Points& previous, Index r) {
-  return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0), true};
+  return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0)};
 }
 
 // The zero surfel nearest to a point, as init() needs it.

@@ -23,16 +23,12 @@ class RobustKernel {
   static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
   static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at old_position
   static constexpr std::uint8_t kCrossed = 8;      // swept: the last step passed through the solid
-  // old_position is not stored: it is where the point was at the end of its last update, i.e. its position
-  // before the step (TestPoint::previous) at its next one. Only for points whose driver guarantees that
-  // (TestPoint::tracked); it spares a write of every state at every step (most points are not tested).
-  static constexpr std::uint8_t kOldIsPrevious = 16;
 
   // One cache line per point: the row sweep touches every state every step.
   struct alignas(64) State {
     Sphere sphere;                     // holds no original surfel
-    Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide (kOldIsPrevious: stale)
-    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed | kOldIsPrevious
+    Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
+    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
     bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
   };
   static constexpr bool kSeeded = true;
@@ -58,8 +54,8 @@ class RobustKernel {
   }
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt);
-    finish(s, pt);
+    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
+    finish(s, pt.p);
     return made;
   }
   // Not a candidate: it keeps its collision state. If it left its sphere and does not collide, its
@@ -72,17 +68,13 @@ class RobustKernel {
       s.flags |= kFirstUpdate;
       s.sphere = {pt.p, 0.0};
     }
-    finish(s, pt);
+    finish(s, pt.p);
     return 0;
   }
   // Its inside state may go stale while it is not tested, so its next test re-derives it from
   // old_position (the last position at which it was found not colliding), as after a reset: the
-  // parity then compares that position with the new one, across the untested steps. `pt`: where it is
-  // (an implicit old position is stored now, before the untested steps move it).
-  void skip(State& s, const TestPoint& pt) const {
-    store_old(s, pt);
-    s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed);
-  }
+  // parity then compares that position with the new one, across the untested steps.
+  void skip(State& s) const { s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed); }
   // Child: the parent's state (inside, colliding, first update, old position) and the sphere rule.
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
@@ -108,13 +100,11 @@ class RobustKernel {
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
   // Out of line: most points of a step are not tested, and the sweep inlines update() around it.
-  [[gnu::noinline]] Index test(State& s, const TestPoint& pt) const {
+  [[gnu::noinline]] Index test(State& s, const Vec3& p1, const Vec3& p0) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
-    const Vec3& p1 = pt.p;
     double r_near = 0.0;  // radius of the reference surfel nearest to p1
-    Index made = params_.inside == InsideMode::Nearest ? test_original(s, pt, r_near) : test_zero(s, pt, r_near);
+    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, r_near) : test_zero(s, p1, r_near);
     if (params_.swept && !s.colliding()) {
-      const Vec3 p0 = pt.previous();
       if (InsideModel::may_cross(p1 - p0, r_near) && inside_->crossed(p0, p1, made)) {
         s.flags |= kCrossed;
         s.sphere.rho2 = 0.0;  // tested again at the next step
@@ -123,13 +113,12 @@ class RobustKernel {
     return made;
   }
   // The inside state against the rigid solid (InsideModel); every change counts.
-  Index test_zero(State& s, const TestPoint& pt, double& r_near) const {
+  Index test_zero(State& s, const Vec3& p1, double& r_near) const {
     Index made = 0;
-    const Vec3& p1 = pt.p;
     if (s.flags & kFirstUpdate) {
       s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
       ++made;
-      set_inside(s, inside_->probe(old_position(s, pt)).inside);
+      set_inside(s, inside_->probe(s.old_position).inside);
     }
     const InsideModel::Probe pr = inside_->probe(p1);
     ++made;
@@ -140,16 +129,14 @@ class RobustKernel {
     return made;
   }
   // The thesis's test against the original model (Code 6.8).
-  Index test_original(State& s, const TestPoint& pt, double& r_near) const {
+  Index test_original(State& s, const Vec3& p1, double& r_near) const {
     Index made = 0;
-    const Vec3& p1 = pt.p;
     const double w = params_.threshold;
     if (s.flags & kFirstUpdate) {
       s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
-      const Vec3 old = old_position(s, pt);
-      const Index k = orig_.tree->nearest(old);
+      const Index k = orig_.tree->nearest(s.old_position);
       ++made;
-      set_inside(s, (old - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < w);
+      set_inside(s, (s.old_position - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < w);
     }
     const Index k = orig_.tree->nearest(p1);
     ++made;
@@ -164,26 +151,8 @@ class RobustKernel {
   // End of every step: the position of a point that does not collide is the last non-colliding one.
   // The inside model over the alive zero surfels, when `inside` or `swept` needs it.
   void build_inside();
-  // A point that collides keeps its old position: one left implicit is stored first (it is the position
-  // before this step). Writes only what changes, so an untested point's state is not touched.
-  static void finish(State& s, const TestPoint& pt) {
-    if (s.flags & kColliding) {
-      store_old(s, pt);
-    } else if (!pt.tracked) {
-      s.old_position = pt.p;
-    } else if (!(s.flags & kOldIsPrevious)) {
-      s.flags |= kOldIsPrevious;
-    }
-  }
-  // The last position at which the point did not collide, as of the start of this step.
-  static Vec3 old_position(const State& s, const TestPoint& pt) {
-    return (s.flags & kOldIsPrevious) ? pt.previous() : s.old_position;
-  }
-  // Makes an implicit old position explicit (it is the position before this step).
-  static void store_old(State& s, const TestPoint& pt) {
-    if (!(s.flags & kOldIsPrevious)) return;
-    s.old_position = pt.previous();
-    s.flags &= static_cast<std::uint8_t>(~kOldIsPrevious);
+  static void finish(State& s, const Vec3& p1) {
+    if (!(s.flags & kColliding)) s.old_position = p1;
   }
   static void set_inside(State& s, bool in) {
     s.flags = in ? (s.flags | kInside) : (s.flags & static_cast<std::uint8_t>(~kInside));
