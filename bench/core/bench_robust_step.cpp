@@ -11,7 +11,8 @@
 //   default; hierarchy 0: none, 1: zero AABB tree + deformable AABB tree. Counters: median and max
 //   detect_ms over the steps, preprocess_ms (the detector's reset), re-tested surfels per step (median).
 // BM_IdleDrag/<hierarchy>: one iteration = one step of +-1e-4 (a hundredth of the spacing) from the start
-//   state: no point leaves its sphere, nothing is re-tested (checked); counter detect_ms (mean).
+//   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
+//   history_kb_per_step (what 16 more such steps add to the undo history, per step).
 // BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
 // BM_DetectRun/<hierarchy>, BM_DetectIdle/<hierarchy>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
@@ -134,6 +135,17 @@ void BM_IdleDrag(benchmark::State& state) {
     step.translation = -step.translation;
   }
   state.counters["detect_ms"] = detect / std::max(n, 1.0);
+  // The undo history's growth per step (deterministic, unlike the times): 16 steps of a fresh session
+  // (the timed one's history is at its bound by now).
+  session = scene.session(true, state.range(0) != 0);
+  auto history_bytes = [&] {
+    for (const StructureInfo& s : session->report().structures)
+      if (s.name == "history") return static_cast<double>(s.bytes);
+    return 0.0;
+  };
+  const double h0 = history_bytes();
+  for (int k = 0; k < 16; ++k, step.translation = -step.translation) session->deform(step);
+  state.counters["history_kb_per_step"] = (history_bytes() - h0) / 16.0 / 1024.0;
 }
 
 void BM_Preprocess(benchmark::State& state) {
