@@ -52,7 +52,7 @@ class RobustKernel {
   double depth(const State& s, const Vec3& p) const {
     return std::max(0.0, std::sqrt(s.sphere.rho2) - (p - s.sphere.center).norm());
   }
-  Index update(State& s, const TestPoint& pt) const {
+  [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
     if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
     finish(s, pt.p);
@@ -99,7 +99,8 @@ class RobustKernel {
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
-  Index test(State& s, const Vec3& p1, const Vec3& p0) const {
+  // Out of line: most points of a step are not tested, and the sweep inlines update() around it.
+  [[gnu::noinline]] Index test(State& s, const Vec3& p1, const Vec3& p0) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
     double r_near = 0.0;  // radius of the reference surfel nearest to p1
     Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, r_near) : test_zero(s, p1, r_near);

@@ -1,0 +1,238 @@
+// The Robust detector's step on the piercing scene (issue 14): the scene of surfeledit.scenes.piercing
+// rebuilt in C++ (a 2.59 x 2.59 x 0.15 plate, the zero region, and a ball of radius 0.691, the one
+// region, ~210k surfels at spacing 0.01, ~60k deformable), one thread, so that a profiler sees the
+// steps alone and not the scenario's Python set-up.
+//
+// Run (built with -DSURFELEDIT_BUILD_BENCH=ON):
+//   taskset -c 1 build/bench/surfeledit_bench_robust_step [--benchmark_repetitions=N]
+//
+// BM_PiercingRun/<history>/<hierarchy>: one iteration = the scenario's 50 steps (the ball pushed through
+//   the plate) from a fresh session (set-up untimed). history 0: history_mb 0 (no before-image), 1: the
+//   default; hierarchy 0: none, 1: zero AABB tree + deformable AABB tree. Counters: median and max
+//   detect_ms over the steps, preprocess_ms (the detector's reset), re-tested surfels per step (median).
+// BM_IdleDrag/<hierarchy>: one iteration = one step of +-1e-4 (a hundredth of the spacing) from the start
+//   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
+//   history_kb_per_step (what 16 more such steps add to the undo history, per step).
+// BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
+// BM_DetectRun/<hierarchy>, BM_DetectIdle/<hierarchy>: the detector alone (make_detector, reset, detect), the
+//   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
+//   session, no history). Counters: median / max thread CPU ms of one detect (detect_cpu_*), as the CPU
+//   column is of the whole iteration; use them on a loaded machine.
+#include <benchmark/benchmark.h>
+
+#include <time.h>
+
+#include <algorithm>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/scene.hpp"
+
+namespace {
+
+using namespace surfeledit;
+
+constexpr double kSpacing = 0.01;      // surfel spacing of the full-size piercing scene, model units
+constexpr double kHalfWidth = 1.296;   // plate half width
+constexpr double kHalfThick = 0.075;   // plate half thickness
+constexpr double kBall = 0.691;        // ball radius
+constexpr int kSteps = 50;             // steps of the scenario
+
+// The piercing scene, sampled once per process (as surfeledit.scenes.piercing(scale=1, seed=1)).
+struct Piercing {
+  SurfelArrays arrays;
+  IdList zero, one;
+  double z0 = 0.0;  // the ball's start height above the plate's centre
+
+  Piercing() {
+    z0 = kHalfThick + kBall + 2.0 * kSpacing;
+    Scene scene;
+    scene.add(make_box(Vec3(kHalfWidth, kHalfWidth, kHalfThick)));
+    Pose ball;
+    ball.translation = Vec3(0.0, 0.0, z0);
+    ball.rotation = Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+    scene.add(make_sphere(kBall, ball));
+    const SampledSurfels s = scene.sample(SampleParams{kSpacing, 1, 0.25});
+    arrays.positions = s.positions;
+    arrays.normals = s.normals;
+    arrays.radii = s.radii;
+    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
+  }
+  static const Piercing& get() {
+    static const Piercing p;
+    return p;
+  }
+  // A session with the scene loaded, its regions set and Robust configured (one thread).
+  std::unique_ptr<EditSession> session(bool history, bool hierarchy) const {
+    auto s = std::make_unique<EditSession>("bench", SessionParams{1});
+    s->load(SurfelModel::from_arrays(arrays));
+    s->set_regions({zero, {}}, {one, {}});
+    std::vector<NamedSetting> set = {{"algorithm", std::string("robust")}, {"threads", std::int64_t{1}}};
+    if (!history) set.push_back({"history_mb", 0.0});
+    if (hierarchy) {
+      set.push_back({"zero_hierarchy", std::string("aabb")});
+      set.push_back({"deformable_hierarchy", std::string("aabb")});
+    }
+    s->configure(set);
+    return s;
+  }
+};
+
+// CPU time of the calling thread, ms.
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void BM_PiercingRun(benchmark::State& state) {
+  const Piercing& scene = Piercing::get();
+  DeformParams step;
+  step.translation = Vec3(0.0, 0.0, -2.0 * scene.z0 / kSteps);
+  std::vector<double> detect, tested;
+  double preprocess = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto session = scene.session(state.range(0) != 0, state.range(1) != 0);
+    state.ResumeTiming();
+    for (int k = 0; k < kSteps; ++k) {
+      const StepResult r = session->deform(step);
+      detect.push_back(r.stats.detect_ms);
+      tested.push_back(static_cast<double>(r.stats.tested));
+      preprocess = r.stats.preprocess_ms;
+    }
+    state.PauseTiming();
+    session.reset();  // freed untimed
+    state.ResumeTiming();
+  }
+  state.counters["detect_median_ms"] = median(detect);
+  state.counters["detect_max_ms"] = *std::max_element(detect.begin(), detect.end());
+  state.counters["preprocess_ms"] = preprocess;
+  state.counters["retested_median"] = median(tested);
+}
+
+void BM_IdleDrag(benchmark::State& state) {
+  const Piercing& scene = Piercing::get();
+  auto session = scene.session(true, state.range(0) != 0);
+  DeformParams step;
+  step.translation = Vec3(1e-4, 0.0, 0.0);
+  double detect = 0.0, n = 0.0;
+  for (auto _ : state) {
+    const StepResult r = session->deform(step);
+    if (r.stats.tested != 0) throw std::runtime_error("idle drag re-tested surfels");
+    detect += r.stats.detect_ms;
+    n += 1.0;
+    step.translation = -step.translation;
+  }
+  state.counters["detect_ms"] = detect / std::max(n, 1.0);
+  // The undo history's growth per step (deterministic, unlike the times): 16 steps of a fresh session
+  // (the timed one's history is at its bound by now).
+  session = scene.session(true, state.range(0) != 0);
+  auto history_bytes = [&] {
+    for (const StructureInfo& s : session->report().structures)
+      if (s.name == "history") return static_cast<double>(s.bytes);
+    return 0.0;
+  };
+  const double h0 = history_bytes();
+  for (int k = 0; k < 16; ++k, step.translation = -step.translation) session->deform(step);
+  state.counters["history_kb_per_step"] = (history_bytes() - h0) / 16.0 / 1024.0;
+}
+
+void BM_Preprocess(benchmark::State& state) {
+  const Piercing& scene = Piercing::get();
+  auto session = scene.session(true, false);
+  double preprocess = 0.0;
+  for (auto _ : state) {
+    session->configure({{"algorithm", std::string("robust")}});
+    state.PauseTiming();
+    preprocess = session->deform(DeformParams{}).stats.preprocess_ms;  // reports the reset's time
+    state.ResumeTiming();
+  }
+  state.counters["preprocess_ms"] = preprocess;
+}
+
+// The detector of the piercing scene on its own: positions, regions and a Robust detector (one thread).
+struct DetectorRun {
+  Points positions, previous;
+  std::vector<Region> regions;
+  std::unique_ptr<CollisionDetector> detector;
+  const Piercing& scene = Piercing::get();
+
+  explicit DetectorRun(bool hierarchy) {
+    positions = scene.arrays.positions;
+    previous = positions;
+    regions.assign(static_cast<std::size_t>(positions.rows()), Region::Zero);
+    for (SurfelId id : scene.one) regions[id] = Region::One;
+    SessionSettings settings;
+    settings.collision.algorithm = CollisionAlgorithm::Robust;
+    settings.collision.threads = 1;
+    if (hierarchy) {
+      settings.hierarchy.zero = ZeroHierarchy::Aabb;
+      settings.hierarchy.deformable = DeformableHierarchy::Aabb;
+    }
+    detector = make_detector(settings);
+    detector->reset(CollisionScene{positions, scene.arrays.normals, scene.arrays.radii, regions});
+  }
+  // Moves the ball by t (untimed by the caller), then detects; returns {thread CPU ms, re-tested}.
+  std::pair<double, Index> step(const Vec3& t) {
+    previous = positions;
+    for (SurfelId id : scene.one) positions.row(static_cast<Index>(id)) += t.transpose();
+    const double c0 = thread_cpu_ms();
+    const CollisionResult r = detector->detect(CollisionScene{positions, scene.arrays.normals, scene.arrays.radii, regions},
+                                               previous);
+    const double cpu = thread_cpu_ms() - c0;
+    benchmark::DoNotOptimize(r.colliding.data());
+    return {cpu, r.stats.tested};
+  }
+};
+
+void BM_DetectRun(benchmark::State& state) {
+  std::vector<double> cpu;
+  const Vec3 t(0.0, 0.0, -2.0 * Piercing::get().z0 / kSteps);
+  for (auto _ : state) {
+    state.PauseTiming();
+    DetectorRun run(state.range(0) != 0);
+    for (int k = 0; k < kSteps; ++k) {
+      state.ResumeTiming();
+      // The move is timed too (a copy and 60k row updates, the same in A and B).
+      cpu.push_back(run.step(t).first);
+      state.PauseTiming();
+    }
+    state.ResumeTiming();
+  }
+  state.counters["detect_cpu_median_ms"] = median(cpu);
+  state.counters["detect_cpu_max_ms"] = *std::max_element(cpu.begin(), cpu.end());
+}
+
+void BM_DetectIdle(benchmark::State& state) {
+  DetectorRun run(state.range(0) != 0);
+  Vec3 t(1e-4, 0.0, 0.0);
+  std::vector<double> cpu;
+  for (auto _ : state) {
+    const auto [ms, tested] = run.step(t);
+    if (tested != 0) throw std::runtime_error("idle step re-tested surfels");
+    cpu.push_back(ms);
+    t = -t;
+  }
+  state.counters["detect_cpu_median_ms"] = median(cpu);
+}
+
+BENCHMARK(BM_DetectRun)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_DetectIdle)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Preprocess)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
