@@ -73,6 +73,8 @@ std::vector<std::pair<std::string, std::size_t>> CollisionDetector::structures()
   return {{std::string("collision_") + to_string(params_.algorithm), memory_bytes()}};
 }
 
+bool CollisionDetector::on_rigid_moved(const CollisionScene&, const IndexList&) { return false; }
+
 bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 
 HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
@@ -180,6 +182,24 @@ void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, dou
   rows = zero_rows;
   marked.assign(zero_rows.size(), 0);
   tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
+}
+
+bool ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
+  IndexList at(moved.size());
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    const auto it = std::lower_bound(rows.begin(), rows.end(), moved[j]);
+    if (it == rows.end() || *it != moved[j]) return false;  // not a zero row of this set
+    at[j] = static_cast<Index>(it - rows.begin());
+  }
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    const Index r = moved[j], k = at[j];
+    positions.row(k) = scene.positions.row(r);
+    normals.row(k) = scene.normals.row(r);
+    radii[k] = scene.radii[r];
+  }
+  // A new tree: the old one may be shared by clones (history images) that keep the old positions.
+  if (!moved.empty()) tree = std::make_shared<const KdTree>(positions, nearest_tree_params(knn_eps));
+  return true;
 }
 
 void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {

@@ -82,6 +82,9 @@ struct ZeroSet {
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.
   void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads);
+  // Rows `moved` (ascending model rows) moved: their copies take `scene`'s values, the tree is rebuilt (a
+  // new object), the boundary marks are kept. False (nothing changed) when one of them is not in `rows`.
+  bool move_rows(const CollisionScene& scene, const IndexList& moved);
   // Index (into the copies) of the zero surfel nearest to p; -1 when there is none.
   Index nearest(const Vec3& p) const { return tree->nearest(p); }
   // Drops removed rows (marks of the survivors are kept) and renumbers rows; rebuilds the tree

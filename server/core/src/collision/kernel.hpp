@@ -41,6 +41,11 @@
 //     // Rows removed (`keep` per old row, `new_row` from remap_rows) / `added` rows appended.
 //     void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
 //     void on_inserted(Index added);
+//     // Zero rows `rows` (ascending) moved (CollisionDetector::on_rigid_moved): updates the references
+//     // for them and the states of `deformable` that depended on where they were; false, nothing
+//     // changed, when the kernel cannot (the detector is then reset).
+//     bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+//                         std::vector<State>& states, int threads);
 //     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
 //     const ZeroSet* zero_set() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
@@ -95,24 +100,67 @@ struct Sphere {
   }
 };
 
-// The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p)` gives
-// the NearestZero of p.
+// The nearest point of `tree` (built over `points`, indices into it) to p, warm-started from `hint` (the
+// answer for a nearby earlier query, or -1): the bound |p - points[hint]|^2, widened by a relative 1e-9
+// for the tree's local-frame rounding, holds the nearest point, so the answer is nearest(p)'s exactly
+// (ties go to the lower index either way) with far less of the tree visited when p is far from every
+// point (a deformable surfel 0.5 away from the zero region visits thousands of leaves cold). `hint`
+// becomes the answer.
+inline Index warm_nearest(const KdTree& tree, const Points& points, const Vec3& p, Index& hint) {
+  Index k = -1;
+  if (hint >= 0) k = tree.nearest_within(p, (p - row3(points, hint)).squaredNorm() * (1.0 + 1e-9) + 1e-300);
+  if (k < 0) k = tree.nearest(p);
+  hint = k;
+  return k;
+}
+
+// The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p, hint)` gives
+// the NearestZero of p, `hint` being the thread's warm start for warm_nearest (-1 at first; rows are
+// taken in order, so consecutive queries are mostly neighbours). Results do not depend on the threads.
 template <typename Kernel, typename Nearest>
 void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads,
                  Nearest nearest, std::vector<typename Kernel::State>& states) {
   const Index n = static_cast<Index>(rows.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (Index q = 0; q < n; ++q) {
-    const Index r = rows[q];
-    const Vec3 p = row3(positions, r);
-    states[r] = kernel.init(p, nearest(p));
+#pragma omp parallel num_threads(threads)
+  {
+    Index hint = -1;
+#pragma omp for schedule(static)
+    for (Index q = 0; q < n; ++q) {
+      const Index r = rows[q];
+      const Vec3 p = row3(positions, r);
+      states[r] = kernel.init(p, nearest(p, hint));
+    }
   }
 }
 
-// The NearestZero of p in `zero`.
-inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
-  const Index k = zero.nearest(p);
+// The NearestZero of p in `zero` (warm-started from `hint`, see warm_nearest).
+inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p, Index& hint) {
+  const Index k = warm_nearest(*zero.tree, zero.positions, p, hint);
   return {(p - row3(zero.positions, k)).squaredNorm(), zero.radii[k]};
+}
+
+// The rows of `deformable` (in its order) whose state's sphere holds (strictly) one of the rows `moved` at
+// its position in `scene` now: their points must be tested at their next step (a sphere held no reference
+// surfel before, and the surfels that did not move still lie outside it).
+template <typename State>
+IndexList spheres_holding(const CollisionScene& scene, const IndexList& moved, const IndexList& deformable,
+                          const std::vector<State>& states, int threads) {
+  IndexList out;
+  if (moved.empty()) return out;
+  const KdTree near(scene.positions, moved);
+  const Index n = static_cast<Index>(deformable.size());
+  std::vector<std::uint8_t> hit(deformable.size(), 0);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (Index q = 0; q < n; ++q) {
+    const Sphere& sphere = states[deformable[q]].sphere;
+    if (!(sphere.rho2 > 0.0)) continue;
+    // Widened for the tree's local-frame rounding; contains() decides in world coordinates.
+    const Index k = near.nearest_within(sphere.center, sphere.rho2 * (1.0 + 1e-9));
+    hit[q] = k >= 0 && sphere.contains(row3(scene.positions, k));
+  }
+  for (std::size_t q = 0; q < hit.size(); ++q)
+    if (hit[q]) out.push_back(deformable[q]);
+  return out;
 }
 
 // Appends the states of split surfels: rows first_child + k were split from parents[k] (all children

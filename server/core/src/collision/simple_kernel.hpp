@@ -64,6 +64,10 @@ class SimpleKernel : public ZeroSetKernel {
   void skip(State&) const {}
   State child(const State& parent, const Vec3&) const { return parent; }
   void keep_parent(State&, const Vec3&) const {}
+  // Every point queries its nearest zero surfel every step: the zero copies are all there is to update.
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList&, std::vector<State>&, int) {
+    return zero_.move_rows(scene, rows);
+  }
 };
 
 }  // namespace surfeledit::detail

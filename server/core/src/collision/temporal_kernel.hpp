@@ -42,7 +42,7 @@ class TemporalKernel : public ZeroSetKernel {
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             std::vector<State>& states) const {
-    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p) { return nearest_zero(zero_, p); },
+    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p, Index& hint) { return nearest_zero(zero_, p, hint); },
                 states);
   }
   State init(const Vec3& p, const NearestZero& z) const {
@@ -71,6 +71,14 @@ class TemporalKernel : public ZeroSetKernel {
   void skip(State&) const {}
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
+  // The zero copies, then the spheres that now hold a moved zero surfel. Not with an inside model
+  // (winding, vote, swept): a moved part changes the solid those test against everywhere near it.
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+                      std::vector<State>& states, int threads) {
+    if (inside_ || !zero_.move_rows(scene, rows)) return false;
+    for (Index r : spheres_holding(scene, rows, deformable, states, threads)) states[r].sphere.rho2 = 0.0;
+    return true;
+  }
 
  private:
   // The model when `inside` is not nearest or `swept` is on (else null: the thesis's test).
