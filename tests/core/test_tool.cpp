@@ -150,48 +150,7 @@ TEST(Tool, AnAuthorAloneGetsWhatTheDefaultToolGets) {
   EXPECT_EQ(x.session.state_hash(), y.session.state_hash());
 }
 
-// The two arms swung into each other, each by its own tool: b moves arm B towards arm A (interleaved with
-// a's steps), then a's arm enters where arm B is now -- not where it was when a's detector was built.
-// a's colliding set is checked against the exact signed distance of the capsule B at its new place.
-void swing_arms(const std::string& algorithm) {
-  SCOPED_TRACE(algorithm);
-  ArmsSession t;
-  for (const char* tool : {"a", "b"}) t.session.configure({{"algorithm", algorithm}}, tool);
-  t.take_tools();
-  for (int k = 0; k < 5; ++k) {
-    const StepResult rb = t.move("b", -0.05);
-    EXPECT_TRUE(rb.colliding.empty()) << "b step " << k;  // arm B enters nothing on its way
-    const StepResult ra = t.move("a", 0.05);
-    EXPECT_TRUE(ra.colliding.empty()) << "a step " << k;
-  }
-  EXPECT_TRUE(t.move("b", -0.05).colliding.empty());
-  // Arm A spans x in [-0.25, -0.05], arm B [0, 0.2]. One step of a: 0.05 deep into arm B.
-  const StepResult ra = t.move("a", 0.1);
-  ASSERT_TRUE(ra.detected);
-  const auto capsule_b = TwoArms::arm_b_solid(Vec3(-0.3, 0, 0));
-  const auto body = TwoArms::body_solid();
-  const SurfelModel& m = t.session.model();
-  const double tol = 2.0 * ArmsSession::kSpacing;
-  const std::set<SurfelId> found(ra.colliding.begin(), ra.colliding.end());
-  std::size_t deep = 0;
-  for (SurfelId id : t.a) {
-    const Vec3 p = m.positions().row(m.row_of(id)).transpose();
-    const double d = std::min(capsule_b->sdf(p), body->sdf(p));
-    if (d < -tol) {
-      ++deep;
-      EXPECT_TRUE(found.count(id)) << "surfel " << id << " is " << -d << " inside arm B but not reported";
-    }
-    if (found.count(id)) EXPECT_LT(d, tol) << "surfel " << id << " reported colliding at distance " << d << " at " << p.transpose();
-  }
-  EXPECT_GT(deep, 5u);  // the check is not vacuous
-  // Arm B's step saw arm A where it is now too: b's colliding set is what b reported, a's is a's.
-  EXPECT_EQ(t.session.colliding("a"), ra.colliding);
-}
-
-TEST(Tool, ArmsSwungIntoEachOtherRobust) { swing_arms("robust"); }
-TEST(Tool, ArmsSwungIntoEachOtherSimple) { swing_arms("simple"); }
-TEST(Tool, ArmsSwungIntoEachOtherTemporal) { swing_arms("temporal"); }
-TEST(Tool, ArmsSwungIntoEachOtherImproved) { swing_arms("improved"); }
+// The two arms swung into each other: tests/core/test_tool_rigid.cpp.
 
 TEST(Tool, UndoAcrossToolsRestoresEveryToolsState) {
   // undo() / redo() in the session's order over two tools: every undo restores the state before its op

@@ -83,7 +83,9 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   // The points to test at their next step. One whose inside state is still to be re-derived at its old
   // position gets it now, against the rigid part where it was: the next test then counts the change
   // when the other tool's part came over it.
-  const IndexList hit = spheres_holding(scene, rows, deformable, states, threads);
+  double reach = 0.0;
+  for (Index r : rows) reach = std::max(reach, (row3(orig_.positions, orig_of_row_[r]) - row3(scene.positions, r)).norm());
+  const IndexList hit = rows_near_moved<true>(scene, rows, reach, deformable, states, threads);
   for (Index r : hit) {
     State& s = states[r];
     if (!(s.flags & kFirstUpdate)) continue;
