@@ -45,8 +45,8 @@ void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable
   const KdTree zero_tree(scene.positions, zero_rows, nearest_tree_params(params_.knn_eps));
   seed_states(
       *this, scene.positions, deformable, threads,
-      [&](const Vec3& p, Index& hint) {
-        const Index k = warm_nearest(zero_tree, scene.positions, p, hint);
+      [&](const Vec3& p) {
+        const Index k = zero_tree.nearest(p);
         return NearestZero{(p - row3(scene.positions, k)).squaredNorm(), scene.radii[k]};
       },
       states);

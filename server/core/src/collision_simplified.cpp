@@ -39,7 +39,7 @@ class SimplifiedDetector final : public ApproximateDetector {
     ZeroSet own_zero;  // the zero region for proximity and initial spheres when the kernel has none
     if (!kernel.zero_set()) own_zero.build(scene, zero_rows, params_.knn_eps);
     const ZeroSet& zero = kernel.zero_set() ? *kernel.zero_set() : own_zero;
-    auto nearest = [&](const Vec3& p, Index& hint) { return nearest_zero(zero, p, hint); };
+    auto nearest = [&](const Vec3& p) { return nearest_zero(zero, p); };
     // Per-row states: spheres start with the distance to the nearest zero surfel.
     if (Kernel::kSeeded) seed_states(kernel, scene.positions, kr.deformable, threads, nearest, kr.states);
     // Clusters of the deformable rows and their simplified surfels' states.
@@ -58,8 +58,7 @@ class SimplifiedDetector final : public ApproximateDetector {
         const IndexList& m = map.members(c);
         if (m.size() < 2) continue;
         const Vec3 p = centroid(scene.positions, m);
-        Index cold = -1;  // clusters are not in spatial order: no warm start
-        cstate[c] = kernel.init(p, nearest(p, cold));
+        cstate[c] = kernel.init(p, nearest(p));
       }
     }
     rows_ = std::move(kr);

@@ -101,42 +101,23 @@ struct Sphere {
   }
 };
 
-// The nearest point of `tree` (built over `points`, indices into it) to p, warm-started from `hint` (the
-// answer for a nearby earlier query, or -1): the bound |p - points[hint]|^2, widened by a relative 1e-9
-// for the tree's local-frame rounding, holds the nearest point, so the answer is nearest(p)'s exactly
-// (ties go to the lower index either way) with far less of the tree visited when p is far from every
-// point (a deformable surfel 0.5 away from the zero region visits thousands of leaves cold). `hint`
-// becomes the answer.
-inline Index warm_nearest(const KdTree& tree, const Points& points, const Vec3& p, Index& hint) {
-  Index k = -1;
-  if (hint >= 0) k = tree.nearest_within(p, (p - row3(points, hint)).squaredNorm() * (1.0 + 1e-9) + 1e-300);
-  if (k < 0) k = tree.nearest(p);
-  hint = k;
-  return k;
-}
-
-// The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p, hint)` gives
-// the NearestZero of p, `hint` being the thread's warm start for warm_nearest (-1 at first; rows are
-// taken in order, so consecutive queries are mostly neighbours). Results do not depend on the threads.
+// The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p)` gives
+// the NearestZero of p.
 template <typename Kernel, typename Nearest>
 void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads,
                  Nearest nearest, std::vector<typename Kernel::State>& states) {
   const Index n = static_cast<Index>(rows.size());
-#pragma omp parallel num_threads(threads)
-  {
-    Index hint = -1;
-#pragma omp for schedule(static)
-    for (Index q = 0; q < n; ++q) {
-      const Index r = rows[q];
-      const Vec3 p = row3(positions, r);
-      states[r] = kernel.init(p, nearest(p, hint));
-    }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (Index q = 0; q < n; ++q) {
+    const Index r = rows[q];
+    const Vec3 p = row3(positions, r);
+    states[r] = kernel.init(p, nearest(p));
   }
 }
 
-// The NearestZero of p in `zero` (warm-started from `hint`, see warm_nearest).
-inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p, Index& hint) {
-  const Index k = warm_nearest(*zero.tree, zero.positions, p, hint);
+// The NearestZero of p in `zero`.
+inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
+  const Index k = zero.nearest(p);
   return {(p - row3(zero.positions, k)).squaredNorm(), zero.radii[k]};
 }
 

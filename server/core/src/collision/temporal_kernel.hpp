@@ -43,7 +43,7 @@ class TemporalKernel : public ZeroSetKernel {
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             std::vector<State>& states) const {
-    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p, Index& hint) { return nearest_zero(zero_, p, hint); },
+    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p) { return nearest_zero(zero_, p); },
                 states);
   }
   State init(const Vec3& p, const NearestZero& z) const {
