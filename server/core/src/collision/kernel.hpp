@@ -124,7 +124,7 @@ inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
 // The rows of `deformable` (ascending, as given) whose state a rigid move of the rows `moved` may have
 // changed: a surface that swept across a point during a move of at most `reach` (the largest displacement
 // of a moved surfel) ends within `reach` of it, so every point within reach + the radii of a moved surfel
-// (at its position in `scene` now) is selected; with `Sphere`, also every point whose sphere now holds
+// (at its position in `scene` now) is selected; with `kSphere`, also every point whose sphere now holds
 // (strictly) a moved surfel. The others keep their states: no surface crossed them, and their spheres
 // still hold no reference surfel.
 template <bool kSphere, typename State>
