@@ -8,38 +8,22 @@
 
 #include "expect_error.hpp"
 #include "surfeledit/core/edit_session.hpp"
-#include "surfeledit/core/scene.hpp"
+#include "surfeledit/core/two_arms.hpp"
 
 namespace surfeledit {
 namespace {
 
 using testing_util::expect_error;
 
-// A body with two arms (as in test_tool.cpp, coarser): part 0 body, 1 arm A, 2 arm B.
+// The two-arm scene (core/two_arms.hpp), coarser than test_tool.cpp's: part 0 body, 1 arm A, 2 arm B.
 struct Arms {
+  TwoArms scene{SampleParams{0.03, 3, 0.25}};
   EditSession session{"clients"};
-  IdList body, a, b;
-  Arms() {
-    Scene scene;
-    scene.add(make_box(Vec3(0.7, 0.2, 0.2)));
-    Pose pa, pb;
-    pa.translation = Vec3(-0.4, 0, 0.52);
-    pb.translation = Vec3(0.4, 0, 0.52);
-    scene.add(make_capsule(0.1, 0.25, pa));
-    scene.add(make_capsule(0.1, 0.25, pb));
-    const SampledSurfels s = scene.sample(SampleParams{0.03, 3, 0.25});
-    SurfelArrays m;
-    m.positions = s.positions;
-    m.normals = s.normals;
-    m.radii = s.radii;
-    session.load(SurfelModel::from_arrays(m), "owner");
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? body : s.part[i] == 1 ? a : b).push_back(i);
-  }
-  static IdList join(IdList x, const IdList& y) {
-    x.insert(x.end(), y.begin(), y.end());
-    std::sort(x.begin(), x.end());
-    return x;
-  }
+  const IdList& body = scene.body;
+  const IdList& a = scene.a;
+  const IdList& b = scene.b;
+  Arms() { session.load(scene.model(), "owner"); }
+  static IdList join(IdList x, const IdList& y) { return TwoArms::join(std::move(x), y); }
   void take(const std::string& tool, const IdList& arm, const IdList& other_arm) {
     session.set_regions({join(body, other_arm), {}}, {arm, {}}, tool);
   }

@@ -10,49 +10,27 @@
 #include "session_fixture.hpp"
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "surfeledit/core/two_arms.hpp"
 
 namespace surfeledit {
 namespace {
 
 using testing_util::expect_error;
 
-// A body (box) with two arms (capsules standing on it at x = -0.4 and x = +0.4): part 0 the body,
-// part 1 arm A, part 2 arm B. Tool "a" moves arm A (its zero region: body and arm B), tool "b" arm B.
-struct TwoArms {
+// The two-arm scene (core/two_arms.hpp) in a session: tool "a" moves arm A (its zero region: body and
+// arm B), tool "b" arm B.
+struct ArmsSession {
   static constexpr double kSpacing = 0.02;
-  static constexpr double kArmRadius = 0.1, kArmHalf = 0.25;
-  Vec3 arm_a = Vec3(-0.4, 0, 0.2 + kArmHalf + kArmRadius - 0.03);  // capsule centres (slightly into the body)
-  Vec3 arm_b = Vec3(0.4, 0, 0.2 + kArmHalf + kArmRadius - 0.03);
-  SampledSurfels s;
+  TwoArms scene{SampleParams{kSpacing, 7, 0.25}};
   EditSession session{"arms"};
-  IdList body, a, b;
+  const IdList& body = scene.body;
+  const IdList& a = scene.a;
+  const IdList& b = scene.b;
 
-  TwoArms() {
-    Scene scene;
-    scene.add(make_box(Vec3(0.7, 0.2, 0.2)));
-    scene.add(make_capsule(kArmRadius, kArmHalf, pose_at(arm_a)));
-    scene.add(make_capsule(kArmRadius, kArmHalf, pose_at(arm_b)));
-    s = scene.sample(SampleParams{kSpacing, 7, 0.25});
-    SurfelArrays m;
-    m.positions = s.positions;
-    m.normals = s.normals;
-    m.radii = s.radii;
-    session.load(SurfelModel::from_arrays(m));
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? body : s.part[i] == 1 ? a : b).push_back(i);
-  }
-  static Pose pose_at(const Vec3& c) {
-    Pose p;
-    p.translation = c;
-    return p;
-  }
-  static IdList join(IdList x, const IdList& y) {
-    x.insert(x.end(), y.begin(), y.end());
-    std::sort(x.begin(), x.end());
-    return x;
-  }
+  explicit ArmsSession(SessionParams params = {}) : session("arms", params) { session.load(scene.model()); }
   void take_tools() {
-    session.set_regions({join(body, b), {}}, {a, {}}, "a");
-    session.set_regions({join(body, a), {}}, {b, {}}, "b");
+    session.set_regions({TwoArms::join(body, b), {}}, {a, {}}, "a");
+    session.set_regions({TwoArms::join(body, a), {}}, {b, {}}, "b");
   }
   StepResult move(const std::string& tool, double dx) {
     DeformParams p;
@@ -67,7 +45,7 @@ IdList sorted(IdList v) {
 }
 
 TEST(Tool, EachAuthorHasItsOwnRegionsAndSettings) {
-  TwoArms t;
+  ArmsSession t;
   t.take_tools();
   ASSERT_NE(t.session.fields("a"), nullptr);
   ASSERT_NE(t.session.fields("b"), nullptr);
@@ -94,12 +72,12 @@ TEST(Tool, EachAuthorHasItsOwnRegionsAndSettings) {
 }
 
 TEST(Tool, LocksAreDisjointAndAConflictChangesNothing) {
-  TwoArms t;
-  t.session.set_regions({t.join(t.body, t.b), {}}, {t.a, {}}, "a");
+  ArmsSession t;
+  t.session.set_regions({TwoArms::join(t.body, t.b), {}}, {t.a, {}}, "a");
   const std::uint64_t v = t.session.version();
   const std::size_t entries = t.session.history().size();
   // b asks for arm A and arm B as its one region (zero: the body): every surfel of arm A overlaps.
-  const std::string msg = expect_error([&] { t.session.set_regions({t.body, {}}, {t.join(t.a, t.b), {}}, "b"); },
+  const std::string msg = expect_error([&] { t.session.set_regions({t.body, {}}, {TwoArms::join(t.a, t.b), {}}, "b"); },
                                        ErrorCode::Conflict, "regions");
   // How many overlap, computed here: rows outside a's zero and outside b's zero.
   std::set<SurfelId> zero_a(t.body.begin(), t.body.end()), zero_b(t.body.begin(), t.body.end());
@@ -114,20 +92,20 @@ TEST(Tool, LocksAreDisjointAndAConflictChangesNothing) {
   EXPECT_EQ(t.session.fields("b"), nullptr);
   // One surfel of arm A left out of b's zero region is in b's blend band: it overlaps too.
   const IdList a_but_one(t.a.begin() + 1, t.a.end());
-  const std::string one = expect_error([&] { t.session.set_regions({t.join(t.body, a_but_one), {}}, {t.b, {}}, "b"); },
+  const std::string one = expect_error([&] { t.session.set_regions({TwoArms::join(t.body, a_but_one), {}}, {t.b, {}}, "b"); },
                                        ErrorCode::Conflict, "regions");
   EXPECT_NE(one.find("1 surfel(s)"), std::string::npos) << one;
   // Disjoint: accepted. The same author may replace its own regions freely.
-  t.session.set_regions({t.join(t.body, t.a), {}}, {t.b, {}}, "b");
-  t.session.set_regions({t.join(t.body, t.b), {}}, {t.a, {}}, "a");
+  t.session.set_regions({TwoArms::join(t.body, t.a), {}}, {t.b, {}}, "b");
+  t.session.set_regions({TwoArms::join(t.body, t.b), {}}, {t.a, {}}, "a");
   // Removing or merging surfels another tool's lock holds is refused.
   const IdList some_of_b = {t.b.front()};
   expect_error([&] { t.session.remove(some_of_b, "a"); }, ErrorCode::Conflict, "ids");
 }
 
 TEST(Tool, ReleaseFreesTheLockAndUndoTakesItBack) {
-  TwoArms t;
-  t.session.set_regions({t.join(t.body, t.b), {}}, {t.a, {}}, "a");
+  ArmsSession t;
+  t.session.set_regions({TwoArms::join(t.body, t.b), {}}, {t.a, {}}, "a");
   t.move("a", 0.02);
   const DeformationFields fields_a = *t.session.fields("a");
   const std::uint64_t v = t.session.version();
@@ -140,13 +118,13 @@ TEST(Tool, ReleaseFreesTheLockAndUndoTakesItBack) {
   EXPECT_FALSE(t.session.release("a"));  // nothing left to release: no change
   EXPECT_EQ(t.session.version(), v + 1);
   // The lock is free: b may move arm A now.
-  t.session.set_regions({t.body, {}}, {t.join(t.a, t.b), {}}, "b");
+  t.session.set_regions({t.body, {}}, {TwoArms::join(t.a, t.b), {}}, "b");
   t.session.undo();  // b's set_regions
   t.session.undo();  // a's release: a's regions and lock are back, exactly
   ASSERT_NE(t.session.fields("a"), nullptr);
   EXPECT_EQ(t.session.fields("a")->deformable, fields_a.deformable);
   EXPECT_TRUE(t.session.fields("a")->lambda == fields_a.lambda);
-  expect_error([&] { t.session.set_regions({t.body, {}}, {t.join(t.a, t.b), {}}, "b"); }, ErrorCode::Conflict,
+  expect_error([&] { t.session.set_regions({t.body, {}}, {TwoArms::join(t.a, t.b), {}}, "b"); }, ErrorCode::Conflict,
                "regions");
   // And a can step again.
   EXPECT_GT(t.move("a", 0.02).moved.size(), 0u);
@@ -172,54 +150,12 @@ TEST(Tool, AnAuthorAloneGetsWhatTheDefaultToolGets) {
   EXPECT_EQ(x.session.state_hash(), y.session.state_hash());
 }
 
-// The two arms swung into each other, each by its own tool: b moves arm B towards arm A (interleaved with
-// a's steps), then a's arm enters where arm B is now -- not where it was when a's detector was built.
-// a's colliding set is checked against the exact signed distance of the capsule B at its new place.
-void swing_arms(const std::string& algorithm) {
-  SCOPED_TRACE(algorithm);
-  TwoArms t;
-  for (const char* tool : {"a", "b"}) t.session.configure({{"algorithm", algorithm}}, tool);
-  t.take_tools();
-  for (int k = 0; k < 5; ++k) {
-    const StepResult rb = t.move("b", -0.05);
-    EXPECT_TRUE(rb.colliding.empty()) << "b step " << k;  // arm B enters nothing on its way
-    const StepResult ra = t.move("a", 0.05);
-    EXPECT_TRUE(ra.colliding.empty()) << "a step " << k;
-  }
-  EXPECT_TRUE(t.move("b", -0.05).colliding.empty());
-  // Arm A spans x in [-0.25, -0.05], arm B [0, 0.2]. One step of a: 0.05 deep into arm B.
-  const StepResult ra = t.move("a", 0.1);
-  ASSERT_TRUE(ra.detected);
-  const auto capsule_b = make_capsule(TwoArms::kArmRadius, TwoArms::kArmHalf,
-                                      TwoArms::pose_at(t.arm_b + Vec3(-0.3, 0, 0)));
-  const auto body = make_box(Vec3(0.7, 0.2, 0.2));
-  const SurfelModel& m = t.session.model();
-  const double tol = 2.0 * TwoArms::kSpacing;
-  const std::set<SurfelId> found(ra.colliding.begin(), ra.colliding.end());
-  std::size_t deep = 0;
-  for (SurfelId id : t.a) {
-    const Vec3 p = m.positions().row(m.row_of(id)).transpose();
-    const double d = std::min(capsule_b->sdf(p), body->sdf(p));
-    if (d < -tol) {
-      ++deep;
-      EXPECT_TRUE(found.count(id)) << "surfel " << id << " is " << -d << " inside arm B but not reported";
-    }
-    if (found.count(id)) EXPECT_LT(d, tol) << "surfel " << id << " reported colliding at distance " << d << " at " << p.transpose();
-  }
-  EXPECT_GT(deep, 5u);  // the check is not vacuous
-  // Arm B's step saw arm A where it is now too: b's colliding set is what b reported, a's is a's.
-  EXPECT_EQ(t.session.colliding("a"), ra.colliding);
-}
-
-TEST(Tool, ArmsSwungIntoEachOtherRobust) { swing_arms("robust"); }
-TEST(Tool, ArmsSwungIntoEachOtherSimple) { swing_arms("simple"); }
-TEST(Tool, ArmsSwungIntoEachOtherTemporal) { swing_arms("temporal"); }
-TEST(Tool, ArmsSwungIntoEachOtherImproved) { swing_arms("improved"); }
+// The two arms swung into each other: tests/core/test_tool_rigid.cpp.
 
 TEST(Tool, UndoAcrossToolsRestoresEveryToolsState) {
   // undo() / redo() in the session's order over two tools: every undo restores the state before its op
   // bit for bit, and each tool steps on afterwards.
-  TwoArms t;
+  ArmsSession t;
   t.take_tools();
   UndoChecker u;
   for (int k = 0; k < 4; ++k) {
@@ -233,7 +169,7 @@ TEST(Tool, UndoAcrossToolsRestoresEveryToolsState) {
   }
   // A fresh session taking the same ops gives the same next steps (the model; a tool whose entry came
   // back alone re-initialises its detector at its next step, so collision states may differ).
-  TwoArms fresh;
+  ArmsSession fresh;
   fresh.take_tools();
   for (int k = 0; k < 4; ++k) fresh.move(k % 2 ? "a" : "b", k % 2 ? 0.04 : -0.04);
   for (const char* tool : {"a", "b", "a"}) {
@@ -244,12 +180,12 @@ TEST(Tool, UndoAcrossToolsRestoresEveryToolsState) {
 }
 
 TEST(Tool, ResamplingOfOneToolExtendsTheOthersFields) {
-  TwoArms t;
+  ArmsSession t;
   t.take_tools();
   t.session.configure({{"resample", true}}, "a");
   DeformParams stretch;
   stretch.translation = Vec3(0, 0, 0.3);  // pulls arm A's top away from the body: its blend band stretches
-  t.session.set_regions({t.join(t.body, t.b), {}}, {IdList(t.a.begin(), t.a.begin() + t.a.size() / 3), {}}, "a");
+  t.session.set_regions({TwoArms::join(t.body, t.b), {}}, {IdList(t.a.begin(), t.a.begin() + t.a.size() / 3), {}}, "a");
   const Index before = t.session.model().size();
   t.session.deform(stretch, "a");
   const Index after = t.session.model().size();

@@ -73,6 +73,8 @@ std::vector<std::pair<std::string, std::size_t>> CollisionDetector::structures()
   return {{std::string("collision_") + to_string(params_.algorithm), memory_bytes()}};
 }
 
+bool CollisionDetector::on_rigid_moved(const CollisionScene&, const IndexList&) { return false; }
+
 bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 
 HierarchyInfo CollisionDetector::hierarchy_info() const { return {}; }
@@ -182,6 +184,26 @@ void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, dou
   tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
 }
 
+double ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
+  IndexList at(moved.size());
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    const auto it = std::lower_bound(rows.begin(), rows.end(), moved[j]);
+    if (it == rows.end() || *it != moved[j]) return -1.0;  // not a zero row of this set
+    at[j] = static_cast<Index>(it - rows.begin());
+  }
+  double reach = 0.0;
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    const Index r = moved[j], k = at[j];
+    reach = std::max(reach, (positions.row(k) - scene.positions.row(r)).norm());
+    positions.row(k) = scene.positions.row(r);
+    normals.row(k) = scene.normals.row(r);
+    radii[k] = scene.radii[r];
+  }
+  // A new tree: the old one may be shared by clones (history images) that keep the old positions.
+  if (!moved.empty()) tree = std::make_shared<const KdTree>(positions, nearest_tree_params(knn_eps));
+  return reach;
+}
+
 void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {
   std::fill(marked.begin(), marked.end(), 0);
   if (deformable.empty()) return;
@@ -237,11 +259,11 @@ std::size_t ZeroSet::memory_bytes() const {
 }
 
 SimpleTest simple_test(const CollisionParams& params, const ZeroSet& zero, Index k, const Vec3& p1, double r1,
-                       const Vec3& previous, bool previous_state) {
+                       const Vec3& previous, bool previous_state, bool bounded) {
   SimpleTest out;
   const Vec3 d = p1 - zero.positions.row(k).transpose();
   out.dist2 = d.squaredNorm();
-  if (params.step_bound) {
+  if (params.step_bound && bounded) {
     // Def. 6.1 with the surfel's own displacement t this step: farther than |t| + r1 + r2 from the
     // nearest zero surfel, it cannot have crossed the zero surface.
     const double bound = (p1 - previous).norm() + r1 + zero.radii[k];

@@ -82,6 +82,10 @@ struct ZeroSet {
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.
   void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads);
+  // Rows `moved` (model rows) moved: their copies take `scene`'s values, the tree is rebuilt (a new
+  // object), the boundary marks are kept. Returns the largest displacement of a moved surfel (model
+  // units), or -1 (nothing changed) when one of them is not in `rows`.
+  double move_rows(const CollisionScene& scene, const IndexList& moved);
   // Index (into the copies) of the zero surfel nearest to p; -1 when there is none.
   Index nearest(const Vec3& p) const { return tree->nearest(p); }
   // Drops removed rows (marks of the survivors are kept) and renumbers rows; rebuilds the tree
@@ -123,7 +127,8 @@ struct SimpleTest {
   double dist2 = 0.0;  // |p1 - p2|^2
   bool state = false;  // colliding after the test
 };
+// `bounded` false: no step bound this time (the zero region moved near the point since its last test).
 SimpleTest simple_test(const CollisionParams& params, const ZeroSet& zero, Index k, const Vec3& p1, double r1,
-                       const Vec3& previous, bool previous_state);
+                       const Vec3& previous, bool previous_state, bool bounded = true);
 
 }  // namespace surfeledit::detail

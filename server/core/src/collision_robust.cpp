@@ -71,6 +71,49 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
   compact(orig_of_row_, keep);
 }
 
+bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+                                  std::vector<State>& states, int threads) {
+  if (inside_ || !orig_.tree) return false;
+  for (Index r : rows) {
+    if (r < 0 || static_cast<std::size_t>(r) >= orig_of_row_.size()) return false;
+    const Index o = orig_of_row_[r];
+    if (o < 0 || !orig_.zero[o] || !orig_.alive[o]) return false;  // not a zero surfel of the snapshot
+  }
+  if (rows.empty()) return true;
+  // The points to test at their next step. One whose inside state is still to be re-derived at its old
+  // position gets it now, against the rigid part where it was: the next test then counts the change
+  // when the other tool's part came over it.
+  double reach = 0.0;
+  for (Index r : rows) reach = std::max(reach, (row3(orig_.positions, orig_of_row_[r]) - row3(scene.positions, r)).norm());
+  const IndexList hit = rows_near_moved<true>(scene, rows, reach, deformable, states, threads);
+  for (Index r : hit) {
+    State& s = states[r];
+    if (!(s.flags & kFirstUpdate)) continue;
+    const Index k = orig_.tree->nearest(s.old_position);
+    s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
+    set_inside(s, (s.old_position - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < params_.threshold);
+  }
+  bool all_alive = true;
+  for (std::uint8_t a : orig_.alive) all_alive = all_alive && a;
+  for (Index r : rows) {
+    const Index o = orig_of_row_[r];
+    orig_.positions.row(o) = scene.positions.row(r);
+    orig_.normals.row(o) = scene.normals.row(r);
+    orig_.radii[o] = scene.radii[r];
+  }
+  // A new tree (clones in history images share the old one with their own, older snapshot).
+  if (all_alive) {
+    orig_.tree = std::make_shared<const KdTree>(orig_.positions, nearest_tree_params(params_.knn_eps));
+  } else {
+    IndexList alive;
+    for (std::size_t o = 0; o < orig_.alive.size(); ++o)
+      if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
+    orig_.tree = std::make_shared<const KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
+  }
+  for (Index r : hit) states[r].sphere.rho2 = 0.0;
+  return true;
+}
+
 std::size_t RobustKernel::memory_bytes() const {
   return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size() + orig_.radii.size()) * sizeof(double) +
          orig_.zero.capacity() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : 0) +

@@ -63,19 +63,35 @@ std::vector<std::pair<std::string, Index>> EditSession::tools() const {
   return out;
 }
 
-void EditSession::mark_others_stale() {
+void EditSession::mark_others_stale(const IndexList* moved) {
   for (auto& [id, t] : tools_)
-    if (&t != tool_ && t.fields) t.stale = true;
+    if (&t != tool_ && t.fields) t.mark_stale(moved);
 }
 
 void EditSession::sync_tool() {
   Tool& t = *tool_;
   if (!t.stale) return;
-  // Rows this tool treats as rigid changed under its detector (another tool's op): it starts again
-  // from the model as it is now (the zero region where it is now; Robust's original model is now).
-  if (t.fields) t.detector = fresh_detector(t.settings, *t.fields);
-  t.colliding.clear();
-  t.stale = false;
+  // Rows this tool treats as rigid changed under its detector (another tool's op). Moved rows only: the
+  // detector updates its structures for them (on_rigid_moved). History images refer to the detector
+  // object and must keep it as it was, so a shared detector is cloned first (a detector that cannot be
+  // cloned is reset instead).
+  bool followed = false;
+  if (params_.incremental_rigid && t.fields && t.detector && t.stale_rows_known &&
+      t.fields->regions.size() == static_cast<std::size_t>(model_.size())) {
+    const bool shared = t.detector.use_count() > 1;
+    std::shared_ptr<CollisionDetector> d = shared ? std::shared_ptr<CollisionDetector>(t.detector->clone()) : t.detector;
+    if (d && d->on_rigid_moved(scene_of(model_, *t.fields), t.stale_rows)) {
+      t.detector = std::move(d);
+      followed = true;
+    }
+  }
+  // Otherwise it starts again from the model as it is now (the zero region where it is now; Robust's
+  // original model is now).
+  if (!followed) {
+    if (t.fields) t.detector = fresh_detector(t.settings, *t.fields);
+    t.colliding.clear();
+  }
+  t.clear_stale();
 }
 
 void EditSession::check_unlocked(const std::vector<bool>* keep, const IndexList* parents, const char* field) const {
@@ -166,7 +182,7 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
   tool_->fields = std::move(fields);
   tool_->detector = std::move(detector);
   tool_->colliding.clear();
-  tool_->stale = false;
+  tool_->clear_stale();
   take_origins();
   ++version_;
   record("set_regions", author, {}, std::move(before));
@@ -180,6 +196,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   use(author);
   sync_tool();
   const std::uint64_t version_before = version_;
+  const Index rows_before = model_.size();
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image. Else the
   // deformable rows, and the detector states the step changes (its journal, when it keeps one); a merge
   // after the step (response "merge") upgrades it to a whole image (respond()).
@@ -209,7 +226,10 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
     roll_back(before, version_before);
     throw;
   }
-  if (version_ != version_before) mark_others_stale();
+  // A step moves the tool's deformable rows only (rigid to every other tool); resampling's splits or a
+  // merge change rows otherwise.
+  const IndexList* moved = model_.size() == rows_before && out.response != "merged" ? &tool_->fields->deformable : nullptr;
+  if (version_ != version_before) mark_others_stale(moved);
   const auto t_record = std::chrono::steady_clock::now();
   if (tool_->journaling && before.rows) before.detector = tool_->detector->journal_image();
   if (out.response != "cancelled" && !none) {
@@ -220,7 +240,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
       const IdList removed = changes_since(version_before).removed;
       touched.insert(touched.end(), removed.begin(), removed.end());
     }
-    record("deform", author, std::move(touched), std::move(before));
+    record("deform", author, std::move(touched), std::move(before), moved);
   }
   out.history_ms = capture_ms + ms_since(t_record);
   return out;
@@ -332,7 +352,7 @@ void EditSession::configure(const std::vector<NamedSetting>& changes, const std:
   history_params_ = next.history;
   tool_->detector = std::move(detector);
   tool_->colliding.clear();
-  tool_->stale = false;
+  tool_->clear_stale();
   if (tool_->fields) take_origins();
   record("configure", author, {}, std::move(before));
 }

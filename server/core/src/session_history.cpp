@@ -133,7 +133,8 @@ void EditSession::restore(const SessionImage& image, bool clone) {
     put_versions(row_version_, *r.rows, r.version_runs);
     // The detector object the states belong to (the tool may have re-initialised its detector since).
     t.detector = image.detector_object;
-    t.stale = image.stale;
+    t.clear_stale();  // the rows moved since are not in the image: a stale tool is re-initialised
+    if (image.stale) t.mark_stale(nullptr);
     // A step's image without detector states while the journal runs: the journal holds them.
     if (image.detector) t.detector->restore_image(*image.detector);
     else if (t.detector && t.journaling) t.detector->restore_journal();
@@ -155,13 +156,14 @@ std::size_t EditSession::history_limit() const {
   return static_cast<std::size_t>(history_params_.history_mb * 1024.0 * 1024.0);
 }
 
-void EditSession::record(const char* op, const std::string& author, IdList touched, SessionImage before) {
+void EditSession::record(const char* op, const std::string& author, IdList touched, SessionImage before,
+                         const IndexList* moved) {
   if (!std::is_sorted(touched.begin(), touched.end())) std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   HistoryEntry e;
   e.item = {version_, op, author, std::move(touched), false};
   e.image = std::move(before);
-  if (!e.item.touched.empty()) mark_others_stale();
+  if (!e.item.touched.empty()) mark_others_stale(moved);
   history_.push(std::move(e), history_limit());
 }
 
@@ -176,7 +178,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   const IdList ids_before = model_.ids();
   restore(entry.image, false);
   // A step's rows moved under the other tools' detectors (a whole image puts every tool back as it was).
-  if (entry.image.rows) mark_others_stale();
+  if (entry.image.rows) mark_others_stale(entry.image.rows->rows.get());
   history_.replace_image(entry, std::move(now));
   // The restored rows count as changed now; ids that went away are logged as removed.
   ++version_;
@@ -249,7 +251,7 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
   if (whole || e.image.rows) {
     v = swap_entry(e, what);
     // Its tool's detector saw the rows other tools moved since as they were then.
-    if (!whole) tools_.at(e.image.tool).stale = true;
+    if (!whole) tools_.at(e.image.tool).mark_stale(nullptr);
   } else {
     // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
     const ToolImage& t = e.image.whole->tools.at(e.image.tool);
@@ -267,7 +269,7 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
     use(e.image.tool);
     SessionImage now = capture_whole(false);
     tool_->restore(t, false);
-    tool_->stale = true;
+    tool_->mark_stale(nullptr);
     history_.replace_image(e, std::move(now));
     v = ++version_;
   }

@@ -1,6 +1,7 @@
 #include "surfeledit/core/tool.hpp"
 
 #include <algorithm>
+#include <iterator>
 
 namespace surfeledit {
 
@@ -29,7 +30,33 @@ void Tool::restore(const ToolImage& t, bool clone) {
   merge = t.merge;
   colliding = t.colliding;
   steps = t.steps;
-  stale = t.stale;
+  // The rows moved since are not in the image: a stale tool that comes back is re-initialised.
+  clear_stale();
+  if (t.stale) mark_stale(nullptr);
+}
+
+void Tool::mark_stale(const IndexList* moved) {
+  if (!stale) {
+    stale = true;
+    stale_rows_known = moved != nullptr;
+    stale_rows.clear();
+    if (moved) stale_rows = *moved;
+  } else if (stale_rows_known && moved) {
+    IndexList both;
+    both.reserve(stale_rows.size() + moved->size());
+    std::set_union(stale_rows.begin(), stale_rows.end(), moved->begin(), moved->end(), std::back_inserter(both));
+    stale_rows = std::move(both);
+  } else {
+    stale_rows_known = false;
+    stale_rows.clear();
+  }
+  if (stale_rows_known && !std::is_sorted(stale_rows.begin(), stale_rows.end())) std::sort(stale_rows.begin(), stale_rows.end());
+}
+
+void Tool::clear_stale() {
+  stale = false;
+  stale_rows_known = false;
+  stale_rows.clear();
 }
 
 void Tool::clear_regions() {
@@ -37,7 +64,7 @@ void Tool::clear_regions() {
   detector.reset();
   colliding.clear();
   merge = MergeMemo();
-  stale = false;
+  clear_stale();
 }
 
 void extend_fields(DeformationFields& f, const IndexList& parents) {

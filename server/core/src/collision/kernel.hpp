@@ -41,6 +41,11 @@
 //     // Rows removed (`keep` per old row, `new_row` from remap_rows) / `added` rows appended.
 //     void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
 //     void on_inserted(Index added);
+//     // Zero rows `rows` (ascending) moved (CollisionDetector::on_rigid_moved): updates the references
+//     // for them and the states of `deformable` that depended on where they were; false, nothing
+//     // changed, when the kernel cannot (the detector is then reset).
+//     bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+//                         std::vector<State>& states, int threads);
 //     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
 //     const ZeroSet* zero_set() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
@@ -52,6 +57,7 @@
 // on_removed(), asked in update(); its spheres (sphere_rho2) also stay clear of the open boundary.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "../collision_detail.hpp"
@@ -113,6 +119,44 @@ void seed_states(const Kernel& kernel, const Points& positions, const IndexList&
 inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
   const Index k = zero.nearest(p);
   return {(p - row3(zero.positions, k)).squaredNorm(), zero.radii[k]};
+}
+
+// The rows of `deformable` (ascending, as given) whose state a rigid move of the rows `moved` may have
+// changed: a surface that swept across a point during a move of at most `reach` (the largest displacement
+// of a moved surfel) ends within `reach` of it, so every point within reach + the radii of a moved surfel
+// (at its position in `scene` now) is selected; with `kSphere`, also every point whose sphere now holds
+// (strictly) a moved surfel. The others keep their states: no surface crossed them, and their spheres
+// still hold no reference surfel.
+template <bool kSphere, typename State>
+IndexList rows_near_moved(const CollisionScene& scene, const IndexList& moved, double reach, const IndexList& deformable,
+                          const std::vector<State>& states, int threads) {
+  IndexList out;
+  if (moved.empty()) return out;
+  const KdTree near(scene.positions, moved);
+  double r_max = 0.0;
+  for (Index r : moved) r_max = std::max(r_max, scene.radii[r]);
+  const Index n = static_cast<Index>(deformable.size());
+  std::vector<std::uint8_t> hit(deformable.size(), 0);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (Index q = 0; q < n; ++q) {
+    const Index r = deformable[q];
+    const Vec3 p = row3(scene.positions, r);
+    const double d = reach + r_max + scene.radii[r];
+    if (near.nearest_within(p, d * d * (1.0 + 1e-9)) >= 0) {
+      hit[q] = 1;
+      continue;
+    }
+    if constexpr (kSphere) {
+      const Sphere& sphere = states[r].sphere;
+      if (!(sphere.rho2 > 0.0)) continue;
+      // Widened for the tree's local-frame rounding; contains() decides in world coordinates.
+      const Index k = near.nearest_within(sphere.center, sphere.rho2 * (1.0 + 1e-9));
+      hit[q] = k >= 0 && sphere.contains(row3(scene.positions, k));
+    }
+  }
+  for (std::size_t q = 0; q < hit.size(); ++q)
+    if (hit[q]) out.push_back(deformable[q]);
+  return out;
 }
 
 // Appends the states of split surfels: rows first_child + k were split from parents[k] (all children

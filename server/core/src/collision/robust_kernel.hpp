@@ -83,6 +83,14 @@ class RobustKernel {
   // deformable surfels stay in it (they still describe the undeformed shape).
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
   void on_inserted(Index added) { orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1); }
+  // Moved zero rows take their new place in the original model (the rigid part is where it is now; the
+  // deformable part's original surfaces stay where they were at reset), the snapshot's tree is rebuilt (a
+  // new object), and the points a moved surface may have crossed or whose sphere holds a moved surfel
+  // (rows_near_moved) are tested at their next step. Inside states and parities are kept: that test
+  // compares a point's inside state with the rigid part where it is now. Not with an inside model
+  // (winding, vote, swept).
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+                      std::vector<State>& states, int threads);
   const ZeroSet* zero_set() const { return nullptr; }
   std::size_t memory_bytes() const;
 

@@ -145,6 +145,16 @@ class RowDetector final : public NarrowDetector {
     journal_.on = false;
     rows_.on_inserted(scene, parents);
   }
+  // Rigid rows moved (another tool's op): the kernel updates its references and the states that
+  // depended on them. Rows that are not Zero, or a scene of another row count: false, nothing changed.
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows) override {
+    const Index n = rows_.rows();
+    if (scene.positions.rows() != n || static_cast<Index>(scene.regions.size()) != n) return false;
+    for (Index r : rows)
+      if (r < 0 || r >= n || scene.regions[static_cast<std::size_t>(r)] != Region::Zero) return false;
+    journal_.on = false;
+    return rows_.kernel.on_rigid_moved(scene, rows, rows_.deformable, rows_.states, resolve_threads(params_.threads));
+  }
   std::size_t memory_bytes() const override {
     return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
   }

@@ -25,8 +25,8 @@ class ZeroSetKernel {
 
  protected:
   // The §4.1 test of a point against its nearest zero surfel k (`previous_state`: before the step).
-  SimpleTest test(Index k, const TestPoint& pt, bool previous_state) const {
-    return simple_test(params_, zero_, k, pt.p, pt.radius(), pt.previous(), previous_state);
+  SimpleTest test(Index k, const TestPoint& pt, bool previous_state, bool bounded = true) const {
+    return simple_test(params_, zero_, k, pt.p, pt.radius(), pt.previous(), previous_state, bounded);
   }
 
   CollisionParams params_;
@@ -38,6 +38,7 @@ class SimpleKernel : public ZeroSetKernel {
   struct State {
     double depth = 0.0;     // |d| at the last test (model units)
     std::uint8_t hit = 0;   // colliding
+    std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
     bool colliding() const { return hit != 0; }
   };
   static constexpr bool kSeeded = false;  // nothing to measure at reset
@@ -50,7 +51,8 @@ class SimpleKernel : public ZeroSetKernel {
   double depth(const State& s, const Vec3&) const { return s.depth; }
   // One §4.1 test of s; returns it (Improved's sweep needs |d|^2).
   SimpleTest test(State& s, const TestPoint& pt) const {
-    const SimpleTest t = ZeroSetKernel::test(zero_.nearest(pt.p), pt, s.colliding());
+    const SimpleTest t = ZeroSetKernel::test(zero_.nearest(pt.p), pt, s.colliding(), !s.unbounded);
+    s.unbounded = 0;
     s.hit = t.state;
     s.depth = std::sqrt(t.dist2);
     return t;
@@ -64,6 +66,15 @@ class SimpleKernel : public ZeroSetKernel {
   void skip(State&) const {}
   State child(const State& parent, const Vec3&) const { return parent; }
   void keep_parent(State&, const Vec3&) const {}
+  // Every point queries its nearest zero surfel every step: the zero copies are all there is to update.
+  // The points the moved surfaces may have crossed are tested without the step bound next time.
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+                      std::vector<State>& states, int threads) {
+    const double reach = zero_.move_rows(scene, rows);
+    if (reach < 0.0) return false;
+    for (Index r : rows_near_moved<false>(scene, rows, reach, deformable, states, threads)) states[r].unbounded = 1;
+    return true;
+  }
 };
 
 }  // namespace surfeledit::detail

@@ -22,6 +22,7 @@ class TemporalKernel : public ZeroSetKernel {
     Sphere sphere;          // holds no zero surfel
     double depth = 0.0;     // depth estimate of the last evaluation (model units)
     std::uint8_t hit = 0;   // colliding (1: by the test, 2: only by the swept test this step)
+    std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
     bool colliding() const { return hit != 0; }
   };
   static constexpr bool kSeeded = true;
@@ -59,7 +60,8 @@ class TemporalKernel : public ZeroSetKernel {
     }
     if (inside_) return update_inside(s, pt);
     const Index k = zero_.nearest(pt.p);
-    const SimpleTest t = test(k, pt, s.colliding());
+    const SimpleTest t = test(k, pt, s.colliding(), !s.unbounded);
+    s.unbounded = 0;
     s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};
     s.hit = t.state;
     s.depth = std::sqrt(t.dist2);
@@ -71,6 +73,20 @@ class TemporalKernel : public ZeroSetKernel {
   void skip(State&) const {}
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
+  // The zero copies, then the points a moved surface may have crossed or whose sphere holds a moved
+  // surfel: tested at their next step, without the step bound. Not with an inside model
+  // (winding, vote, swept): a moved part changes the solid those test against everywhere near it.
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
+                      std::vector<State>& states, int threads) {
+    if (inside_) return false;
+    const double reach = zero_.move_rows(scene, rows);
+    if (reach < 0.0) return false;
+    for (Index r : rows_near_moved<true>(scene, rows, reach, deformable, states, threads)) {
+      states[r].sphere.rho2 = 0.0;
+      states[r].unbounded = 1;
+    }
+    return true;
+  }
 
  private:
   // The model when `inside` is not nearest or `swept` is on (else null: the thesis's test).

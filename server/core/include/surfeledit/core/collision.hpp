@@ -144,6 +144,15 @@ class CollisionDetector {
   // before the append). A child inside its parent's sphere takes the parent's sphere and state;
   // otherwise it starts with radius 0 (tested at the next step) (§4.4, thesis §6.5).
   virtual void on_inserted(const CollisionScene& scene, const IndexList& parents) = 0;
+  // Rows the detector treats as rigid (Zero in `scene.regions`) changed under it: another tool's op moved
+  // them (issue 11 §1, docs/collaboration.md). `rows`: ascending model rows, every one Zero, the row count
+  // the same as at reset; `scene` holds their positions, normals and radii now. Updates the references
+  // (zero copies and their tree; Robust: those rows of the original model) for these rows only and empties
+  // every sphere that now holds one of them (its point is tested at the next step); other states are kept.
+  // False (nothing changed) when this detector cannot follow incrementally: the caller resets it. The row
+  // detectors (Simple, Improved, Temporal, Robust) with the nearest inside test can; hierarchies, approximate
+  // detection, inside modes winding and vote, and the swept test cannot (the default).
+  virtual bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows);
   // Bytes held (trees, per-surfel state).
   virtual std::size_t memory_bytes() const = 0;
   // What it holds, by name, for a session report (default: one entry "collision_<algorithm>").

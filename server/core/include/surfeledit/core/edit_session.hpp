@@ -28,6 +28,8 @@ namespace surfeledit {
 
 struct SessionParams {
   int threads = 0;  // worker threads for batch work; 0 = all hardware threads
+  bool incremental_rigid = true;  // a stale tool's detector follows moved rigid rows (on_rigid_moved);
+                                  // false: it is always re-initialised (the reference, for tests and bench)
 };
 
 // What changed since a given version.
@@ -243,9 +245,11 @@ class EditSession {
   const Tool* find_tool(const std::string& author) const;
   // The author's tool's settings (defaults when it has none), with the session's history bound.
   SessionSettings settings_of(const std::string& author) const;
-  // Every tool but the acting one treats rows the acting op changed as rigid: stale (re-initialised
-  // before its next step). sync_tool(): re-initialises the acting tool's detector when stale.
-  void mark_others_stale();
+  // Every tool but the acting one treats rows the acting op changed as rigid: stale (Tool::mark_stale;
+  // `moved`: the op only moved those rows, nullptr: anything may have changed). sync_tool(): when the
+  // acting tool is stale, its detector follows the moved rows (on_rigid_moved, on a clone when a history
+  // image still refers to the detector object) or, when that cannot be, is re-initialised.
+  void mark_others_stale(const IndexList* moved = nullptr);
   void sync_tool();
   // Conflict (naming `field` and the other author) when a row with keep[r] false, or a row of
   // `parents` (rows that will get children), is in another tool's lock.
@@ -268,8 +272,10 @@ class EditSession {
   void restore(const SessionImage& image, bool clone);
   // Appends rows (the last parents.size() rows) as extend_rows does, with or without regions.
   void extend_any(const IndexList& parents);
-  // Appends the entry of an op that just bumped the version; `before` is the image before it.
-  void record(const char* op, const std::string& author, IdList touched, SessionImage before);
+  // Appends the entry of an op that just bumped the version; `before` is the image before it. `moved`:
+  // the rows the op moved when it did nothing else to rows (a step), for the other tools (mark_others_stale).
+  void record(const char* op, const std::string& author, IdList touched, SessionImage before,
+              const IndexList* moved = nullptr);
   std::uint64_t swap_entry(HistoryEntry& entry, const char* what);
   // Undo / redo of an author's entry (undo(author)): the whole swap or the entry's own part (see undo()).
   std::uint64_t swap_own(HistoryEntry& entry, bool undo);

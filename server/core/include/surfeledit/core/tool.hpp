@@ -6,8 +6,11 @@
 // Lock: the rows a tool can move are its deformable rows (every row outside its zero region, i.e.
 // every surfel with s > 0); they are disjoint from every other tool's (EditSession::set_regions).
 // Everything else is rigid to the tool. When another tool's op changes rows the tool treats as rigid
-// (moves, inserts or removes them), the tool is `stale`: its detector is re-initialised from the model
-// as it is then before the tool's next step (EditSession::sync_tool).
+// (moves, inserts or removes them), the tool is `stale` and its detector catches up before the tool's
+// next step (EditSession::sync_tool): while every change since is a move of known rows (`stale_rows`),
+// the detector updates its structures for those rows only (CollisionDetector::on_rigid_moved);
+// otherwise (rows inserted or removed, an undo that brought back an older detector, a detector that
+// cannot follow) it is re-initialised from the model as it is then.
 #pragma once
 
 #include <cstdint>
@@ -61,6 +64,8 @@ struct Tool {
   std::uint64_t steps = 0;                      // its steps so far (StepResult::seq)
   MergeMemo merge;                              // origins and last crease (session_merge.cpp)
   bool stale = false;  // rows it treats as rigid changed under its detector since the detector was built
+  bool stale_rows_known = false;  // when stale: every change since moved rows of `stale_rows`, nothing else
+  IndexList stale_rows;           // when stale_rows_known: the rows moved since, ascending (model rows)
   // Scratch, not part of the state (never in an image):
   bool journaling = false;  // during deform(): the detector's journal holds the step's before-states
   Points previous;          // #P by 3: positions before the current step (reused between steps)
@@ -74,6 +79,11 @@ struct Tool {
   void restore(const ToolImage& image, bool clone);
   // Frees the regions, the detector and what they found (the settings stay).
   void clear_regions();
+  // Another tool's op changed rows this tool treats as rigid: `moved` (ascending model rows, the row
+  // count unchanged) when it only moved those, nullptr when anything may have changed.
+  void mark_stale(const IndexList* moved);
+  // The detector caught up with the model (reset or updated): not stale.
+  void clear_stale();
 };
 
 // Appends one row per parent (a row of `f`) inheriting its region and fields (the model got them appended).
