@@ -32,11 +32,28 @@ Vec3 SurfaceProjector::onto_tangent_plane(const Vec3& x) const {
 
 Vec3 SurfaceProjector::onto_mls(const Vec3& x0, double h, Vec3* normal) const {
   Vec3 x = x0, nrm = Vec3::Zero();
-  IndexList idx;
-  std::vector<double> dist2;
+  // One range query about x0 with a margin of h serves every foot point within h of x0 (the samples within
+  // 3 h of the foot point are among them); a foot point farther away queries again about itself.
+  IndexList found, idx;
+  std::vector<double> found_d2, dist2;
+  Vec3 centre = x0;
+  const double margin = h, r2 = 9.0 * h * h;
+  tree_->radius(centre, 3.0 * h + margin, found, found_d2);
+  const auto near = [&](const Vec3& at) {
+    if ((at - centre).norm() > margin) {
+      centre = at;
+      tree_->radius(centre, 3.0 * h + margin, found, found_d2);
+    }
+    idx.clear();
+    dist2.clear();
+    for (Index k : found) {
+      const double d2 = (positions_.row(k).transpose() - at).squaredNorm();
+      if (d2 <= r2) idx.push_back(k), dist2.push_back(d2);
+    }
+  };
   // The reference plane: a weighted plane about the foot point, iterated to a fixed point.
   for (int it = 0; it < 50; ++it) {
-    tree_->radius(x, 3.0 * h, idx, dist2);
+    near(x);
     if (idx.empty()) return x;
     Vec3 c = Vec3::Zero(), m = Vec3::Zero();
     double wsum = 0.0;
@@ -57,7 +74,7 @@ Vec3 SurfaceProjector::onto_mls(const Vec3& x0, double h, Vec3* normal) const {
   if (normal) *normal = nrm;
   // The quadratic height z = a0 + a1 u + a2 v + a3 u^2 + a4 u v + a5 v^2 over the plane, about the foot x
   // (coordinates in units of h), by weighted least squares; the surface point is x + a0 n.
-  tree_->radius(x, 3.0 * h, idx, dist2);
+  near(x);
   if (idx.size() < 6) return x;
   const Vec3 e1 = nrm.unitOrthogonal(), e2 = nrm.cross(e1);
   Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
