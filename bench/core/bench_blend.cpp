@@ -11,6 +11,7 @@
 #include <cstdlib>
 
 #include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/particles/blend.hpp"
 #include "surfeledit/core/scene.hpp"
 
 namespace {
@@ -87,6 +88,28 @@ void BM_FillHole5Percent(benchmark::State& bench) {
   bench.counters["inserted"] = static_cast<double>(inserted);
 }
 
+// The final projection of a blend alone (iterations = 0): range(0) particles on a unit sphere with radial
+// noise, spacing ~ mean radius, projection tangent (0: nothing) or mls (1), one thread.
+void BM_FinalProjection(benchmark::State& bench) {
+  const int count = static_cast<int>(bench.range(0));
+  Points x(count, 3), n(count, 3);
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / count, rho = std::sqrt(1.0 - z * z), phi = golden * i;
+    n.row(i) << rho * std::cos(phi), rho * std::sin(phi), z;
+    x.row(i) = (1.0 + 0.01 * std::sin(37.0 * i)) * n.row(i);
+  }
+  BlendParams p;
+  p.iterations = 0;
+  p.threads = 1;
+  p.projection = bench.range(1) == 1 ? ProjectionKind::Mls : ProjectionKind::Tangent;
+  const double mean_radius = std::sqrt(4.0 * M_PI / count);
+  for (auto _ : bench) benchmark::DoNotOptimize(run_blend(x, n, Points(), mean_radius, p).positions.data());
+  bench.counters["particles"] = count;
+}
+
+BENCHMARK(BM_FinalProjection)->ArgNames({"particles", "mls"})->Args({2067, 0})->Args({2067, 1})->Args({200000, 1})
+    ->Unit(benchmark::kMillisecond)->Repetitions(3);
 BENCHMARK(BM_Boolean100k)->ArgNames({"op"})->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3);
 BENCHMARK(BM_FillHole5Percent)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3);
 

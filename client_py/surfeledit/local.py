@@ -157,12 +157,14 @@ class LocalSession(StateArrays):
 
     def blend(self, iterations: int = 50, range_factor: float = 4.0, dt: float = 0.1, repulsion: str = "weight",
               weight: str = "compact", only_grow: bool = False, adaptive: bool = False,
-              neighbourhood: str = "cached", features: Optional[ArrayLike] = None) -> BlendResult:
+              neighbourhood: str = "cached", features: Optional[ArrayLike] = None,
+              projection: str = "mls") -> BlendResult:
         """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
         f = None if features is None else np.asarray(as_ids(features, "features"), np.int64)
         raw = self.core.blend(iterations=int(iterations), range_factor=float(range_factor), dt=float(dt),
                               repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
-                              adaptive=bool(adaptive), neighbourhood=str(neighbourhood), features=f)
+                              adaptive=bool(adaptive), neighbourhood=str(neighbourhood), features=f,
+                              projection=str(projection))
         return blend_result(raw, self.version)
 
     def boolean(self, op: str, positions: ArrayLike, normals: ArrayLike,
@@ -173,10 +175,11 @@ class LocalSession(StateArrays):
         return self._merge_result(self.core.boolean(str(op), pos, nrm, as_radii(radii, pos.shape[0])))
 
     def fill_holes(self, max_diameter: float, iterations: int = 10,
-                   boundary: Optional[ArrayLike] = None) -> FillResult:
+                   boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
         b = None if boundary is None else np.asarray(as_ids(boundary, "boundary"), np.int64)
-        raw = self.core.fill_holes(float(max_diameter), iterations=int(iterations), boundary=b)
+        raw = self.core.fill_holes(float(max_diameter), iterations=int(iterations), boundary=b,
+                                   projection=str(projection))
         return fill_result(raw, self.version)
 
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:

@@ -103,13 +103,15 @@ class EditingSession(Protocol):
 
     def blend(self, iterations: int = 50, range_factor: float = 4.0, dt: float = 0.1, repulsion: str = "weight",
               weight: str = "compact", only_grow: bool = False, adaptive: bool = False,
-              neighbourhood: str = "cached", features: Optional[ArrayLike] = None) -> BlendResult:
+              neighbourhood: str = "cached", features: Optional[ArrayLike] = None,
+              projection: str = "mls") -> BlendResult:
         """Blend tool (thesis §12.3, docs/particles.md): the surfels within ``range_factor`` x mean radius of
         the feature surfels (``features`` ids, or those of the last merge / boolean) become oriented particles
         (the crease undone there), run ``iterations`` steps of ``dt`` and become surfels again. ``repulsion``:
         none | spring | gaussian | weight; ``weight``: compact | gaussian; ``neighbourhood``: cached | grid |
-        kdtree; ``only_grow``: move along +n only; ``adaptive``: split / kill by neighbour count. Calling it
-        again continues. One history entry. InvalidArgumentError / NotFoundError naming the argument,
+        kdtree; ``only_grow``: move along +n only; ``adaptive``: split / kill by neighbour count;
+        ``projection``: mls (at the end, onto the moving-least-squares surface of the particles and the rigid
+        surfels around them) | tangent (no final projection). Calling it again continues. One history entry. InvalidArgumentError / NotFoundError naming the argument,
         ConflictError before any merge or boolean (nothing changes)."""
         ...
 
@@ -122,10 +124,12 @@ class EditingSession(Protocol):
         ...
 
     def fill_holes(self, max_diameter: float, iterations: int = 10,
-                   boundary: Optional[ArrayLike] = None) -> FillResult:
+                   boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Fills every hole (a loop of boundary surfels, detected or the ``boundary`` ids) no wider than
         ``max_diameter`` (model units) with surfels on the surface around it (thesis §12.4.2); wider loops
-        (a scan's border) are left alone. One history entry when it inserted surfels."""
+        (a scan's border) are left alone. ``projection``: mls (the filling ends on the moving-least-squares
+        surface of the surfels around the hole and itself) | tangent (it stays on the quadric fitted around
+        the hole). One history entry when it inserted surfels."""
         ...
 
     def report(self) -> Dict[str, Any]:

@@ -34,13 +34,14 @@ class BlendOps:
 
     def blend(self, iterations: int = 50, range_factor: float = 4.0, dt: float = 0.1, repulsion: str = "weight",
               weight: str = "compact", only_grow: bool = False, adaptive: bool = False,
-              neighbourhood: str = "cached", features: Optional[ArrayLike] = None) -> BlendResult:
+              neighbourhood: str = "cached", features: Optional[ArrayLike] = None,
+              projection: str = "mls") -> BlendResult:
         """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
         ids = as_ids(features, "features") if features is not None else []
         args = proto.Blend(iterations=_int(iterations, "iterations"), range_factor=float(range_factor), dt=float(dt),
                            repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
                            adaptive=bool(adaptive), neighbourhood=str(neighbourhood),
-                           has_features=features is not None, features=ids)
+                           has_features=features is not None, features=ids, projection=str(projection))
         reply = self._request(proto.Op.OP_BLEND, blend=args)
         if not reply.blend:
             raise errors.InternalServerError("BLEND reply without a blend result", "blend")
@@ -55,11 +56,11 @@ class BlendOps:
         return self._merge_result(reply, "BOOLEAN")
 
     def fill_holes(self, max_diameter: float, iterations: int = 10,
-                   boundary: Optional[ArrayLike] = None) -> FillResult:
+                   boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
         ids = as_ids(boundary, "boundary") if boundary is not None else []
         args = proto.FillHoles(max_diameter=float(max_diameter), iterations=_int(iterations, "iterations"),
-                               has_boundary=boundary is not None, boundary=ids)
+                               has_boundary=boundary is not None, boundary=ids, projection=str(projection))
         reply = self._request(proto.Op.OP_FILL_HOLES, fill_holes=args)
         if not reply.fill:
             raise errors.InternalServerError("FILL_HOLES reply without a fill result", "fill_holes")

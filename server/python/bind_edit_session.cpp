@@ -308,7 +308,7 @@ void bind_edit_session(pyb::module_& m) {
           "blend",
           [](EditSession& s, int iterations, double range_factor, double dt, const std::string& repulsion,
              const std::string& weight, bool only_grow, bool adaptive, const std::string& neighbourhood,
-             const pyb::handle& features) {
+             const pyb::handle& features, const std::string& projection) {
             BlendParams p;
             p.iterations = iterations;
             p.range_factor = range_factor;
@@ -318,6 +318,7 @@ void bind_edit_session(pyb::module_& m) {
             p.only_grow = only_grow;
             p.adaptive = adaptive;
             p.neighbours = parse_enum<NeighbourMode>(neighbourhood, "neighbourhood");
+            p.projection = parse_enum<ProjectionKind>(projection, "projection");
             std::optional<IdList> f;
             if (!features.is_none()) f = to_ids(features, "features");
             BlendOutcome b;
@@ -339,6 +340,7 @@ void bind_edit_session(pyb::module_& m) {
           pyb::arg("range_factor") = BlendParams{}.range_factor, pyb::arg("dt") = BlendParams{}.dt,
           pyb::arg("repulsion") = "weight", pyb::arg("weight") = "compact", pyb::arg("only_grow") = false,
           pyb::arg("adaptive") = false, pyb::arg("neighbourhood") = "cached", pyb::arg("features") = pyb::none(),
+          pyb::arg("projection") = "mls",
           "Blend tool (§12.3): particles, moved, inserted, removed (ids), energy per iteration, substeps, ms")
       .def(
           "boolean",
@@ -360,10 +362,12 @@ void bind_edit_session(pyb::module_& m) {
           "Boolean of the model (A) with B (§12.4.1): as merge(); removed = A's dropped ids, inserted = B's new ids")
       .def(
           "fill_holes",
-          [](EditSession& s, double max_diameter, int iterations, const pyb::handle& boundary) {
+          [](EditSession& s, double max_diameter, int iterations, const pyb::handle& boundary,
+             const std::string& projection) {
             HoleParams p;
             p.max_diameter = max_diameter;
             p.iterations = iterations;
+            p.projection = parse_enum<ProjectionKind>(projection, "projection");
             std::optional<IdList> b;
             if (!boundary.is_none()) b = to_ids(boundary, "boundary");
             FillOutcome f;
@@ -387,7 +391,7 @@ void bind_edit_session(pyb::module_& m) {
             return d;
           },
           pyb::arg("max_diameter"), pyb::kw_only(), pyb::arg("iterations") = HoleParams{}.iterations,
-          pyb::arg("boundary") = pyb::none(),
+          pyb::arg("boundary") = pyb::none(), pyb::arg("projection") = "mls",
           "Hole filling (§12.4.2): holes [{boundary, diameter, inserted}], skipped, inserted (ids), ms")
       .def("ids", [](const EditSession& s) { return ids_array(s.model().ids()); })
       .def("positions", [](const EditSession& s) { return s.model().positions(); })

@@ -90,6 +90,7 @@ void validate(const HoleParams& p) {
   require(p.link_factor > 0.0, "link_factor", p.link_factor, "> 0");
   require(p.min_loop >= 3, "min_loop", p.min_loop, ">= 3");
   require(p.ring_factor > 0.0, "ring_factor", p.ring_factor, "> 0");
+  require(p.mls_width > 0.0, "mls_width", p.mls_width, "> 0");
 }
 
 IndexList boundary_rows(const SurfelModel& model, const HoleParams& params) {
@@ -250,6 +251,19 @@ HoleFilling fill_hole(const SurfelModel& model, const Hole& hole, const HolePara
     for (int it = 0; it < params.iterations; ++it) engine.step();
     sx = (engine.state().x * h).rowwise() + centre.transpose();
     sn = engine.state().normals();
+  }
+  if (params.projection == ProjectionKind::Mls) {
+    // The surface around and across the hole: the ring surfels and the particles.
+    const Eigen::Index nr = static_cast<Eigen::Index>(ring.size());
+    Points px(nr + sx.rows(), 3), pn(px.rows(), 3);
+    for (Eigen::Index k = 0; k < nr; ++k) {
+      px.row(k) = model.positions().row(ring[k]);
+      pn.row(k) = model.normals().row(ring[k]);
+    }
+    px.bottomRows(sx.rows()) = sx;
+    pn.bottomRows(sx.rows()) = sn;
+    const SurfaceProjector surface(px, pn);
+    project_rows_mls(surface, params.mls_width * h, sx, sn, 1);
   }
   // Keep the particles that cover something new, at least 0.5 h from a surfel and from each other.
   std::vector<Vec3> kept;

@@ -109,9 +109,12 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
     else x.row(static_cast<Eigen::Index>(k)) = m.positions().row(r);
     n.row(static_cast<Eigen::Index>(k)) = m.normals().row(r);
   }
-  Points rigid(static_cast<Eigen::Index>(region.rigid.size()), 3);
-  for (std::size_t k = 0; k < region.rigid.size(); ++k) rigid.row(static_cast<Eigen::Index>(k)) = m.positions().row(region.rigid[k]);
-  const BlendRun run = run_blend(x, n, rigid, m.radii().mean(), params);
+  Points rigid(static_cast<Eigen::Index>(region.rigid.size()), 3), rigid_n(rigid.rows(), 3);
+  for (std::size_t k = 0; k < region.rigid.size(); ++k) {
+    rigid.row(static_cast<Eigen::Index>(k)) = m.positions().row(region.rigid[k]);
+    rigid_n.row(static_cast<Eigen::Index>(k)) = m.normals().row(region.rigid[k]);
+  }
+  const BlendRun run = run_blend(x, n, rigid, m.radii().mean(), params, rigid_n);
 
   // Particles back to surfels: the first particle of each region surfel keeps its id, split-off ones are new.
   BlendOutcome out;

@@ -27,6 +27,7 @@ void serve_blend(OpContext& c) {
     p.repulsion = parse_enum<RepulsionKind>(args.repulsion, "repulsion");
     p.weight = parse_enum<WeightKind>(args.weight, "weight");
     p.neighbours = parse_enum<NeighbourMode>(args.neighbourhood, "neighbourhood");
+    p.projection = parse_enum<ProjectionKind>(args.projection, "projection");
     return s.blend(p, args.features, c.command.client_id);
   });
   c.reply.timings.emplace_back("blend", b.ms);
@@ -59,7 +60,11 @@ void serve_fill_holes(OpContext& c) {
   const auto& args = args_of<FillHolesArgs>(c);
   EditSession& s = *c.entry->session;
   const std::uint64_t before = s.version();
-  const FillOutcome f = prefixed("fill_holes", [&] { return s.fill_holes(args.params, args.boundary, c.command.client_id); });
+  const FillOutcome f = prefixed("fill_holes", [&] {
+    HoleParams p = args.params;
+    p.projection = parse_enum<ProjectionKind>(args.projection, "projection");
+    return s.fill_holes(p, args.boundary, c.command.client_id);
+  });
   c.reply.timings.emplace_back("fill_holes", f.ms);
   FillInfo info;
   for (const HoleOutcome& h : f.holes) info.holes.push_back({h.boundary, h.diameter, h.inserted});

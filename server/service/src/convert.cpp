@@ -328,6 +328,7 @@ Command decode(const surfeledit_proto_Request& r) {
         args.repulsion = str(a.repulsion);
         args.weight = str(a.weight);
         args.neighbourhood = str(a.neighbourhood);
+        args.projection = str(a.projection);
         if (a.has_features) args.features = IdList(a.features._buffer, a.features._buffer + a.features._length);
         return args;
       });
@@ -341,6 +342,7 @@ Command decode(const surfeledit_proto_Request& r) {
         FillHolesArgs args;
         args.params.max_diameter = a.max_diameter;
         args.params.iterations = a.iterations;
+        args.projection = str(a.projection);
         if (a.has_boundary) args.boundary = IdList(a.boundary._buffer, a.boundary._buffer + a.boundary._length);
         return args;
       });

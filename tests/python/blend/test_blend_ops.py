@@ -49,14 +49,15 @@ def test_blend_over_dds_equals_in_process(client: surfeledit.Client) -> None:
     with client.open_session("b") as sess:
         pushed_and_merged(sess, a)
         for kwargs in ({"iterations": 10}, {"iterations": 5, "adaptive": True, "only_grow": True},
-                       {"iterations": 3, "repulsion": "spring", "weight": "gaussian", "neighbourhood": "grid"}):
+                       {"iterations": 3, "repulsion": "spring", "weight": "gaussian", "neighbourhood": "grid"},
+                       {"iterations": 4, "projection": "tangent"}):
             want, got = local.blend(**kwargs), sess.blend(**kwargs)
             same_blend(got, want)
             assert got.version == want.version == sess.version
             assert got.particles > 0 and got.energy.shape == (kwargs["iterations"],)
             same_state(sess.state(), local.state())
         assert sess.info().state_hash == local.core.state_hash
-        assert [h.op for h in sess.history()][-3:] == ["blend"] * 3
+        assert [h.op for h in sess.history()][-4:] == ["blend"] * 4
 
 
 @pytest.mark.parametrize("op", ["union", "intersection", "difference"])
@@ -91,6 +92,15 @@ def test_fill_holes_over_dds_equals_in_process(client: surfeledit.Client) -> Non
             s.undo()
         same_fill(sess.fill_holes(0.6, boundary=got.holes[0].boundary),
                   local.fill_holes(0.6, boundary=want.holes[0].boundary))
+        same_state(sess.state(), local.state())
+        # Without the final MLS projection the filling stays on the fitted quadric: other positions.
+        mls = sess.state()
+        for s in (sess, local):
+            s.undo()
+        same_fill(sess.fill_holes(0.6, projection="tangent"), local.fill_holes(0.6, projection="tangent"))
+        tangent = sess.state()
+        same_state(tangent, local.state())
+        assert mls.positions.shape != tangent.positions.shape or not np.array_equal(mls.positions, tangent.positions)
 
 
 @pytest.mark.parametrize("where", ["local", "dds"])
@@ -134,6 +144,8 @@ def test_bad_arguments_are_typed_and_change_nothing(client: surfeledit.Client, w
             (InvalidArgumentError, lambda: sess.blend(repulsion="magnetic")),
             (InvalidArgumentError, lambda: sess.blend(weight="box")),
             (InvalidArgumentError, lambda: sess.blend(neighbourhood="octree")),
+            (InvalidArgumentError, lambda: sess.blend(projection="spline")),
+            (InvalidArgumentError, lambda: sess.blend(projection="")),
             (InvalidArgumentError, lambda: sess.blend(features=[])),
             (NotFoundError, lambda: sess.blend(features=[10**9])),
             (InvalidArgumentError, lambda: sess.boolean("xor", pb, nb, rb)),
@@ -142,6 +154,7 @@ def test_bad_arguments_are_typed_and_change_nothing(client: surfeledit.Client, w
             (InvalidArgumentError, lambda: sess.boolean("union", pb, np.zeros_like(nb), rb)),
             (InvalidArgumentError, lambda: sess.fill_holes(-1.0)),
             (InvalidArgumentError, lambda: sess.fill_holes(0.5, iterations=-3)),
+            (InvalidArgumentError, lambda: sess.fill_holes(0.5, projection="MLS")),
             (NotFoundError, lambda: sess.fill_holes(0.5, boundary=[10**9])),
         ]
         for error, call in bad_calls:

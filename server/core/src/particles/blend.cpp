@@ -30,6 +30,7 @@ void validate(const BlendParams& p) {
   require(p.dt > 0.0 && std::isfinite(p.dt), "dt", p.dt, "> 0");
   require(p.gamma >= 0.0 && std::isfinite(p.gamma), "gamma", p.gamma, ">= 0");
   require(p.spring_r0 > 0.0 && std::isfinite(p.spring_r0), "spring_r0", p.spring_r0, "> 0");
+  require(p.mls_width > 0.0 && std::isfinite(p.mls_width), "mls_width", p.mls_width, "> 0");
   require(p.split_below >= 1, "split_below", p.split_below, ">= 1");
   require(p.kill_above > p.split_below, "kill_above", p.kill_above, "> split_below");
   validate(blend_particle_params(p));
@@ -81,8 +82,10 @@ BlendRegion blend_region(const SurfelModel& model, const IndexList& features, do
 }
 
 BlendRun run_blend(const Points& positions, const Points& normals, const Points& rigid, double mean_radius,
-                   const BlendParams& params) {
+                   const BlendParams& params, const Points& rigid_normals) {
   validate(params);
+  if (rigid_normals.rows() != 0 && rigid_normals.rows() != rigid.rows())
+    throw Error(ErrorCode::InvalidArgument, "rigid_normals", "expected none or one per rigid point");
   require(mean_radius > 0.0 && std::isfinite(mean_radius), "mean_radius", mean_radius, "> 0");
   BlendRun out;
   if (positions.rows() == 0) return out;
@@ -102,8 +105,18 @@ BlendRun run_blend(const Points& positions, const Points& normals, const Points&
     out.substeps += rep.substeps;
   }
   const ParticleState& s = engine.state();
-  out.positions = (s.x * mean_radius).rowwise() + centre;
-  out.normals = s.normals();
+  Points px = s.x, pn = s.normals();
+  if (params.projection == ProjectionKind::Mls && px.rows() > 0) {
+    // The surface the blend made: the particles, and the rigid region around them when its normals are known.
+    const Eigen::Index nr = rigid_normals.rows();
+    Points sx(px.rows() + nr, 3), sn(px.rows() + nr, 3);
+    sx << px, rx.topRows(nr);
+    sn << pn, rigid_normals;
+    const SurfaceProjector surface(sx, sn);
+    project_rows_mls(surface, params.mls_width, px, pn, pp.threads);
+  }
+  out.positions = (px * mean_radius).rowwise() + centre;
+  out.normals = pn;
   out.origin = s.origin;
   return out;
 }

@@ -70,9 +70,9 @@ void ParticleEngine::refresh_neighbours(bool force) {
   const double r = params_.weight.radius;
   switch (params_.neighbours) {
     case NeighbourMode::Cached:  // the one query by the grid: the same lists, built faster than by the k-d tree
-      if (force) nbrs_ = neighbours_grid(state_.x, r, params_.threads);
+      if (force) neighbours_grid(state_.x, r, params_.threads, grid_, nbrs_);
       break;
-    case NeighbourMode::RecomputeGrid: nbrs_ = neighbours_grid(state_.x, r, params_.threads); break;
+    case NeighbourMode::RecomputeGrid: neighbours_grid(state_.x, r, params_.threads, grid_, nbrs_); break;
     case NeighbourMode::RecomputeKdTree: nbrs_ = neighbours_kdtree(state_.x, r, params_.threads); break;
   }
   evaluated_ = false;

@@ -2,11 +2,13 @@
 // among their nearest neighbours, seen in their tangent plane) grouped into loops; a loop no wider than
 // max_diameter is a hole. Particles are seeded across it at the surrounding density on the quadric height
 // field fitted to the surfels around it, diffuse with the particle engine (repulsion, local adaptive split /
-// kill) while kept on that quadric, and become surfels where no surfel covers the surface yet.
+// kill) while kept on that quadric, are projected onto the MLS surface of the ring and themselves (optional),
+// and become surfels where no surfel covers the surface yet.
 #pragma once
 
 #include <vector>
 
+#include "surfeledit/core/particles/projection.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 
 namespace surfeledit {
@@ -20,6 +22,9 @@ struct HoleParams {
   double link_factor = 2.5;   // boundary surfels closer than this x their mean radius are in one loop, > 0
   int min_loop = 6;           // loops with fewer boundary surfels are noise, not holes, >= 3
   double ring_factor = 3.0;   // the quadric is fitted to the surfels within this x radius of the loop, > 0
+  ProjectionKind projection = ProjectionKind::Mls;  // at the end: onto the MLS surface of the ring surfels and
+                                                    // the particles (tangent: stay on the fitted quadric)
+  double mls_width = 1.5;     // MLS kernel width h in mean radii of the loop (samples within 3 h count), > 0
   int threads = 0;            // worker threads (0 = all); the result does not depend on it
 };
 

@@ -103,6 +103,7 @@ struct BlendArgs {
   std::string repulsion = "weight";    // RepulsionKind name
   std::string weight = "compact";      // WeightKind name
   std::string neighbourhood = "cached";  // NeighbourMode name
+  std::string projection = "mls";      // ProjectionKind name
   std::optional<IdList> features;      // none: the last merge's / boolean's features
 };
 
@@ -115,6 +116,7 @@ struct BooleanArgs {
 struct FillHolesArgs {
   HoleParams params;                // max_diameter, iterations
   std::optional<IdList> boundary;   // none: detected
+  std::string projection = "mls";   // ProjectionKind name
 };
 
 // The op's argument: none (std::monostate), or the struct of that op. OP_LOAD_CHUNK's is a

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "surfeledit/core/particles/params.hpp"
+#include "surfeledit/core/particles/projection.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 
 namespace surfeledit {
@@ -30,6 +31,9 @@ struct BlendParams {
   NeighbourMode neighbours = NeighbourMode::Cached;  // cached or recomputed every iteration
   double gamma = 2.0;             // region scaling exponent (Eq. 12.28), >= 0
   double spring_r0 = 1.0;         // Spring repulsion: equilibrium distance in mean radii, > 0
+  ProjectionKind projection = ProjectionKind::Mls;  // at the end: onto the MLS surface of the particles and
+                                                    // the rigid region (smooths the particles' jitter, §12.3.7)
+  double mls_width = 1.5;         // MLS kernel width h in mean radii (samples within 3 h count), > 0
   int split_below = 12;           // adaptive: fewer neighbours -> split, >= 1
   int kill_above = 80;            // adaptive: more neighbours -> die, > split_below
   int threads = 0;                // worker threads (0 = all); the result does not depend on it
@@ -80,7 +84,8 @@ struct BlendRun {
 
 // Runs the particle system on `positions` / `normals` (#P by 3, model units: the blend region's surfels, as
 // they should start), anchored by `rigid` (#R by 3, model units); `mean_radius` sets the spacing unit.
+// `rigid_normals` (#R by 3, or empty): with them the final MLS projection also fits the rigid region.
 BlendRun run_blend(const Points& positions, const Points& normals, const Points& rigid, double mean_radius,
-                   const BlendParams& params);
+                   const BlendParams& params, const Points& rigid_normals = Points());
 
 }  // namespace surfeledit

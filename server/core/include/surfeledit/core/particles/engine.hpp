@@ -59,6 +59,7 @@ class ParticleEngine {
   ParticleParams params_;
   Values scale_;
   Neighbourhood nbrs_;
+  GridWorkspace grid_;  // the grid builder's buffers, reused by every recomputation
   SystemForces forces_;
   bool evaluated_ = false;
   std::unique_ptr<SurfaceProjector> surface_;

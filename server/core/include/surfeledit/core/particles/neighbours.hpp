@@ -22,4 +22,17 @@ Neighbourhood neighbours_kdtree(const Points& points, double radius, int threads
 // Uniform grid with cells of at least `radius` (coarser when the bounding box would need too many cells).
 Neighbourhood neighbours_grid(const Points& points, double radius, int threads = 0);
 
+// The grid builder's buffers, kept between calls (a recomputed neighbourhood reuses them every iteration).
+struct GridWorkspace {
+  std::vector<std::int64_t> cell;    // #P: cell of every particle
+  std::vector<std::int64_t> start;   // #cells + 1: first sorted slot of every cell
+  std::vector<std::int64_t> fill;    // #cells: counting-sort cursors
+  IndexList sorted;                  // #P: particles by cell
+  std::vector<double> sp;            // #P * 3: their coordinates in that order
+  std::vector<IndexList> found;      // per block of rows: neighbours in cell order
+  std::vector<std::int64_t> cursor;  // #P: transpose cursors
+};
+// The same lists as neighbours_grid, into `out`, reusing `ws` and `out`'s storage.
+void neighbours_grid(const Points& points, double radius, int threads, GridWorkspace& ws, Neighbourhood& out);
+
 }  // namespace surfeledit
