@@ -145,7 +145,7 @@ TEST(Tool, ReleaseFreesTheLockAndUndoTakesItBack) {
   t.session.undo();  // a's release: a's regions and lock are back, exactly
   ASSERT_NE(t.session.fields("a"), nullptr);
   EXPECT_EQ(t.session.fields("a")->deformable, fields_a.deformable);
-  EXPECT_TRUE(t.session.fields("a")->lambda == fields_a.lambda);
+  EXPECT_TRUE(t.session.fields("a")->blend == fields_a.blend);
   expect_error([&] { t.session.set_regions({t.body, {}}, {t.join(t.a, t.b), {}}, "b"); }, ErrorCode::Conflict,
                "regions");
   // And a can step again.
