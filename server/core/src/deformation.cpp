@@ -251,41 +251,61 @@ inline double beta_prime(double l) {
   }
 }
 
-// sin and cos of x, |x| <= kMaxStepAngle, branch-free so that a loop over them vectorises (SSE2 2-wide):
-// Cody-Waite reduction by pi/2 in three parts (each part's product with the quadrant number is exact
-// for |k| < 2^20) and minimax polynomials on [-pi/4, pi/4] (fdlibm's kernel coefficients); within
-// about one ulp of the libm values.
-inline void sin_cos(double x, double& sn, double& cs) {
+// The step works on two rows at once: D2 is a pair of doubles (one SSE2 register on x86-64; GCC and Clang
+// vector extensions elsewhere), M2 the mask a comparison of two pairs gives. The same templated code runs on
+// plain doubles for an odd last row, with the same operations in the same order, so every row's result is
+// the same whichever lane (or thread) computes it.
+typedef double D2 __attribute__((vector_size(16)));
+
+inline double splat(double x, double) { return x; }
+inline D2 splat(double x, D2) { return D2{x, x}; }
+inline double select(bool m, double a, double b) { return m ? a : b; }
+template <class M>
+inline D2 select(M m, D2 a, D2 b) { return m ? a : b; }
+inline double root(double x) { return std::sqrt(x); }
+inline D2 root(D2 x) {
+#if defined(__SSE2__)
+  return __builtin_ia32_sqrtpd(x);
+#else
+  return D2{std::sqrt(x[0]), std::sqrt(x[1])};
+#endif
+}
+
+// sin and cos of x, |x| <= kMaxStepAngle, branch-free: Cody-Waite reduction by pi/2 in three parts (each
+// part's product with the quadrant number is exact for |k| < 2^20) and minimax polynomials on
+// [-pi/4, pi/4] (fdlibm's kernel coefficients); within about one ulp of the libm values.
+template <class T>
+inline void sin_cos(T x, T& sn, T& cs) {
   constexpr double kTwoOverPi = 6.36619772367581382433e-01;
   constexpr double kPio2a = 1.57079632673412561417e+00;  // first 33 bits of pi/2
   constexpr double kPio2b = 6.07710050630396597660e-11;  // next 33 bits
   constexpr double kPio2c = 2.02226624871116645580e-21;  // the rest
   constexpr double kRound = 6755399441055744.0;          // 1.5 * 2^52: adding it rounds to an integer
-  const double k = (x * kTwoOverPi + kRound) - kRound;   // nearest quadrant number
-  const double r = ((x - k * kPio2a) - k * kPio2b) - k * kPio2c;
-  const double z = r * r;
-  const double ps = r + r * z *
-                            (-1.66666666666666324348e-01 +
-                             z * (8.33333333332248946124e-03 +
-                                  z * (-1.98412698298579493134e-04 +
-                                       z * (2.75573137070700676789e-06 +
-                                            z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
-  const double pc = 1.0 - 0.5 * z +
-                    z * z *
-                        (4.16666666666666019037e-02 +
-                         z * (-1.38888888888741095749e-03 +
-                              z * (2.48015872894767294178e-05 +
-                                   z * (-2.75573143513906633035e-07 +
-                                        z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+  const T k = (x * kTwoOverPi + kRound) - kRound;        // nearest quadrant number
+  const T r = ((x - k * kPio2a) - k * kPio2b) - k * kPio2c;
+  const T z = r * r;
+  const T ps = r + r * z *
+                       (-1.66666666666666324348e-01 +
+                        z * (8.33333333332248946124e-03 +
+                             z * (-1.98412698298579493134e-04 +
+                                  z * (2.75573137070700676789e-06 +
+                                       z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+  const T pc = 1.0 - 0.5 * z +
+               z * z *
+                   (4.16666666666666019037e-02 +
+                    z * (-1.38888888888741095749e-03 +
+                         z * (2.48015872894767294178e-05 +
+                              z * (-2.75573143513906633035e-07 +
+                                   z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
   // Quadrant q = k mod 4 (k is an integer; k / 4 - 0.375 rounds to floor(k / 4) without ties).
-  const double q = k - 4.0 * ((k * 0.25 - 0.375 + kRound) - kRound);
-  const bool odd = (q == 1.0) | (q == 3.0);
-  const double s0 = odd ? pc : ps, c0 = odd ? ps : pc;
-  sn = q >= 2.0 ? -s0 : s0;
-  cs = ((q == 1.0) | (q == 2.0)) ? -c0 : c0;
+  const T q = k - 4.0 * ((k * 0.25 - 0.375 + kRound) - kRound);
+  const auto odd = (q == 1.0) | (q == 3.0);
+  const T s0 = select(odd, pc, ps), c0 = select(odd, ps, pc);
+  sn = select(q >= 2.0, -s0, s0);
+  cs = select((q == 1.0) | (q == 2.0), -c0, c0);
 }
 
-constexpr int kBlock = 64;  // rows per block of the step: SoA buffers of 64 doubles stay in L1
+constexpr int kBlock = 64;  // rows per block of the step (the unit of the threads' static schedule)
 
 // The step's constants.
 struct StepConstants {
@@ -297,100 +317,114 @@ struct StepConstants {
   double adt;            // a . t
 };
 
-// One block of `count` (<= kBlock) rows: gather (AoS -> SoA), the step on the SoA buffers (a branch-free
-// loop the compiler vectorises), scatter. `ks` lists the rows' positions in fields.deformable, or is null
-// for the consecutive positions k0, k0 + 1, ...
-// Per row: J = R (I + w g^T) with g = grad s = beta'(lambda) grad lambda and w = R^T dF/ds =
-// alpha (a x (p - c)) + R^T t (R commutes with rotations about a). Hence
+// Lanes of one call: the rows' offsets into the #P by 3 arrays (3 * row) and into the blend rows (4 * k).
+inline double gather(const double* a, const std::ptrdiff_t* o, double) { return a[o[0]]; }
+inline D2 gather(const double* a, const std::ptrdiff_t* o, D2) { return D2{a[o[0]], a[o[1]]}; }
+inline void scatter(double* a, const std::ptrdiff_t* o, double v) { a[o[0]] = v; }
+inline void scatter(double* a, const std::ptrdiff_t* o, D2 v) { a[o[0]] = v[0], a[o[1]] = v[1]; }
+
+// One or two rows (T = double or D2). Per row: J = R (I + w g^T) with g = grad s = beta'(lambda) grad lambda
+// and w = R^T dF/ds = alpha (a x (p - c)) + R^T t (R commutes with rotations about a). Hence
 //   J x = R (x + w (g . x)),  cofactor(J) n = R ((1 + g . w) n - (w . n) g),
 // the latter being J u x J v for an orthonormal tangent frame (u, v) of n.
+template <class T, Blend B, bool Rotate, bool Tangents>
+inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const std::ptrdiff_t* f, const double* F,
+                      double* P, double* N, double* U, double* V) {
+  const T z{};
+  std::ptrdiff_t o1[2], o2[2], f1[2], f2[2], f3[2];
+  for (int i = 0; i < 2; ++i) o1[i] = o[i] + 1, o2[i] = o[i] + 2, f1[i] = f[i] + 1, f2[i] = f[i] + 2, f3[i] = f[i] + 3;
+  const T l = gather(F, f, z);
+  T s, d;
+  if constexpr (B == Blend::Smooth) {
+    const T q = l * (l - 2.0);
+    s = q * q;
+    d = 4.0 * l * (l - 1.0) * (l - 2.0);
+  } else if constexpr (B == Blend::Quadratic) {
+    s = l * l;
+    d = 2.0 * l;
+  } else {
+    s = l;
+    d = splat(1.0, z);
+  }
+  const T g0 = d * gather(F, f1, z), g1 = d * gather(F, f2, z), g2 = d * gather(F, f3, z);
+  const auto flat = (g0 == 0.0) & (g1 == 0.0) & (g2 == 0.0);  // J = R: a rigid motion, no renormalisation
+  T px = gather(P, o, z), py = gather(P, o1, z), pz = gather(P, o2, z);
+  // Rotation R = cs I + sn [a]x + (1 - cs) a a^T (identity without rotation), w, new position.
+  T w0 = splat(sc.tx, z), w1 = splat(sc.ty, z), w2 = splat(sc.tz, z);
+  T r00, r01, r02, r10, r11, r12, r20, r21, r22;
+  if constexpr (Rotate) {
+    T sn, cs;
+    sin_cos(s * sc.alpha, sn, cs);
+    const T kk = 1.0 - cs;
+    const T kxy = kk * (sc.ax * sc.ay), kxz = kk * (sc.ax * sc.az), kyz = kk * (sc.ay * sc.az);
+    r00 = cs + kk * (sc.ax * sc.ax), r01 = kxy - sn * sc.az, r02 = kxz + sn * sc.ay;
+    r10 = kxy + sn * sc.az, r11 = cs + kk * (sc.ay * sc.ay), r12 = kyz - sn * sc.ax;
+    r20 = kxz - sn * sc.ay, r21 = kyz + sn * sc.ax, r22 = cs + kk * (sc.az * sc.az);
+    const T e0 = px - sc.cx, e1 = py - sc.cy, e2 = pz - sc.cz;
+    px = r00 * e0 + r01 * e1 + r02 * e2 + sc.cx + s * sc.tx;
+    py = r10 * e0 + r11 * e1 + r12 * e2 + sc.cy + s * sc.ty;
+    pz = r20 * e0 + r21 * e1 + r22 * e2 + sc.cz + s * sc.tz;
+    // R^T t = cos t - sin (a x t) + (1 - cos)(a . t) a
+    const T ka = kk * sc.adt;
+    w0 = sc.alpha * (sc.ay * e2 - sc.az * e1) + (cs * sc.tx - sn * sc.axtx + ka * sc.ax);
+    w1 = sc.alpha * (sc.az * e0 - sc.ax * e2) + (cs * sc.ty - sn * sc.axty + ka * sc.ay);
+    w2 = sc.alpha * (sc.ax * e1 - sc.ay * e0) + (cs * sc.tz - sn * sc.axtz + ka * sc.az);
+  } else {
+    px += s * sc.tx, py += s * sc.ty, pz += s * sc.tz;
+  }
+  scatter(P, o, px), scatter(P, o1, py), scatter(P, o2, pz);
+  const T n0 = gather(N, o, z), n1 = gather(N, o1, z), n2 = gather(N, o2, z);
+  const T gw = 1.0 + (g0 * w0 + g1 * w1 + g2 * w2), wn = w0 * n0 + w1 * n1 + w2 * n2;
+  T m0 = gw * n0 - wn * g0, m1 = gw * n1 - wn * g1, m2 = gw * n2 - wn * g2;
+  T len2 = m0 * m0 + m1 * m1 + m2 * m2;
+  // Both sides of every select are computed: no branches.
+  const T nn = n0 * n0 + n1 * n1 + n2 * n2;
+  const auto ok = len2 > 0.0;
+  m0 = select(ok, m0, n0), m1 = select(ok, m1, n1), m2 = select(ok, m2, n2);
+  len2 = select(ok, len2, nn);
+  // |R m| = |m|: normalise with m's length; the sign makes the normal agree with R n.
+  const T sign = select((m0 * n0 + m1 * n1 + m2 * n2) < 0.0, splat(-1.0, z), splat(1.0, z));
+  const T scale = select(flat, splat(1.0, z), sign / root(len2));
+  if constexpr (Rotate) {
+    scatter(N, o, scale * (r00 * m0 + r01 * m1 + r02 * m2));
+    scatter(N, o1, scale * (r10 * m0 + r11 * m1 + r12 * m2));
+    scatter(N, o2, scale * (r20 * m0 + r21 * m1 + r22 * m2));
+  } else {
+    scatter(N, o, scale * m0), scatter(N, o1, scale * m1), scatter(N, o2, scale * m2);
+  }
+  if constexpr (Tangents) {
+    for (double* X : {U, V}) {
+      const T x0 = gather(X, o, z), x1 = gather(X, o1, z), x2 = gather(X, o2, z);
+      const T gx = g0 * x0 + g1 * x1 + g2 * x2;
+      const T a0 = x0 + gx * w0, a1 = x1 + gx * w1, a2 = x2 + gx * w2;
+      if constexpr (Rotate) {
+        scatter(X, o, r00 * a0 + r01 * a1 + r02 * a2);
+        scatter(X, o1, r10 * a0 + r11 * a1 + r12 * a2);
+        scatter(X, o2, r20 * a0 + r21 * a1 + r22 * a2);
+      } else {
+        scatter(X, o, a0), scatter(X, o1, a1), scatter(X, o2, a2);
+      }
+    }
+  }
+}
+
+// One block of `count` (<= kBlock) rows, two at a time. `ks` lists the rows' positions in
+// fields.deformable, or is null for the consecutive positions k0, k0 + 1, ...
 template <Blend B, bool Rotate, bool Tangents>
-void step_block(const StepConstants& sc, const Index* rows, const double* fields, const Index* ks, Eigen::Index k0,
+void step_block(const StepConstants& sc, const Index* rows, const double* F, const Index* ks, Eigen::Index k0,
                 int count, double* P, double* N, double* U, double* V) {
-  alignas(64) double px[kBlock], py[kBlock], pz[kBlock], nx[kBlock], ny[kBlock], nz[kBlock];
-  alignas(64) double lam[kBlock], gx[kBlock], gy[kBlock], gz[kBlock];
-  alignas(64) double ux[kBlock], uy[kBlock], uz[kBlock], vx[kBlock], vy[kBlock], vz[kBlock];
-  for (int j = 0; j < count; ++j) {
-    const std::ptrdiff_t k = ks ? ks[j] : k0 + j;
-    const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(rows[k]);
-    const double* f = fields + 4 * k;
-    px[j] = P[o], py[j] = P[o + 1], pz[j] = P[o + 2];
-    nx[j] = N[o], ny[j] = N[o + 1], nz[j] = N[o + 2];
-    lam[j] = f[0], gx[j] = f[1], gy[j] = f[2], gz[j] = f[3];
-    if constexpr (Tangents) {
-      ux[j] = U[o], uy[j] = U[o + 1], uz[j] = U[o + 2];
-      vx[j] = V[o], vy[j] = V[o + 1], vz[j] = V[o + 2];
-    }
+  int j = 0;
+  for (; j + 1 < count; j += 2) {
+    const std::ptrdiff_t k[2] = {ks ? ks[j] : k0 + j, ks ? ks[j + 1] : k0 + j + 1};
+    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[k[0]]), 3 * static_cast<std::ptrdiff_t>(rows[k[1]])};
+    const std::ptrdiff_t f[2] = {4 * k[0], 4 * k[1]};
+    step_rows<D2, B, Rotate, Tangents>(sc, o, f, F, P, N, U, V);
   }
-#pragma omp simd
-  for (int j = 0; j < count; ++j) {
-    const double l = lam[j];
-    const double s = beta<B>(l), d = beta_prime<B>(l);
-    const double g0 = d * gx[j], g1 = d * gy[j], g2 = d * gz[j];
-    const bool flat = (g0 == 0.0) & (g1 == 0.0) & (g2 == 0.0);  // J = R: a rigid motion, no renormalisation
-    // Rotation R = cs I + sn [a]x + (1 - cs) a a^T (identity without rotation), w, new position.
-    double w0 = sc.tx, w1 = sc.ty, w2 = sc.tz;
-    double r00 = 1, r01 = 0, r02 = 0, r10 = 0, r11 = 1, r12 = 0, r20 = 0, r21 = 0, r22 = 1;
-    if constexpr (Rotate) {
-      double sn, cs;
-      sin_cos(s * sc.alpha, sn, cs);
-      const double kk = 1.0 - cs;
-      const double kxy = kk * sc.ax * sc.ay, kxz = kk * sc.ax * sc.az, kyz = kk * sc.ay * sc.az;
-      r00 = cs + kk * sc.ax * sc.ax, r01 = kxy - sn * sc.az, r02 = kxz + sn * sc.ay;
-      r10 = kxy + sn * sc.az, r11 = cs + kk * sc.ay * sc.ay, r12 = kyz - sn * sc.ax;
-      r20 = kxz - sn * sc.ay, r21 = kyz + sn * sc.ax, r22 = cs + kk * sc.az * sc.az;
-      const double e0 = px[j] - sc.cx, e1 = py[j] - sc.cy, e2 = pz[j] - sc.cz;
-      px[j] = r00 * e0 + r01 * e1 + r02 * e2 + sc.cx + s * sc.tx;
-      py[j] = r10 * e0 + r11 * e1 + r12 * e2 + sc.cy + s * sc.ty;
-      pz[j] = r20 * e0 + r21 * e1 + r22 * e2 + sc.cz + s * sc.tz;
-      // R^T t = cos t - sin (a x t) + (1 - cos)(a . t) a
-      const double ka = kk * sc.adt;
-      w0 = sc.alpha * (sc.ay * e2 - sc.az * e1) + (cs * sc.tx - sn * sc.axtx + ka * sc.ax);
-      w1 = sc.alpha * (sc.az * e0 - sc.ax * e2) + (cs * sc.ty - sn * sc.axty + ka * sc.ay);
-      w2 = sc.alpha * (sc.ax * e1 - sc.ay * e0) + (cs * sc.tz - sn * sc.axtz + ka * sc.az);
-    } else {
-      px[j] += s * sc.tx, py[j] += s * sc.ty, pz[j] += s * sc.tz;
-    }
-    const double n0 = nx[j], n1 = ny[j], n2 = nz[j];
-    const double gw = 1.0 + (g0 * w0 + g1 * w1 + g2 * w2), wn = w0 * n0 + w1 * n1 + w2 * n2;
-    double m0 = gw * n0 - wn * g0, m1 = gw * n1 - wn * g1, m2 = gw * n2 - wn * g2;
-    double len2 = m0 * m0 + m1 * m1 + m2 * m2;
-    // Both sides of every select below are computed: the loop has no branches, so it vectorises.
-    const double nn = n0 * n0 + n1 * n1 + n2 * n2;
-    const bool ok = len2 > 0.0;
-    m0 = ok ? m0 : n0, m1 = ok ? m1 : n1, m2 = ok ? m2 : n2;
-    len2 = ok ? len2 : nn;
-    // |R m| = |m|: normalise with m's length; the sign makes the normal agree with R n.
-    const double sign = (m0 * n0 + m1 * n1 + m2 * n2) < 0.0 ? -1.0 : 1.0;
-    const double unit = sign / std::sqrt(len2);
-    const double scale = flat ? 1.0 : unit;
-    if constexpr (Rotate) {
-      nx[j] = scale * (r00 * m0 + r01 * m1 + r02 * m2);
-      ny[j] = scale * (r10 * m0 + r11 * m1 + r12 * m2);
-      nz[j] = scale * (r20 * m0 + r21 * m1 + r22 * m2);
-    } else {
-      nx[j] = scale * m0, ny[j] = scale * m1, nz[j] = scale * m2;
-    }
-    if constexpr (Tangents) {
-      const double gu = g0 * ux[j] + g1 * uy[j] + g2 * uz[j];
-      const double a0 = ux[j] + gu * w0, a1 = uy[j] + gu * w1, a2 = uz[j] + gu * w2;
-      const double gv = g0 * vx[j] + g1 * vy[j] + g2 * vz[j];
-      const double b0 = vx[j] + gv * w0, b1 = vy[j] + gv * w1, b2 = vz[j] + gv * w2;
-      ux[j] = r00 * a0 + r01 * a1 + r02 * a2, uy[j] = r10 * a0 + r11 * a1 + r12 * a2,
-      uz[j] = r20 * a0 + r21 * a1 + r22 * a2;
-      vx[j] = r00 * b0 + r01 * b1 + r02 * b2, vy[j] = r10 * b0 + r11 * b1 + r12 * b2,
-      vz[j] = r20 * b0 + r21 * b1 + r22 * b2;
-    }
-  }
-  for (int j = 0; j < count; ++j) {
+  if (j < count) {
     const std::ptrdiff_t k = ks ? ks[j] : k0 + j;
-    const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(rows[k]);
-    P[o] = px[j], P[o + 1] = py[j], P[o + 2] = pz[j];
-    N[o] = nx[j], N[o + 1] = ny[j], N[o + 2] = nz[j];
-    if constexpr (Tangents) {
-      U[o] = ux[j], U[o + 1] = uy[j], U[o + 2] = uz[j];
-      V[o] = vx[j], V[o + 1] = vy[j], V[o + 2] = vz[j];
-    }
+    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[k]), 0};
+    const std::ptrdiff_t f[2] = {4 * k, 0};
+    step_rows<double, B, Rotate, Tangents>(sc, o, f, F, P, N, U, V);
   }
 }
 
