@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
@@ -454,6 +455,82 @@ TEST(Deformation, InvariantUnderTranslationAndScale) {
     EXPECT_LT(d.position, 1e-9) << c.name;
     EXPECT_LT(d.normal, 1e-6) << c.name;
   }
+}
+
+// Angles far from the polynomial's [-pi/4, pi/4] (the step reduces them by pi/2 in three parts): F1 turns
+// rigidly by exactly the rotation Eigen's AngleAxis (libm's sin/cos) gives, and the blend band follows the
+// reference map, up to |angle| = kMaxStepAngle.
+TEST(Deformation, LargeAnglesMatchLibmRotations) {
+  const Model base = make_model(0.08);
+  const DeformationFields f = compute_fields(base.positions, base.regions);
+  const Values lam = f.lambda();
+  const Vec3 c = f1_centroid(base);
+  for (const double angle : {2.0, -3.5, 7.9, 100.25, -637.0, kMaxStepAngle, -kMaxStepAngle}) {
+    Model m = base;
+    DeformParams p;
+    p.axis = Vec3(0.3, -1, 0.7);
+    p.angle = angle;
+    p.center = c;
+    apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+    const Mat3 rot = Eigen::AngleAxisd(angle, p.axis.normalized()).toRotationMatrix();
+    double worst = 0.0, worst_blend = 0.0;
+    for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+      const Region reg = base.regions[static_cast<std::size_t>(i)];
+      if (reg == Region::One) {
+        const Vec3 expect = rot * (base.positions.row(i).transpose() - c) + c;
+        worst = std::max(worst, (m.positions.row(i).transpose() - expect).norm());
+        worst = std::max(worst, (m.normals.row(i).transpose() - rot * base.normals.row(i).transpose()).norm());
+      } else if (reg == Region::Blend) {
+        const Vec3 expect = reference_map(base.positions.row(i).transpose(), blend_value(p.blend, lam[i]), p, c);
+        worst_blend = std::max(worst_blend, (m.positions.row(i).transpose() - expect).norm());
+      }
+    }
+    EXPECT_LT(worst, 1e-13) << "angle " << angle;
+    EXPECT_LT(worst_blend, 1e-12) << "angle " << angle;
+  }
+}
+
+// `only` moves exactly the listed rows, each exactly as the full step moves it (same centre given).
+TEST(Deformation, OnlyMovesTheListedRowsAsTheFullStepDoes) {
+  const Model base = make_model(0.06);
+  const DeformationFields f = compute_fields(base.positions, base.regions);
+  DeformParams p;
+  p.translation = Vec3(0.02, -0.01, 0.05);
+  p.axis = Vec3(0, 1, 1);
+  p.angle = 0.4;
+  p.center = f1_centroid(base);
+  Model full = base;
+  apply_step(f, p, full.positions, full.normals, &full.tu, &full.tv);
+  IndexList only;
+  for (std::size_t k = 0; k < f.deformable.size(); k += 3) only.push_back(f.deformable[k]);  // every third
+  Model part = base;
+  const DeformResult r = apply_step(f, p, part.positions, part.normals, &part.tu, &part.tv, 1, &only);
+  EXPECT_EQ(r.moved, only);
+  std::vector<bool> listed(static_cast<std::size_t>(base.positions.rows()), false);
+  for (const Index i : only) listed[static_cast<std::size_t>(i)] = true;
+  for (Eigen::Index i = 0; i < base.positions.rows(); ++i) {
+    const Model& expect = listed[static_cast<std::size_t>(i)] ? full : base;
+    ASSERT_TRUE(part.positions.row(i) == expect.positions.row(i)) << "row " << i;
+    ASSERT_TRUE(part.normals.row(i) == expect.normals.row(i)) << "row " << i;
+    ASSERT_TRUE(part.tu.row(i) == expect.tu.row(i) && part.tv.row(i) == expect.tv.row(i)) << "row " << i;
+  }
+  // A row that is not deformable (F0) is refused, and nothing moves.
+  IndexList bad = {only.front()};
+  for (Eigen::Index i = 0; i < base.positions.rows(); ++i)
+    if (base.regions[static_cast<std::size_t>(i)] == Region::Zero) {
+      bad.push_back(static_cast<Index>(i));
+      break;
+    }
+  std::sort(bad.begin(), bad.end());
+  Model m = base;
+  try {
+    apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv, 1, &bad);
+    ADD_FAILURE() << "accepted a non-deformable row";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "only");
+  }
+  EXPECT_TRUE(m.positions == base.positions);
+  EXPECT_TRUE(m.normals == base.normals);
 }
 
 }  // namespace
