@@ -315,6 +315,7 @@ struct StepConstants {
   double alpha;          // angle, radians
   double axtx, axty, axtz;  // a x t
   double adt;            // a . t
+  double r1[9];          // the whole step's rotation R(a, alpha), row-major (F1 rows: s = 1, g = 0)
 };
 
 // Lanes of one call: the rows' offsets into the #P by 3 arrays (3 * row) and into the blend rows (4 * k).
@@ -322,12 +323,18 @@ inline double gather(const double* a, const std::ptrdiff_t* o, double) { return 
 inline D2 gather(const double* a, const std::ptrdiff_t* o, D2) { return D2{a[o[0]], a[o[1]]}; }
 inline void scatter(double* a, const std::ptrdiff_t* o, double v) { a[o[0]] = v; }
 inline void scatter(double* a, const std::ptrdiff_t* o, D2 v) { a[o[0]] = v[0], a[o[1]] = v[1]; }
+inline bool all(bool m) { return m; }
+inline bool all(int m) { return m != 0; }
+template <class M>
+inline bool all(M m) {
+  return m[0] && m[1];
+}
 
 // One or two rows (T = double or D2). Per row: J = R (I + w g^T) with g = grad s = beta'(lambda) grad lambda
 // and w = R^T dF/ds = alpha (a x (p - c)) + R^T t (R commutes with rotations about a). Hence
 //   J x = R (x + w (g . x)),  cofactor(J) n = R ((1 + g . w) n - (w . n) g),
 // the latter being J u x J v for an orthonormal tangent frame (u, v) of n.
-template <class T, Blend B, bool Rotate, bool Tangents>
+template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
 inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const std::ptrdiff_t* f, const double* F,
                       double* P, double* N, double* U, double* V) {
   const T z{};
@@ -349,6 +356,30 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
   const T g0 = d * gather(F, f1, z), g1 = d * gather(F, f2, z), g2 = d * gather(F, f3, z);
   const auto flat = (g0 == 0.0) & (g1 == 0.0) & (g2 == 0.0);  // J = R: a rigid motion, no renormalisation
   T px = gather(P, o, z), py = gather(P, o1, z), pz = gather(P, o2, z);
+  // Rigid rows take a cheap path: without rotation a flat row's normal and tangents stay as they are (the
+  // general formula leaves them bit-identical: m = n, scale 1); with rotation, F1 rows (Rigid) skip the
+  // sin/cos and the renormalisation. Which path a row takes depends on the row alone, never on its lane mate.
+  if constexpr (!Rotate) {
+    if (all(flat)) {
+      scatter(P, o, px + s * sc.tx), scatter(P, o1, py + s * sc.ty), scatter(P, o2, pz + s * sc.tz);
+      return;
+    }
+  } else if constexpr (Rigid) {
+    // F1 (lambda 1, gradient 0): the step's one rotation, as a rigid motion.
+    const double* r = sc.r1;
+    const T e0 = px - sc.cx, e1 = py - sc.cy, e2 = pz - sc.cz;
+    scatter(P, o, r[0] * e0 + r[1] * e1 + r[2] * e2 + sc.cx + sc.tx);
+    scatter(P, o1, r[3] * e0 + r[4] * e1 + r[5] * e2 + sc.cy + sc.ty);
+    scatter(P, o2, r[6] * e0 + r[7] * e1 + r[8] * e2 + sc.cz + sc.tz);
+    for (double* X : {N, U, V}) {
+      if (!Tangents && X != N) break;
+      const T x0 = gather(X, o, z), x1 = gather(X, o1, z), x2 = gather(X, o2, z);
+      scatter(X, o, r[0] * x0 + r[1] * x1 + r[2] * x2);
+      scatter(X, o1, r[3] * x0 + r[4] * x1 + r[5] * x2);
+      scatter(X, o2, r[6] * x0 + r[7] * x1 + r[8] * x2);
+    }
+    return;
+  }
   // Rotation R = cs I + sn [a]x + (1 - cs) a a^T (identity without rotation), w, new position.
   T w0 = splat(sc.tx, z), w1 = splat(sc.ty, z), w2 = splat(sc.tz, z);
   T r00, r01, r02, r10, r11, r12, r20, r21, r22;
@@ -410,22 +441,39 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
 
 // One block of `count` (<= kBlock) rows, two at a time. `ks` lists the rows' positions in
 // fields.deformable, or is null for the consecutive positions k0, k0 + 1, ...
+template <Blend B, bool Rotate, bool Tangents, bool Rigid>
+void step_list(const StepConstants& sc, const Index* rows, const double* F, const std::ptrdiff_t* ks, int count,
+               double* P, double* N, double* U, double* V) {
+  int j = 0;
+  for (; j + 1 < count; j += 2) {
+    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[ks[j]]), 3 * static_cast<std::ptrdiff_t>(rows[ks[j + 1]])};
+    const std::ptrdiff_t f[2] = {4 * ks[j], 4 * ks[j + 1]};
+    step_rows<D2, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
+  }
+  if (j < count) {
+    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[ks[j]]), 0};
+    const std::ptrdiff_t f[2] = {4 * ks[j], 0};
+    step_rows<double, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
+  }
+}
+
+// One block of `count` (<= kBlock) rows, two at a time; with rotation, F1 rows (lambda 1, gradient 0) and
+// the others in separate lists. `ks` lists the rows' positions in fields.deformable, or is null for the
+// consecutive positions k0, k0 + 1, ...
 template <Blend B, bool Rotate, bool Tangents>
 void step_block(const StepConstants& sc, const Index* rows, const double* F, const Index* ks, Eigen::Index k0,
                 int count, double* P, double* N, double* U, double* V) {
-  int j = 0;
-  for (; j + 1 < count; j += 2) {
-    const std::ptrdiff_t k[2] = {ks ? ks[j] : k0 + j, ks ? ks[j + 1] : k0 + j + 1};
-    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[k[0]]), 3 * static_cast<std::ptrdiff_t>(rows[k[1]])};
-    const std::ptrdiff_t f[2] = {4 * k[0], 4 * k[1]};
-    step_rows<D2, B, Rotate, Tangents>(sc, o, f, F, P, N, U, V);
-  }
-  if (j < count) {
+  std::ptrdiff_t general[kBlock], rigid[kBlock];
+  int ng = 0, nr = 0;
+  for (int j = 0; j < count; ++j) {
     const std::ptrdiff_t k = ks ? ks[j] : k0 + j;
-    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[k]), 0};
-    const std::ptrdiff_t f[2] = {4 * k, 0};
-    step_rows<double, B, Rotate, Tangents>(sc, o, f, F, P, N, U, V);
+    const double* f = F + 4 * k;
+    const bool one = Rotate && f[0] == 1.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0;
+    if (one) rigid[nr++] = k;
+    else general[ng++] = k;
   }
+  step_list<B, Rotate, Tangents, false>(sc, rows, F, general, ng, P, N, U, V);
+  if (nr > 0) step_list<B, Rotate, Tangents, true>(sc, rows, F, rigid, nr, P, N, U, V);
 }
 
 using BlockFn = void (*)(const StepConstants&, const Index*, const double*, const Index*, Eigen::Index, int, double*,
@@ -565,8 +613,16 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const Vec3 a = rotate ? Vec3(params.axis.normalized()) : Vec3::UnitZ();
   const Vec3 c = result.center, t = params.translation;
   const Vec3 axt = a.cross(t);
-  const StepConstants sc{c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), a.x(), a.y(), a.z(), params.angle,
-                         axt.x(), axt.y(), axt.z(), a.dot(t)};
+  StepConstants sc{c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), a.x(), a.y(), a.z(), params.angle,
+                   axt.x(), axt.y(), axt.z(), a.dot(t), {}};
+  {  // Rodrigues: R = cs I + sn [a]x + (1 - cs) a a^T
+    const double cs = std::cos(params.angle), sn = std::sin(params.angle), k = 1.0 - cs;
+    const double kxy = k * a.x() * a.y(), kxz = k * a.x() * a.z(), kyz = k * a.y() * a.z();
+    const double r1[9] = {cs + k * a.x() * a.x(), kxy - sn * a.z(), kxz + sn * a.y(),
+                          kxy + sn * a.z(), cs + k * a.y() * a.y(), kyz - sn * a.x(),
+                          kxz - sn * a.y(), kyz + sn * a.x(), cs + k * a.z() * a.z()};
+    std::copy(r1, r1 + 9, sc.r1);
+  }
   BlockFn block = nullptr;
   switch (params.blend) {
     case Blend::Smooth: block = pick_block<Blend::Smooth>(rotate, has_u); break;
