@@ -88,8 +88,8 @@ blend between them. step(...) applies one cumulative step and returns the moved 
           pyb::arg("angle") = 0.0, pyb::arg("center") = pyb::none(), pyb::arg("blend") = "smooth")
       .def_readonly("positions", &DeformationTool::positions)
       .def_readonly("normals", &DeformationTool::normals)
-      .def_property_readonly("lam", [](const DeformationTool& t) { return t.fields.lambda; }, "lambda = d0 / (d0 + d1), (P,)")
-      .def_property_readonly("grad_lam", [](const DeformationTool& t) { return t.fields.grad_lambda; }, "gradient of lambda, (P, 3)")
+      .def_property_readonly("lam", [](const DeformationTool& t) { return t.fields.lambda(); }, "lambda = d0 / (d0 + d1), (P,)")
+      .def_property_readonly("grad_lam", [](const DeformationTool& t) { return t.fields.grad_lambda(); }, "gradient of lambda, (P, 3)")
       .def_property_readonly("regions", [](const DeformationTool& t) {
         pyb::array_t<std::uint8_t> out(t.fields.regions.size());
         for (std::size_t i = 0; i < t.fields.regions.size(); ++i) out.mutable_data()[i] = static_cast<std::uint8_t>(t.fields.regions[i]);

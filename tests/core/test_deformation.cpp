@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
@@ -112,26 +113,29 @@ TEST(Deformation, FieldsMatchBruteForce) {
   const Model m = make_model();
   const DeformationFields f = compute_fields(m.positions, m.regions, 2);
   const Eigen::Index n = m.positions.rows();
-  ASSERT_EQ(f.lambda.size(), n);
-  ASSERT_EQ(f.grad_lambda.rows(), n);
+  const Values lam = f.lambda();
+  const Points grad = f.grad_lambda();
+  ASSERT_EQ(lam.size(), n);
+  ASSERT_EQ(grad.rows(), n);
+  ASSERT_EQ(f.blend.rows(), static_cast<Eigen::Index>(f.deformable.size()));
   std::size_t deformable = 0;
   int gradient_checked = 0, gradient_ok = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
     const Region r = m.regions[static_cast<std::size_t>(i)];
     const Vec3 p = m.positions.row(i).transpose();
     if (r == Region::Zero) {
-      EXPECT_EQ(f.lambda[i], 0.0);
-      EXPECT_TRUE(f.grad_lambda.row(i).isZero(0.0));
+      EXPECT_EQ(lam[i], 0.0);
+      EXPECT_TRUE(grad.row(i).isZero(0.0));
       continue;
     }
     ASSERT_LT(deformable, f.deformable.size());
     EXPECT_EQ(f.deformable[deformable++], i);
     if (r == Region::One) {
-      EXPECT_EQ(f.lambda[i], 1.0);
-      EXPECT_TRUE(f.grad_lambda.row(i).isZero(0.0));
+      EXPECT_EQ(lam[i], 1.0);
+      EXPECT_TRUE(grad.row(i).isZero(0.0));
       continue;
     }
-    EXPECT_NEAR(f.lambda[i], brute_lambda(m, p), 1e-14);
+    EXPECT_NEAR(lam[i], brute_lambda(m, p), 1e-14);
     // Gradient vs central differences of the brute-force lambda (skipped where the nearest
     // F0/F1 surfel changes inside the stencil: lambda has a kink there).
     Index a0 = -1, a1 = -1;
@@ -151,12 +155,14 @@ TEST(Deformation, FieldsMatchBruteForce) {
     }
     if (!same) continue;
     ++gradient_checked;
-    gradient_ok += (f.grad_lambda.row(i).transpose() - fd).norm() <= 1e-6 * (1.0 + fd.norm());
+    gradient_ok += (grad.row(i).transpose() - fd).norm() <= 1e-6 * (1.0 + fd.norm());
   }
   EXPECT_EQ(deformable, f.deformable.size());
   EXPECT_GT(gradient_checked, 500);
   EXPECT_EQ(gradient_ok, gradient_checked);
-  EXPECT_GT(f.memory_bytes(), static_cast<std::size_t>(n) * 4 * sizeof(double));
+  // Per-deformable-row storage only: a region byte per row, and an index and 4 doubles per deformable row.
+  EXPECT_EQ(f.memory_bytes() >= static_cast<std::size_t>(n) + deformable * (sizeof(Index) + 4 * sizeof(double)), true);
+  EXPECT_LT(f.memory_bytes(), static_cast<std::size_t>(n) * 2 + deformable * 2 * (sizeof(Index) + 4 * sizeof(double)));
 }
 
 TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
@@ -198,6 +204,7 @@ TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
 TEST(Deformation, ZeroRegionStillOneRegionRigid) {
   Model m = make_model();
   const DeformationFields f = compute_fields(m.positions, m.regions);
+  const Values lam = f.lambda();
   const Model before = m;
   DeformParams p;
   p.translation = Vec3(0.1, -0.05, 0.2);
@@ -211,7 +218,7 @@ TEST(Deformation, ZeroRegionStillOneRegionRigid) {
   std::size_t k = 0;
   for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
     const Region reg = m.regions[static_cast<std::size_t>(i)];
-    const double s = blend_value(p.blend, f.lambda[i]);
+    const double s = blend_value(p.blend, lam[i]);
     if (s > 0) {
       ASSERT_LT(k, r.moved.size());
       EXPECT_EQ(r.moved[k++], i);
@@ -270,6 +277,7 @@ TEST(Deformation, NormalsAndTangentsFollowTheFiniteDifferenceJacobian) {
     SCOPED_TRACE(rotate ? "rotation + translation" : "translation only");
     Model m = make_model();
     const DeformationFields f = compute_fields(m.positions, m.regions);
+    const Values lam = f.lambda();
     const Model before = m;
     DeformParams p;
     p.translation = Vec3(0.25, 0.1, 0.15);
@@ -305,7 +313,7 @@ TEST(Deformation, NormalsAndTangentsFollowTheFiniteDifferenceJacobian) {
       const Vec3 n0 = before.normals.row(i).transpose();
       // cofactor(J) n = det(J) J^-T n, oriented like R n.
       Vec3 expect_n = (jac.determinant() * jac.inverse().transpose() * n0).normalized();
-      const Mat3 rot = Eigen::AngleAxisd(blend_value(p.blend, f.lambda[i]) * p.angle,
+      const Mat3 rot = Eigen::AngleAxisd(blend_value(p.blend, lam[i]) * p.angle,
                                          rotate ? p.axis.normalized() : Vec3::UnitZ())
                            .toRotationMatrix();
       if (expect_n.dot(rot * n0) < 0) expect_n = -expect_n;
@@ -447,6 +455,82 @@ TEST(Deformation, InvariantUnderTranslationAndScale) {
     EXPECT_LT(d.position, 1e-9) << c.name;
     EXPECT_LT(d.normal, 1e-6) << c.name;
   }
+}
+
+// Angles far from the polynomial's [-pi/4, pi/4] (the step reduces them by pi/2 in three parts): F1 turns
+// rigidly by exactly the rotation Eigen's AngleAxis (libm's sin/cos) gives, and the blend band follows the
+// reference map, up to |angle| = kMaxStepAngle.
+TEST(Deformation, LargeAnglesMatchLibmRotations) {
+  const Model base = make_model(0.08);
+  const DeformationFields f = compute_fields(base.positions, base.regions);
+  const Values lam = f.lambda();
+  const Vec3 c = f1_centroid(base);
+  for (const double angle : {2.0, -3.5, 7.9, 100.25, -637.0, kMaxStepAngle, -kMaxStepAngle}) {
+    Model m = base;
+    DeformParams p;
+    p.axis = Vec3(0.3, -1, 0.7);
+    p.angle = angle;
+    p.center = c;
+    apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv);
+    const Mat3 rot = Eigen::AngleAxisd(angle, p.axis.normalized()).toRotationMatrix();
+    double worst = 0.0, worst_blend = 0.0;
+    for (Eigen::Index i = 0; i < m.positions.rows(); ++i) {
+      const Region reg = base.regions[static_cast<std::size_t>(i)];
+      if (reg == Region::One) {
+        const Vec3 expect = rot * (base.positions.row(i).transpose() - c) + c;
+        worst = std::max(worst, (m.positions.row(i).transpose() - expect).norm());
+        worst = std::max(worst, (m.normals.row(i).transpose() - rot * base.normals.row(i).transpose()).norm());
+      } else if (reg == Region::Blend) {
+        const Vec3 expect = reference_map(base.positions.row(i).transpose(), blend_value(p.blend, lam[i]), p, c);
+        worst_blend = std::max(worst_blend, (m.positions.row(i).transpose() - expect).norm());
+      }
+    }
+    EXPECT_LT(worst, 1e-13) << "angle " << angle;
+    EXPECT_LT(worst_blend, 1e-12) << "angle " << angle;
+  }
+}
+
+// `only` moves exactly the listed rows, each exactly as the full step moves it (same centre given).
+TEST(Deformation, OnlyMovesTheListedRowsAsTheFullStepDoes) {
+  const Model base = make_model(0.06);
+  const DeformationFields f = compute_fields(base.positions, base.regions);
+  DeformParams p;
+  p.translation = Vec3(0.02, -0.01, 0.05);
+  p.axis = Vec3(0, 1, 1);
+  p.angle = 0.4;
+  p.center = f1_centroid(base);
+  Model full = base;
+  apply_step(f, p, full.positions, full.normals, &full.tu, &full.tv);
+  IndexList only;
+  for (std::size_t k = 0; k < f.deformable.size(); k += 3) only.push_back(f.deformable[k]);  // every third
+  Model part = base;
+  const DeformResult r = apply_step(f, p, part.positions, part.normals, &part.tu, &part.tv, 1, &only);
+  EXPECT_EQ(r.moved, only);
+  std::vector<bool> listed(static_cast<std::size_t>(base.positions.rows()), false);
+  for (const Index i : only) listed[static_cast<std::size_t>(i)] = true;
+  for (Eigen::Index i = 0; i < base.positions.rows(); ++i) {
+    const Model& expect = listed[static_cast<std::size_t>(i)] ? full : base;
+    ASSERT_TRUE(part.positions.row(i) == expect.positions.row(i)) << "row " << i;
+    ASSERT_TRUE(part.normals.row(i) == expect.normals.row(i)) << "row " << i;
+    ASSERT_TRUE(part.tu.row(i) == expect.tu.row(i) && part.tv.row(i) == expect.tv.row(i)) << "row " << i;
+  }
+  // A row that is not deformable (F0) is refused, and nothing moves.
+  IndexList bad = {only.front()};
+  for (Eigen::Index i = 0; i < base.positions.rows(); ++i)
+    if (base.regions[static_cast<std::size_t>(i)] == Region::Zero) {
+      bad.push_back(static_cast<Index>(i));
+      break;
+    }
+  std::sort(bad.begin(), bad.end());
+  Model m = base;
+  try {
+    apply_step(f, p, m.positions, m.normals, &m.tu, &m.tv, 1, &bad);
+    ADD_FAILURE() << "accepted a non-deformable row";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "only");
+  }
+  EXPECT_TRUE(m.positions == base.positions);
+  EXPECT_TRUE(m.normals == base.normals);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "session_fixture.hpp"
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "surfeledit/core/tool.hpp"
 #include "surfeledit/core/two_arms.hpp"
 
 namespace surfeledit {
@@ -123,7 +124,7 @@ TEST(Tool, ReleaseFreesTheLockAndUndoTakesItBack) {
   t.session.undo();  // a's release: a's regions and lock are back, exactly
   ASSERT_NE(t.session.fields("a"), nullptr);
   EXPECT_EQ(t.session.fields("a")->deformable, fields_a.deformable);
-  EXPECT_TRUE(t.session.fields("a")->lambda == fields_a.lambda);
+  EXPECT_TRUE(t.session.fields("a")->blend == fields_a.blend);
   expect_error([&] { t.session.set_regions({t.body, {}}, {TwoArms::join(t.a, t.b), {}}, "b"); }, ErrorCode::Conflict,
                "regions");
   // And a can step again.
@@ -199,6 +200,51 @@ TEST(Tool, ResamplingOfOneToolExtendsTheOthersFields) {
   t.session.undo();
   EXPECT_EQ(t.session.model().size(), before);
   EXPECT_EQ(t.session.fields("b")->regions.size(), static_cast<std::size_t>(before));
+}
+
+
+// The per-deformable-row fields after children are appended and rows removed: every row keeps the lambda
+// and gradient it had (checked through the dense views against the rows' old values).
+TEST(Tool, ExtendAndCompactKeepEachRowsFields) {
+  Points p(40, 3);
+  std::vector<Region> regions(40);
+  for (int i = 0; i < 40; ++i) {
+    p.row(i) << 0.1 * i, 0.05 * (i % 3), 0.0;
+    regions[static_cast<std::size_t>(i)] = i < 15 ? Region::Zero : (i < 32 ? Region::Blend : Region::One);
+  }
+  DeformationFields f = compute_fields(p, regions, 1);
+  const Values lam0 = f.lambda();
+  const Points grad0 = f.grad_lambda();
+  const IndexList parents = {3, 20, 16, 39, 0, 25};  // F0, blend, blend, F1, F0, blend
+  extend_fields(f, parents);
+  ASSERT_EQ(f.regions.size(), 46u);
+  const Values lam1 = f.lambda();
+  const Points grad1 = f.grad_lambda();
+  EXPECT_TRUE(lam1.head(40) == lam0);
+  EXPECT_TRUE(grad1.topRows(40) == grad0);
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Eigen::Index child = 40 + static_cast<Eigen::Index>(k);
+    EXPECT_EQ(f.regions[static_cast<std::size_t>(child)], regions[static_cast<std::size_t>(parents[k])]);
+    EXPECT_EQ(lam1[child], lam0[parents[k]]);
+    EXPECT_TRUE(grad1.row(child) == grad0.row(parents[k]));
+    EXPECT_EQ(f.lambda_of(static_cast<Index>(child)), lam0[parents[k]]);
+  }
+  EXPECT_TRUE(std::is_sorted(f.deformable.begin(), f.deformable.end()));
+  std::vector<bool> keep(46, true);
+  for (int r : {0, 16, 17, 31, 39, 41, 45}) keep[static_cast<std::size_t>(r)] = false;
+  compact_fields(f, keep);
+  const Values lam2 = f.lambda();
+  const Points grad2 = f.grad_lambda();
+  Eigen::Index j = 0;
+  for (Eigen::Index i = 0; i < 46; ++i) {
+    if (!keep[static_cast<std::size_t>(i)]) continue;
+    EXPECT_EQ(lam2[j], lam1[i]) << "row " << i;
+    EXPECT_TRUE(grad2.row(j) == grad1.row(i)) << "row " << i;
+    ++j;
+  }
+  EXPECT_EQ(j, lam2.size());
+  EXPECT_EQ(f.blend.rows(), static_cast<Eigen::Index>(f.deformable.size()));
+  for (Index r : f.deformable) EXPECT_NE(f.regions[static_cast<std::size_t>(r)], Region::Zero);
 }
 
 }  // namespace

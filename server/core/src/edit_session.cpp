@@ -295,8 +295,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     out.inserted = model_.insert(std::move(plan.b));  // validates child B before anything else changes
     DeformationFields& f = *tool_->fields;
     const Index rows = old_rows + static_cast<Index>(k);
-    f.lambda.conservativeResize(rows);
-    f.grad_lambda.conservativeResize(rows, 3);
+    extend_fields(f, plan.parents);  // child B inherits the parent's deformation fields
     rest_radius_.conservativeResize(rows);
     if (previous.rows() > 0) previous.conservativeResize(rows, 3);
     for (Eigen::Index j = 0; j < k; ++j) {
@@ -309,11 +308,6 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
       a.tangent_u.row(parent) = plan.a.tangent_u.row(j);
       a.tangent_v.row(parent) = plan.a.tangent_v.row(j);
       if (plan.a.colors.rows() > 0 && a.colors.rows() == rows) a.colors.row(parent) = plan.a.colors.row(j);
-      // Child B inherits the parent's deformation fields.
-      f.regions.push_back(f.regions[parent]);
-      f.lambda[child] = f.lambda[parent];
-      f.grad_lambda.row(child) = f.grad_lambda.row(parent);
-      f.deformable.push_back(child);
       rest_radius_[parent] = plan.a.radii[j];
       rest_radius_[child] = b_radii[j];
       if (previous.rows() > 0) previous.row(child) = previous.row(parent);

@@ -125,14 +125,8 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     p.angle = params.angle * f;
     SurfelArrays& a = model_.arrays();
     const bool tangents = model_.has_tangents();
-    std::swap(tool_->fields->deformable, rows);  // apply_step moves fields.deformable only
-    struct SwapBack {
-      IndexList& x;
-      IndexList& y;
-      ~SwapBack() { std::swap(x, y); }
-    } swap_back{tool_->fields->deformable, rows};
     apply_step(*tool_->fields, p, a.positions, a.normals, tangents ? &a.tangent_u : nullptr,
-               tangents ? &a.tangent_v : nullptr, 1);
+               tangents ? &a.tangent_v : nullptr, 1, &rows);  // only the candidates move
   };
   auto detect_candidates = [&] {
     if (!partial) return;
@@ -150,7 +144,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
         if (depth < eps || out.colliding.empty()) return;
         const auto deepest = std::max_element(out.depths.begin(), out.depths.end()) - out.depths.begin();
         const Index row = model_.row_of(out.colliding[static_cast<std::size_t>(deepest)]);
-        const double s = blend_value(params.blend, tool_->fields->lambda[row]);
+        const double s = blend_value(params.blend, tool_->fields->lambda_of(row));
         if (s <= 0.0 || t_len <= 0.0) return;
         kept = std::max(0.0, kept - depth / (s * t_len));
       } else {

@@ -69,35 +69,45 @@ void Tool::clear_regions() {
 
 void extend_fields(DeformationFields& f, const IndexList& parents) {
   const Index first = static_cast<Index>(f.regions.size());
-  const Index rows = first + static_cast<Index>(parents.size());
-  f.lambda.conservativeResize(rows);
-  f.grad_lambda.conservativeResize(rows, 3);
+  // The parents' positions in f.deformable (-1: F0), found before anything grows.
+  IndexList at(parents.size(), -1);
+  std::size_t added = 0;
   for (std::size_t k = 0; k < parents.size(); ++k) {
-    const Index parent = parents[k], child = first + static_cast<Index>(k);
-    f.regions.push_back(f.regions[static_cast<std::size_t>(parent)]);
-    f.lambda[child] = f.lambda[parent];
-    f.grad_lambda.row(child) = f.grad_lambda.row(parent);
-    if (f.regions[static_cast<std::size_t>(parent)] != Region::Zero) f.deformable.push_back(child);
+    if (f.regions[static_cast<std::size_t>(parents[k])] == Region::Zero) continue;
+    const auto it = std::lower_bound(f.deformable.begin(), f.deformable.end(), parents[k]);
+    at[k] = static_cast<Index>(it - f.deformable.begin());
+    ++added;
+  }
+  Eigen::Index d = static_cast<Eigen::Index>(f.deformable.size());
+  f.blend.conservativeResize(d + static_cast<Eigen::Index>(added), 4);
+  for (std::size_t k = 0; k < parents.size(); ++k) {
+    const Index child = first + static_cast<Index>(k);
+    f.regions.push_back(f.regions[static_cast<std::size_t>(parents[k])]);
+    if (at[k] < 0) continue;
+    f.blend.row(d++) = f.blend.row(at[k]);  // children come after every row: `deformable` stays ascending
+    f.deformable.push_back(child);
   }
 }
 
 void compact_fields(DeformationFields& f, const std::vector<bool>& keep) {
-  Eigen::Index j = 0;
-  for (Eigen::Index i = 0; i < f.lambda.size(); ++i) {
-    if (!keep[static_cast<std::size_t>(i)]) continue;
-    f.lambda[j] = f.lambda[i];
-    f.grad_lambda.row(j) = f.grad_lambda.row(i);
-    ++j;
-  }
-  f.lambda.conservativeResize(j);
-  f.grad_lambda.conservativeResize(j, 3);
+  // New row of each kept row: its rank among the kept rows.
+  std::vector<Index> new_row(f.regions.size(), -1);
+  Index next = 0;
+  for (std::size_t r = 0; r < f.regions.size(); ++r)
+    if (keep[r]) new_row[r] = next++;
   std::size_t w = 0;
+  for (std::size_t k = 0; k < f.deformable.size(); ++k) {
+    const Index r = f.deformable[k];
+    if (!keep[static_cast<std::size_t>(r)]) continue;
+    f.blend.row(static_cast<Eigen::Index>(w)) = f.blend.row(static_cast<Eigen::Index>(k));
+    f.deformable[w++] = new_row[static_cast<std::size_t>(r)];
+  }
+  f.deformable.resize(w);
+  f.blend.conservativeResize(static_cast<Eigen::Index>(w), 4);
+  w = 0;
   for (std::size_t r = 0; r < f.regions.size(); ++r)
     if (keep[r]) f.regions[w++] = f.regions[r];
   f.regions.resize(w);
-  f.deformable.clear();
-  for (std::size_t r = 0; r < f.regions.size(); ++r)
-    if (f.regions[r] != Region::Zero) f.deformable.push_back(static_cast<Index>(r));
 }
 
 std::size_t lock_overlap(const std::vector<Region>& a, const std::vector<Region>& b) {

@@ -55,16 +55,27 @@ constexpr double kMaxCoordinate = 1e150;  // compute_fields: |coordinate| bound 
 // e.g. (1e200, 1e200, 0): a rotation about it would collapse the region to a point).
 void validate(const DeformParams& params);
 
-// Per-surfel blend fields, computed once when regions are set (from the positions at that time).
+// Per-deformable-row data of the blend fields: one row (32 bytes) per entry of DeformationFields::deformable,
+// (lambda, d lambda / dx, d lambda / dy, d lambda / dz); the gradient in 1 / model unit.
+using BlendRows = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+// Blend fields, computed once when regions are set (from the positions at that time). Only the deformable
+// rows carry lambda and its gradient (F0 has lambda 0 and gradient 0 everywhere), packed contiguously in
+// `deformable` order so that a step streams them instead of gathering from whole-model arrays.
 struct DeformationFields {
   std::vector<Region> regions;  // #P
-  Values lambda;                // #P, d0 / (d0 + d1); 0 on F0, 1 on F1
-  Points grad_lambda;           // #P by 3, gradient of lambda (zero on F0 and F1)
-  IndexList deformable;         // rows with region != Zero, ascending
+  IndexList deformable;         // #D rows with region != Zero, ascending
+  BlendRows blend;              // #D by 4: lambda (0 < lambda <= 1; 1 on F1) and grad lambda (0 on F1) of
+                                // deformable[k]
   Vec3 box_centre = Vec3::Zero();  // centre of the positions' bounding box when the fields were computed
   double box_extent = std::numeric_limits<double>::infinity();  // its diagonal, model units (inf: unknown,
                                                                 // no reach check)
 
+  // Dense views (#P, and #P by 3; zero on F0), for tests and inspection -- not used by the step.
+  Values lambda() const;
+  Points grad_lambda() const;
+  // lambda of one row (0 when it is not deformable); a binary search in `deformable`.
+  double lambda_of(Index row) const;
   std::size_t memory_bytes() const;
 };
 
@@ -86,9 +97,10 @@ struct DeformResult {
 
 // Applies one step in place to `positions`, `normals` (#P by 3) and, when non-empty,
 // the tangent axes `tangent_u`, `tangent_v` (#P by 3, lengths = radii along them).
-// Validates everything before touching any array.
+// `only`, when given, restricts the step to those rows (a subset of fields.deformable, ascending); the
+// others keep their state. Validates everything before touching any array.
 DeformResult apply_step(const DeformationFields& fields, const DeformParams& params,
                         Points& positions, Points& normals, Points* tangent_u = nullptr,
-                        Points* tangent_v = nullptr, int threads = 1);
+                        Points* tangent_v = nullptr, int threads = 1, const IndexList* only = nullptr);
 
 }  // namespace surfeledit

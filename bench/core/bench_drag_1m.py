@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""The ~1M-surfel drag (issue 14): piercing at scale 4.8, the GUI setting (Temporal, knn_eps 2), in-process,
+at 1 and 2 threads. Per step: the whole call, the deformation share (the session's `apply` timing: the
+step's apply_step and its bookkeeping) and the detector's share; medians over the scenario's steps.
+
+    .venv/bin/python bench/core/bench_drag_1m.py [--scale 4.8] [--threads 1,2] [--rounds 1]
+        [--package <dir holding another build's surfeledit package, for an A/B>]
+
+With --package, that directory goes first on sys.path, so an older build's package (e.g. a copy of main's
+client_py in /tmp) runs the same script; interleave the two in one period for a fair comparison.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scale", type=float, default=4.8, help="piercing scale (4.8: about 1M surfels)")
+    ap.add_argument("--threads", default="1,2", help="comma-separated thread counts")
+    ap.add_argument("--algorithm", default="temporal")
+    ap.add_argument("--knn-eps", type=float, default=2.0)
+    ap.add_argument("--rounds", type=int, default=1, help="runs of the scenario per thread count")
+    ap.add_argument("--package", default="", help="directory to import surfeledit from (A/B)")
+    args = ap.parse_args()
+    if args.package:
+        sys.path.insert(0, str(Path(args.package).resolve()))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    import benchlib  # noqa: E402
+    import surfeledit  # noqa: E402
+    from surfeledit import scenario as S  # noqa: E402
+
+    print(f"# surfeledit from {Path(surfeledit.__file__).parent}; {benchlib.load_average()}", flush=True)
+    sc = S.make_scenario("piercing", scale=args.scale, seed=1)
+    print(f"piercing scale {args.scale}: {len(sc.scene.positions):,} surfels, {sc.steps} steps; "
+          f"{args.algorithm} knn_eps {args.knn_eps}", flush=True)
+    params = sc.step_params()
+    for threads in (int(t) for t in args.threads.split(",")):
+        total, apply, detect = [], [], []
+        for _ in range(args.rounds):
+            backend = S.LocalBackend(threads)
+            backend.start(sc.scene)
+            backend.configure(algorithm=args.algorithm, threads=threads, knn_eps=args.knn_eps)
+            for _ in range(sc.steps):
+                r = backend.session.deform(**params)
+                total.append(r.timings["total"])
+                apply.append(r.timings["apply"])
+                detect.append(r.timings.get("detect", float("nan")))
+            backend.close()
+        print(f"threads {threads}: step median {statistics.median(total):.2f} ms "
+              f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms), "
+              f"{len(total)} steps; {benchlib.load_average()}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    t0 = time.perf_counter()
+    rc = main()
+    print(f"total {time.perf_counter() - t0:.0f} s")
+    sys.exit(rc)
