@@ -92,14 +92,12 @@ def join_surfels(parts: Sequence[Any]) -> Tuple[np.ndarray, np.ndarray, np.ndarr
     """(ids (N,) uint64, positions (N, 3), normals (N, 3), radii (N,) float64) of wire samples that
     carry surfels in pieces (state pages, update parts; either encoding), in the order given."""
     ids = concat(parts, "ids", np.uint64)
-    if not any(is_compact(p) for p in parts):
-        return (ids, concat(parts, "positions", np.float64).reshape(-1, 3),
-                concat(parts, "normals", np.float64).reshape(-1, 3), concat(parts, "radii", np.float64))
-    decoded = [compact_surfels(p) if is_compact(p) else
-               (np.asarray(p.positions, np.float64).reshape(-1, 3), np.asarray(p.normals, np.float64).reshape(-1, 3),
-                np.asarray(p.radii, np.float64)) for p in parts]
-    return (ids, np.concatenate([d[0] for d in decoded]), np.concatenate([d[1] for d in decoded]),
-            np.concatenate([d[2] for d in decoded]))
+    if parts and is_compact(parts[0]):  # one reader reads one encoding: every part is compact then
+        decoded = [compact_surfels(p) for p in parts]
+        return (ids, np.concatenate([d[0] for d in decoded]), np.concatenate([d[1] for d in decoded]),
+                np.concatenate([d[2] for d in decoded]))
+    return (ids, concat(parts, "positions", np.float64).reshape(-1, 3),
+            concat(parts, "normals", np.float64).reshape(-1, 3), concat(parts, "radii", np.float64))
 
 
 def join_clips(parts: Sequence[Any]) -> Optional[np.ndarray]:

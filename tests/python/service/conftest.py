@@ -7,11 +7,14 @@ Every started process is stopped by a finalizer (SIGTERM, then SIGKILL) even whe
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import itertools
+import json
 import os
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 from typing import Callable, Iterator, List, Optional, Tuple
@@ -213,3 +216,22 @@ def generated_scene(spacing: float = 0.05) -> Scene:
 @pytest.fixture
 def scene() -> Scene:
     return generated_scene()
+
+
+PEER = Path(__file__).with_name("peer_process.py")
+
+
+@contextlib.contextmanager
+def uploading_peer(domain: int, **job: object) -> Iterator[subprocess.Popen]:
+    """A client in its own process (peer_process.py "upload", with ``job``: session, token, total, chunks,
+    chunk) that joined and sent its chunks; killed (SIGKILL) and reaped on exit if it still runs."""
+    peer = subprocess.Popen([sys.executable, str(PEER), "upload", str(domain), json.dumps(job)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        line = peer.stdout.readline() if peer.stdout else ""
+        assert json.loads(line or "{}").get("ready"), peer.stderr.read() if peer.stderr else ""
+        yield peer
+    finally:
+        if peer.poll() is None:
+            peer.kill()
+        peer.wait()

@@ -6,19 +6,14 @@ asking while the dead one is detached gets every answer promptly."""
 
 from __future__ import annotations
 
-import json
 import signal
-import subprocess
-import sys
 import time
-from pathlib import Path
 from typing import Callable, List
 
 import surfeledit
 
-from .conftest import ServerProcess, connect_to
+from .conftest import ServerProcess, connect_to, uploading_peer
 
-PEER = Path(__file__).with_name("peer_process.py")
 LEASE_MS = 1000
 CLIENT_LIVELINESS_S = surfeledit.connection.CLIENT_LIVELINESS_S
 STALL_S = 0.6  # well below the 1 s linger, well above a round trip on a loaded 2-core machine
@@ -31,19 +26,10 @@ def test_detaching_a_killed_client_does_not_stall_the_others(start_server: Calla
         s = owner.open_session("shared")
         token = s.invite("editor")
         # A peer in its own process joins and gets replies (the server makes its reply writer).
-        peer = subprocess.Popen([sys.executable, str(PEER), "upload", str(srv.domain), json.dumps(
-            dict(session="shared", token=token, total=1000, chunks=3, chunk=10))],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-        try:
-            line = peer.stdout.readline() if peer.stdout else ""
-            assert json.loads(line or "{}").get("ready"), peer.stderr.read() if peer.stderr else ""
+        with uploading_peer(srv.domain, session="shared", token=token, total=1000, chunks=3, chunk=10) as peer:
             assert s.info().clients == 2
             peer.send_signal(signal.SIGKILL)
             killed = time.monotonic()
-        finally:
-            if peer.poll() is None:
-                peer.kill()
-            peer.wait()
         # The owner asks back to back through the detachment and a while after it.
         rtts: List[float] = []
         detached_at = None

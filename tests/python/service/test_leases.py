@@ -4,14 +4,10 @@ and total limits; a killed server is noticed within about two seconds (ServerGon
 
 from __future__ import annotations
 
-import json
 import os
 import signal
-import subprocess
-import sys
 import threading
 import time
-from pathlib import Path
 from typing import Callable, List
 
 import numpy as np
@@ -21,9 +17,8 @@ import surfeledit
 from surfeledit import errors
 from surfeledit._protocol import proto
 
-from .conftest import ServerProcess, connect_to
+from .conftest import ServerProcess, connect_to, uploading_peer
 
-PEER = Path(__file__).with_name("peer_process.py")
 ROW_BYTES = 7 * 8  # one surfel with a radius: positions, normals, radius as doubles
 LEASE_MS = 1000
 CLIENT_LIVELINESS_S = surfeledit.connection.CLIENT_LIVELINESS_S
@@ -48,12 +43,8 @@ def test_a_client_killed_mid_upload_is_detached_and_its_upload_freed(
         s = owner.open_session("shared")
         token = s.invite("editor")
         n, chunks = 5000, 2
-        peer = subprocess.Popen([sys.executable, str(PEER), "upload", str(srv.domain), json.dumps(
-            dict(session="shared", token=token, total=100_000, chunks=chunks, chunk=n))],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-        try:
-            line = peer.stdout.readline() if peer.stdout else ""
-            assert json.loads(line or "{}").get("ready"), peer.stderr.read() if peer.stderr else ""
+        with uploading_peer(srv.domain, session="shared", token=token, total=100_000, chunks=chunks,
+                            chunk=n) as peer:
             info = server_info(owner)
             # Reserved as chunks arrived (capacity doubles up to the total): 2 chunks of n -> 2n rows,
             # not the 100,000 rows LOAD_BEGIN announced.
@@ -62,10 +53,6 @@ def test_a_client_killed_mid_upload_is_detached_and_its_upload_freed(
             assert s.info().clients == 2
             peer.send_signal(signal.SIGKILL)
             killed = time.monotonic()
-        finally:
-            if peer.poll() is None:
-                peer.kill()
-            peer.wait()
         deadline = killed + CLIENT_LIVELINESS_S + LEASE_MS / 1000 + 3.0
         while time.monotonic() < deadline:
             info = server_info(owner)

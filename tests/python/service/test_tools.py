@@ -41,6 +41,15 @@ def open_shared(make_client: Callable[[], surfeledit.Client], name: str):
     return owner, other, a, b, ids, part, positions
 
 
+def claim_arms(a: surfeledit.Session, b: surfeledit.Session, ids: np.ndarray,
+               part: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each client's tool moves its own arm (a: arm A, b: arm B), the rest rigid to it; (arm A, arm B, body) ids."""
+    arm_a, arm_b, body = ids[part == 1], ids[part == 2], ids[part == 0]
+    a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
+    b.set_regions(zero=np.concatenate([body, arm_a]), one=arm_b)
+    return arm_a, arm_b, body
+
+
 def test_locks_conflict_naming_the_client_and_release_frees_them(
         make_client: Callable[[], surfeledit.Client]) -> None:
     owner, other, a, b, ids, part, _ = open_shared(make_client, "locks")
@@ -106,9 +115,7 @@ def test_two_arms_swung_into_each_other_are_detected_where_the_other_client_move
     # follows the other client's moves step by step (docs/collaboration.md), and a surfel stays reported
     # for as long as it is inside, whichever arm moved last.
     _, _, a, b, ids, part, _ = open_shared(make_client, "arms")
-    arm_a, arm_b, body = ids[part == 1], ids[part == 2], ids[part == 0]
-    a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
-    b.set_regions(zero=np.concatenate([body, arm_a]), one=arm_b)
+    arm_a, arm_b, body = claim_arms(a, b, ids, part)
     centers = {"a": np.array(ARM_A), "b": np.array(ARM_B)}
     schedule = [("b", -0.04), ("a", 0.05)] * 7 + [("b", -0.04), ("a", 0.0)]  # overlap 0.07 at the end
     deep = 0
@@ -153,9 +160,7 @@ def _expected_refusal(history, client: str):
 def test_each_client_undoes_its_own_op_and_is_refused_when_another_clients_later_op_overlaps(
         make_client: Callable[[], surfeledit.Client]) -> None:
     owner, other, a, b, ids, part, _ = open_shared(make_client, "undo")
-    arm_a, arm_b, body = ids[part == 1], ids[part == 2], ids[part == 0]
-    a.set_regions(zero=np.concatenate([body, arm_b]), one=arm_a)
-    b.set_regions(zero=np.concatenate([body, arm_a]), one=arm_b)
+    arm_a, arm_b, body = claim_arms(a, b, ids, part)
     a0, b0 = _rows(a.state(), arm_a), _rows(a.state(), arm_b)
     a.deform(translation=(0.03, 0.0, 0.0))
     b.deform(translation=(-0.03, 0.0, 0.0))
