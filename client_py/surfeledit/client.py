@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from .connection import Client, connect
 from .results import Changes, CollisionStats, State, StepResult, UpdateEvent
-from .results import merge as _merge  # noqa: F401  (the former private name)
 from .server_process import find_server_executable
 from .session import Session
 from .watcher import Watcher

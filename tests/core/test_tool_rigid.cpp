@@ -40,7 +40,18 @@ struct Swing {
     (tool == "a" ? offset_a : offset_b) += p.translation;
     return session.deform(p, tool);
   }
+  // One step of the swing: arm a moves by +0.05, arm b by -0.05 (towards each other).
+  StepResult swing(const std::string& tool) { return move(tool, tool == "a" ? 0.05 : -0.05); }
 };
+
+// Steps `tool` in both sessions and expects the same colliding ids and depths; returns x's result.
+StepResult expect_same_step(Swing& x, Swing& y, const std::string& tool, int k) {
+  const StepResult rx = x.swing(tool);
+  const StepResult ry = y.swing(tool);
+  EXPECT_EQ(rx.colliding, ry.colliding) << tool << " step " << k;
+  EXPECT_EQ(rx.depths, ry.depths) << tool << " step " << k;
+  return rx;
+}
 
 // Checks a tool's colliding set against the exact solids where they are now: every surfel of its arm
 // deeper than `tol` inside the other arm (farther than 0.1 from the body) is reported, every reported one
@@ -130,11 +141,7 @@ TEST(ToolRigid, SimpleEqualsAFreshDetectorAndTheReinitialisation) {
   std::size_t reported = 0;
   for (int k = 0; k < 10; ++k) {
     for (const char* tool : {"b", "a"}) {
-      const double dx = tool[0] == 'a' ? 0.05 : -0.05;
-      const StepResult r = s.move(tool, dx);
-      const StepResult q = reset.move(tool, dx);
-      EXPECT_EQ(r.colliding, q.colliding) << tool << " step " << k;
-      EXPECT_EQ(r.depths, q.depths) << tool << " step " << k;
+      const StepResult r = expect_same_step(s, reset, tool, k);
       // A fresh detector on the same model; `previous` is irrelevant without the step bound.
       const SurfelModel& m = s.session.model();
       const DeformationFields& f = *s.session.fields(tool);
@@ -159,11 +166,7 @@ TEST(ToolRigid, UndoRedoLeavesTheNextStepsUnchanged) {
     Swing x({{"algorithm", algorithm}}, true), y({{"algorithm", algorithm}}, true);
     for (int k = 0; k < 9; ++k) {
       for (const char* tool : {"b", "a"}) {
-        const double dx = tool[0] == 'a' ? 0.05 : -0.05;
-        const StepResult rx = x.move(tool, dx);
-        const StepResult ry = y.move(tool, dx);
-        EXPECT_EQ(rx.colliding, ry.colliding) << tool << " step " << k;
-        EXPECT_EQ(rx.depths, ry.depths) << tool << " step " << k;
+        expect_same_step(x, y, tool, k);
         if (k % 3 == 1) {
           x.session.undo(tool);
           x.session.redo(tool);

@@ -5,17 +5,14 @@ watcher applying the updates reaches the server's state. Geometry against exact 
 
 from __future__ import annotations
 
-from typing import List
-
 import numpy as np
 import pytest
 
 import surfeledit
 from surfeledit import ConflictError, InvalidArgumentError, LocalSession, NotFoundError
-from surfeledit.results import Changes, merge
 
 from response.conftest import approach
-from response.test_dds import load, load_and_watch, steps
+from response.test_dds import apply_updates, load, load_and_watch, steps
 from response.test_merge import same_merge, same_state
 
 from .conftest import holed_sphere, two_spheres
@@ -174,13 +171,7 @@ def test_watcher_applies_blend_updates(client: surfeledit.Client) -> None:
         sess.merge()
         sess.blend(iterations=5)
         sess.undo()
-        causes: List[str] = []
-        while len(causes) < 6:
-            ev = w.get(timeout=5.0)
-            assert ev is not None, f"only {causes} arrived"
-            causes.append(ev.cause)
-            cache = merge(cache, Changes(ev.version, ev.full, ev.ids, ev.positions, ev.normals, ev.radii,
-                                         ev.removed, ev.clips))
+        cache, causes = apply_updates(w, cache, 6)
         assert causes[-3:] == ["merge", "blend", "undo"]
         same_state(cache, sess.state())
         w.close()

@@ -1,11 +1,10 @@
 """The scenario runner over DDS with a real server gives the same colliding ids as in-process."""
 
-import os
-
 import numpy as np
 import pytest
 
 import surfeledit
+from service.conftest import free_domain
 from surfeledit import scenario as S
 
 
@@ -15,7 +14,7 @@ def test_remote_equals_in_process(scenarios):
     if surfeledit.find_server_executable() is None:
         pytest.skip("surfeledit-server is not built")
     sc = S.Scenario(scenarios["concave"].scene, 40, scenarios["concave"].motion)
-    domain = 150 + os.getpid() % 50
+    domain = free_domain()
     with surfeledit.connect(domain=domain, spawn=True) as client:
         backend = S.RemoteBackend(client, "scenario-test")
         try:

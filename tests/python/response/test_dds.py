@@ -4,13 +4,14 @@ redo, and bad arguments are typed errors that change nothing (issue 9 §1, §2, 
 
 from __future__ import annotations
 
-from typing import Dict
+from typing import Dict, List, Tuple
 
 import numpy as np
 import pytest
 
 import surfeledit
-from surfeledit import ConflictError, InvalidArgumentError, LocalSession
+from surfeledit import ConflictError, InvalidArgumentError, LocalSession, State
+from surfeledit.results import Changes, merge
 from surfeledit.scenes import SceneSetup
 
 from .conftest import approach
@@ -62,6 +63,19 @@ def load_and_watch(sess: surfeledit.Session, a: SceneSetup) -> surfeledit.Watche
     while w.get(timeout=0.2) is not None:
         pass
     return w
+
+
+def apply_updates(w: surfeledit.Watcher, cache: State, n: int) -> Tuple[State, List[str]]:
+    """Waits for the next `n` updates of `w`, applies each to `cache` (the client's own merge) and
+    returns the result and the updates' causes in arrival order."""
+    causes: List[str] = []
+    while len(causes) < n:
+        ev = w.get(timeout=5.0)
+        assert ev is not None, f"only {causes} arrived"
+        causes.append(ev.cause)
+        cache = merge(cache, Changes(ev.version, ev.full, ev.ids, ev.positions, ev.normals, ev.radii,
+                                     ev.removed, ev.clips))
+    return cache, causes
 
 
 def test_undo_redo_history_and_watcher(client: surfeledit.Client) -> None:

@@ -13,10 +13,9 @@ import pytest
 
 import surfeledit
 from surfeledit import ConflictError, InvalidArgumentError, LocalSession, State
-from surfeledit.results import Changes, merge
 
 from .conftest import approach
-from .test_dds import load, load_and_watch, steps
+from .test_dds import apply_updates, load, load_and_watch, steps
 
 
 def same_state(a: State, b: State) -> None:
@@ -103,13 +102,7 @@ def test_watcher_applies_clips(client: surfeledit.Client) -> None:
         sess.merge()
         sess.undo()
         sess.redo()
-        causes: List[str] = []
-        while len(causes) < 6:
-            ev = w.get(timeout=5.0)
-            assert ev is not None, f"only {causes} arrived"
-            causes.append(ev.cause)
-            cache = merge(cache, Changes(ev.version, ev.full, ev.ids, ev.positions, ev.normals, ev.radii,
-                                         ev.removed, ev.clips))
+        cache, causes = apply_updates(w, cache, 6)
         assert causes == ["deform", "deform", "deform", "merge", "undo", "redo"]
         same_state(cache, sess.state())
         assert cache.clips is not None

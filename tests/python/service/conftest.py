@@ -39,11 +39,16 @@ def pytest_configure(config: pytest.Config) -> None:
 
 
 def unique_domain() -> int:
-    """A DDS domain in 1..230, distinct for the first 230 calls of this process and varying with the pid.
+    """A DDS domain in 1..230, distinct for the first calls of this process and varying with the pid.
 
-    7 is coprime with 230, so consecutive calls never repeat within a run.
+    Under pytest-xdist (``-n N``) worker w of N draws only from the domains that are w modulo N, so two
+    workers never pick the same domain at the same time; within a worker, 7 is coprime with the number
+    of its domains (230 // N for N <= 4), so consecutive calls never repeat within a run.
     """
-    return 1 + (os.getpid() * 31 + 7 * next(_counter)) % 230
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+    slots = 230 // workers
+    return 1 + worker + workers * ((os.getpid() * 31 + 7 * next(_counter)) % slots)
 
 
 def domain_in_use(domain: int, wait: float = 0.3) -> bool:
