@@ -424,6 +424,7 @@ inline CollisionParams params_of(CollisionAlgorithm a, int threads = 1) {
   CollisionParams p;
   p.algorithm = a;
   p.threads = threads;
+  p.parallel_min_ms = 0.0;  // the parallel row loop whenever threads > 1, however small the scene
   return p;
 }
 

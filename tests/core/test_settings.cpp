@@ -32,7 +32,7 @@ TEST(Settings, DefaultsAndListingOrder) {
   std::vector<std::string> names;
   for (const auto& n : d) names.push_back(n.name);
   EXPECT_EQ(names, (std::vector<std::string>{"algorithm", "threshold", "boundary", "boundary_n", "boundary_i",
-                                             "step_bound", "sphere_margin", "threads", "resample",
+                                             "step_bound", "sphere_margin", "threads", "parallel_min_ms", "resample",
                                              "split_threshold", "zero_hierarchy", "deformable_hierarchy", "update",
                                              "hybrid_f", "sat", "extended", "leaf_max_surfels", "leaf_min_surfels",
                                              "max_level", "min_leaf_extent", "inflation", "knn_eps", "simplify",
@@ -192,9 +192,10 @@ TEST(Settings, IntegersAndNumbers) {
 // The table: unique names, every text setting with its names, defaults = SessionSettings{}.
 TEST(Settings, TableDescribesEverySetting) {
   const auto& specs = setting_specs();
-  EXPECT_EQ(specs.size(), 38u);  // 26 + issue 9's response, history_mb, backoff_epsilon, backoff_max_iterations
+  EXPECT_EQ(specs.size(), 39u);  // 26 + issue 9's response, history_mb, backoff_epsilon, backoff_max_iterations
                                  // + issue 13's inside, winding_beta, vote_k, swept
                                  // + issue 10's blend_neighbour_factor, blend_gamma, blend_open_region, blend_spring_r0
+                                 // + issue 14's parallel_min_ms
   const auto listed = describe(SessionSettings{});
   ASSERT_EQ(listed.size(), specs.size());
   for (std::size_t i = 0; i < specs.size(); ++i) {

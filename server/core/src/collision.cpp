@@ -46,6 +46,11 @@ void validate(const CollisionParams& p) {
   if (p.threads < 0) {
     throw Error(ErrorCode::InvalidArgument, "threads", "must be >= 0, got " + std::to_string(p.threads));
   }
+  if (!std::isfinite(p.parallel_min_ms) || p.parallel_min_ms < 0.0) {
+    std::ostringstream msg;
+    msg << "must be finite and >= 0, got " << p.parallel_min_ms;
+    throw Error(ErrorCode::InvalidArgument, "parallel_min_ms", msg.str());
+  }
   if (!std::isfinite(p.knn_eps) || p.knn_eps < 0.0) {
     std::ostringstream msg;
     msg << "must be finite and >= 0, got " << p.knn_eps;

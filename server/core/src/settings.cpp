@@ -106,6 +106,9 @@ std::vector<SettingSpec> make_table() {
                                                              "of the nearest surfel", within(0, kMaxFactor)),
       row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all, at most the hardware threads)",
                                       within(0, hardware_threads())),
+      row<&S::collision, &C::parallel_min_ms>("parallel_min_ms", "a detection step runs on several threads only "
+                                              "when its estimated one-thread work is at least this, ms (0 = always)",
+                                              within(0, 1e6)),
       row<&S::resample, &R::enabled>("resample", "dynamic resampling of stretched surfels"),
       row<&S::resample, &R::split_threshold>("split_threshold", "stretch ratio that splits a surfel", Range{1, kMaxFactor, true}),
       row<&S::hierarchy, &H::zero>("zero_hierarchy", "tree over the zero region (sphere_* = sphere cluster trees)"),

@@ -14,6 +14,8 @@ namespace surfeledit::detail {
 
 class ImprovedSweep {
  public:
+  ImprovedSweep() = default;
+  explicit ImprovedSweep(const CollisionParams&) {}  // one thread always: nothing to take from the settings
   void reset() { mean_dist2_ = 0.0; }
 
   Tally run(const SimpleKernel& kernel, const IndexList& rows, std::vector<SimpleKernel::State>& states,

@@ -57,17 +57,35 @@ struct Journal {
 };
 
 // The points of a step are independent: each row goes through update() (not_candidate() when the
-// broad phase ruled it out), serially below 2048 rows or with one thread, else in OpenMP dynamic
-// chunks of Kernel::kChunk rows. Results do not depend on the thread count.
+// broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
+// large enough to pay for waking the other threads, else serially. Results do not depend on either.
 // Every sweep also fills hit[q] (#rows): 1 when rows[q] collides after the step.
+//
+// The work is not known before the step, so the previous step's stands for it (steps of one drag are
+// alike): `rows` x kRowNs + its nearest-neighbour queries x kQueryNs, from one-thread profiles of the
+// Robust step (RESULTS §23: ~5 ns a row that stays in its sphere, ~0.37 us a query). Below kParallelNs a
+// step runs on one thread: a parallel region costs little on an idle machine, but on a busy one a worker
+// that is not running waits for the scheduler's next tick (steps of 0.3 ms took 4, 8 or 16 ms), which
+// only work of a millisecond or more can hide (RESULTS §35). The threshold is the setting parallel_min_ms.
 struct ParallelSweep {
-  void reset() {}
+  static constexpr double kRowNs = 5.0;      // per row of the sweep (estimate, one thread)
+  static constexpr double kQueryNs = 400.0;  // per nearest-neighbour query (estimate, one thread)
+  double min_ns = 1.0e6;                     // the least estimated work run on several threads (parallel_min_ms)
+  Index last_queries = 0;                    // queries of the previous sweep (0 after a reset)
+
+  ParallelSweep() = default;
+  explicit ParallelSweep(const CollisionParams& params) : min_ns(params.parallel_min_ms * 1.0e6) {}
+  void reset() { last_queries = 0; }
+  // Whether a sweep over `n` rows runs on several threads, from the previous sweep's queries.
+  bool parallel(Index n, int threads) const {
+    return threads > 1 && static_cast<double>(n) * kRowNs + static_cast<double>(last_queries) * kQueryNs >= min_ns;
+  }
 
   // `journal` (may be null): notes each row's state before its update.
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, std::vector<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) const {
+            int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());
     Index tested = 0, queries = 0;
     auto one = [&](Index q) -> Index {
@@ -85,7 +103,7 @@ struct ParallelSweep {
       hit[q] = s.colliding();  // read while the state is in cache
       return made;
     };
-    if (threads == 1 || n < 2048) {
+    if (!parallel(n, threads)) {
       for (Index q = 0; q < n; ++q) {
         const Index m = one(q);
         queries += m;
@@ -99,6 +117,7 @@ struct ParallelSweep {
         tested += m > 0;
       }
     }
+    last_queries = queries;
     return {tested, queries};
   }
 };
@@ -106,7 +125,8 @@ struct ParallelSweep {
 template <typename Kernel, typename Sweep = ParallelSweep>
 class RowDetector final : public NarrowDetector {
  public:
-  explicit RowDetector(const CollisionParams& params) : NarrowDetector(params), rows_(params) {}
+  explicit RowDetector(const CollisionParams& params)
+      : NarrowDetector(params), rows_(params), sweep_(params), journal_sweep_(params) {}
 
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();

@@ -59,6 +59,9 @@ struct CollisionParams {
   double sphere_margin = 0.5;    // Temporal/Robust: a sphere's radius is |d| - margin * r2 (r2: radius of the
                                  // nearest surfel), so it stays clear of that surfel's disc; 0 = the thesis's |d|
   int threads = 0;               // worker threads (0 = all); results do not depend on it
+  double parallel_min_ms = 1.0;  // a step's row loop runs on several threads only when its estimated one-thread
+                                 // work (from the previous step's queries) is at least this, ms; 0 = whenever
+                                 // threads > 1; results do not depend on it (row_detector.hpp ParallelSweep)
   double knn_eps = 0.0;          // approximate nearest-surfel queries (the k-d tree's eps, >= 0): the surfel found
                                  // is at most sqrt(1 + eps) x as far as the nearest one; 0 = exact (default)
   InsideMode inside = InsideMode::Nearest;  // Temporal/Robust: the inside test of a tested point (§4.6)
