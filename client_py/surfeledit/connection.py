@@ -30,7 +30,8 @@ from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qo
 from .dds_status import alive_writers, publication_matched
 from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
-from .security import SecurityConfig, access_checked, participant_qos, security_config
+from .security import (SecurityConfig, access_checked, claim_identity, participant_qos, release_identity,
+                       security_config)
 from .server_process import exit_message, spawn_server, stop_process
 from .session import Session
 
@@ -113,6 +114,7 @@ class Client:
         self._upd_topic: Optional[Topic] = None
         self._replies: Optional[Inbox] = None
         self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
+        claim_identity(self.security)  # one identity per process (security.py)
         try:
             self._make_entities()
         except BaseException:
@@ -153,6 +155,7 @@ class Client:
         """Closes sessions, watchers and DDS entities, then stops the server if this client spawned it."""
         if self._closed:
             return
+        release_identity(self.security)
         if self._replies is None:  # the constructor failed part way (e.g. AccessDeniedError)
             self._closed = True
             _delete(self._rep_sub, self._writer, self._rep_topic, self._req_topic, self._participant)
@@ -373,7 +376,8 @@ def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout:
     if spawn is None:
         spawn = client.security is None
     try:
-        if client.probe(min(_PROBE_S, timeout)):
+        # A secured participant is matched only after the authentication handshake: give it the timeout.
+        if client.probe(timeout if client.security else min(_PROBE_S, timeout)):
             return client
         if not spawn:
             why = (" (with DDS Security: or the server did not authenticate this identity or its permissions)"

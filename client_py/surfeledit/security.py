@@ -17,6 +17,7 @@ import contextlib
 import dataclasses
 import os
 import re
+import threading
 from pathlib import Path
 from typing import Dict, Iterator, List, Optional, Tuple, Union
 
@@ -25,7 +26,7 @@ from cyclonedds.qos import Policy, Qos
 
 from .errors import AccessDeniedError, InvalidArgumentError, SecurityConfigError
 
-__all__ = ["SecurityConfig", "FILE_KEYS", "security_config", "participant_qos", "access_checked"]
+__all__ = ["SecurityConfig", "FILE_KEYS", "plugin_directory", "security_available", "claim_identity", "release_identity", "security_config", "participant_qos", "access_checked"]
 
 #: Configuration key -> participant QoS property (OMG DDS Security, built-in plugins).
 FILE_KEYS: Dict[str, str] = {
@@ -102,21 +103,8 @@ class SecurityConfig:
         return cls(user=user, plugin_dir=(base / plugin_dir) if plugin_dir else None, **files)
 
     def plugin_directory(self) -> Path:
-        """The directory holding the three plugin libraries: ``plugin_dir``, or the one next to the
-        ``libddsc`` the cyclonedds binding loaded (Debian: its ``libddsc0debian`` subdirectory)."""
-        if self.plugin_dir is not None:
-            candidates = [Path(self.plugin_dir)]
-        else:
-            lib = _loaded_libddsc()
-            candidates = [lib.parent, lib.parent / "libddsc0debian"] if lib else []
-        for d in candidates:
-            if all((d / name).is_file() for _, name, _, _ in _PLUGINS):
-                return d.resolve()
-        where = ", ".join(str(d) for d in candidates) or "(libddsc not found)"
-        raise SecurityConfigError(
-            f"no DDS Security plugins (libdds_security_auth.so, _ac, _crypto) in {where}: the cyclonedds "
-            "binding in use has none (the pip wheel of cyclonedds 11); run with .venv-secure "
-            "(scripts/setup.sh) or set plugin_dir", "plugin_dir")
+        """The directory holding the three plugin libraries (:func:`plugin_directory`)."""
+        return plugin_directory(self.plugin_dir)
 
     def qos_properties(self) -> List[Tuple[str, str]]:
         """The participant QoS properties (name, value): six files and three plugins."""
@@ -129,6 +117,34 @@ class SecurityConfig:
     def client_id_prefix(self) -> str:
         """``"<user>."`` (the start of every client id of this identity), or "" without ``user``."""
         return f"{self.user}." if self.user else ""
+
+
+def plugin_directory(plugin_dir: Optional[Path] = None) -> Path:
+    """The directory holding ``libdds_security_{auth,ac,crypto}.so``: ``plugin_dir``, or the one next
+    to the ``libddsc`` the cyclonedds binding loaded (Debian: its ``libddsc0debian`` subdirectory).
+    Raises :class:`SecurityConfigError` when they are not there (the pip wheel of cyclonedds 11)."""
+    if plugin_dir is not None:
+        candidates = [Path(plugin_dir)]
+    else:
+        lib = _loaded_libddsc()
+        candidates = [lib.parent, lib.parent / "libddsc0debian"] if lib else []
+    for d in candidates:
+        if all((d / name).is_file() for _, name, _, _ in _PLUGINS):
+            return d.resolve()
+    where = ", ".join(str(d) for d in candidates) or "(libddsc not found)"
+    raise SecurityConfigError(
+        f"no DDS Security plugins (libdds_security_auth.so, _ac, _crypto) in {where}: the cyclonedds "
+        "binding in use has none (the pip wheel of cyclonedds 11); run with .venv-secure "
+        "(scripts/setup.sh) or set plugin_dir", "plugin_dir")
+
+
+def security_available() -> bool:
+    """Whether this cyclonedds binding can run DDS Security (its libddsc has the plugins beside it)."""
+    try:
+        plugin_directory()
+    except SecurityConfigError:
+        return False
+    return True
 
 
 def security_config(security: Optional[Union[str, "os.PathLike[str]", SecurityConfig]]) -> Optional[SecurityConfig]:
@@ -159,6 +175,37 @@ def access_checked(security: Optional[SecurityConfig], entity: str) -> Iterator[
         raise AccessDeniedError(
             f"DDS Security refused the {entity} of identity {security.identity_certificate.name} "
             f"({security.user or 'no user'}): {e}", entity) from None
+
+
+# The identity (certificate path) of this process's secured clients and how many are open.
+_identity_lock = threading.Lock()
+_identity: Optional[Path] = None
+_identity_users = 0
+
+
+def claim_identity(security: Optional[SecurityConfig]) -> None:
+    """Registers a secured client of this process. Cyclone 0.10.2 does not keep two identities apart
+    in one process (measured: a second participant with another identity was refused its own
+    permitted reply reader, or allowed what its permissions deny, depending on which was first), so
+    a client with a different certificate while one is open raises :class:`SecurityConfigError`."""
+    global _identity, _identity_users
+    if security is None:
+        return
+    with _identity_lock:
+        if _identity_users and _identity != security.identity_certificate:
+            raise SecurityConfigError(
+                f"this process already has a secured client with identity {_identity}; one DDS Security "
+                f"identity per process (not {security.identity_certificate})", "identity_certificate")
+        _identity, _identity_users = security.identity_certificate, _identity_users + 1
+
+
+def release_identity(security: Optional[SecurityConfig]) -> None:
+    """Unregisters a client registered by :func:`claim_identity`."""
+    global _identity_users
+    if security is None:
+        return
+    with _identity_lock:
+        _identity_users = max(0, _identity_users - 1)
 
 
 def _regular_file(config: Path, key: str, value: str, base: Path) -> Path:
