@@ -17,7 +17,8 @@ Needs only the `openssl` command (Debian package openssl). Everything is written
     OUT/<user>/security.conf                     the file to give `surfeledit-server --security` or a client
 
 Users: `--server` may read requests and write replies and updates; each of `--clients` may write
-requests, read updates and read replies only in its own reply partitions "surfeledit.reply.<user>.*"
+requests only in the default partition and its own "surfeledit.req.<user>" (which the server reads as
+the authenticated user, for --grant), read updates, and read replies only in its own reply partitions "surfeledit.reply.<user>.*"
 (so its client ids must start with "<user>.": the Python client does that with `user` of its
 security.conf); each of `--denied` has a valid identity and permissions that
 allow the domain but none of surfeledit's topics; each of `--rogue` has a valid identity but
@@ -121,25 +122,37 @@ def reply_partitions(user: str) -> str:
     return f"surfeledit.reply.{user}.*"
 
 
-def criteria_xml(kind: str, topics: Sequence[str], partition: str = "*") -> str:
-    """A publish or subscribe criterion over `topics` in the partitions matching `partition` ("*":
-    every partition, the default one included; the per-client reply partitions are made at run time)."""
+def request_partitions(user: str) -> List[str]:
+    """The partitions a client user may write requests in: its own "surfeledit.req.<user>" (which
+    therefore names the authenticated user to the server: its --grant roles apply there) and the
+    default partition (requests the server cannot attribute to a user: no granted role)."""
+    return ["", f"surfeledit.req.{user}"]
+
+
+def criteria_xml(kind: str, topics: Sequence[str], partitions: Sequence[str] = ("*",)) -> str:
+    """A publish or subscribe criterion over `topics` in the partitions matching one of `partitions`
+    ("*": every partition, the default one included; the per-client reply partitions are made at run time)."""
     names = "".join(f"<topic>{t}</topic>" for t in topics)
+    parts = "".join(f"<partition>{p}</partition>" for p in partitions)
     return (f"        <{kind}>\n          <topics>{names}</topics>\n"
-            f"          <partitions><partition>{partition}</partition></partitions>\n        </{kind}>\n")
+            f"          <partitions>{parts}</partitions>\n        </{kind}>\n")
 
 
 def permissions_xml(user: str, publish: Sequence[str], subscribe: Sequence[str], domains: Tuple[int, int],
                     days: int, own_replies: bool = False) -> str:
-    """`own_replies`: surfeledit_reply (in `subscribe`) only in the user's own reply partitions."""
+    """`own_replies` (client users): surfeledit_reply (in `subscribe`) only in the user's own reply
+    partitions, surfeledit_request (in `publish`) only in its request partitions."""
     now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0, tzinfo=None)
     not_before = (now - dt.timedelta(days=1)).isoformat()
     not_after = (now + dt.timedelta(days=days)).isoformat()
     rules = ""
+    if own_replies and "surfeledit_request" in publish:
+        rules += criteria_xml("publish", ["surfeledit_request"], request_partitions(user))
+        publish = [t for t in publish if t != "surfeledit_request"]
     if publish:
         rules += criteria_xml("publish", publish)
     if own_replies and "surfeledit_reply" in subscribe:
-        rules += criteria_xml("subscribe", ["surfeledit_reply"], reply_partitions(user))
+        rules += criteria_xml("subscribe", ["surfeledit_reply"], [reply_partitions(user)])
         subscribe = [t for t in subscribe if t != "surfeledit_reply"]
     if subscribe:
         rules += criteria_xml("subscribe", subscribe)

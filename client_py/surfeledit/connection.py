@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, List, Optional, Union
 
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.pub import DataWriter
+from cyclonedds.pub import DataWriter, Publisher
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import Subscriber
 from cyclonedds.topic import Topic
@@ -46,6 +46,12 @@ _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's upda
 CLIENT_LIVELINESS_S = 1.0
 _GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
 _GONE_GRACE_S = 0.3  # how long it may be not alive before the server counts as gone
+
+
+def request_partition(user: str) -> str:
+    """The partition a secured client of ``user`` writes its requests in (PROTOCOL.md, "Security"):
+    only that identity may write there, so the server reads it as the authenticated user."""
+    return "surfeledit.req." + user
 
 
 def reply_partition(client_id: str) -> str:
@@ -110,7 +116,7 @@ class Client:
         self._closed = False
         self._children: List[Any] = []  # sessions and watchers, closed with the client
 
-        self._participant = self._req_topic = self._rep_topic = self._writer = self._rep_sub = None
+        self._participant = self._req_topic = self._rep_topic = self._writer = self._rep_sub = self._req_pub = None
         self._upd_topic: Optional[Topic] = None
         self._replies: Optional[Inbox] = None
         self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
@@ -128,7 +134,11 @@ class Client:
             self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
             self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
         with access_checked(self.security, "request writer"):
-            self._writer = DataWriter(self._participant, self._req_topic, qos=_request_writer_qos())
+            # With a user: requests in its own partition, which names it to the server (--grant roles).
+            if self.security is not None and self.security.user:
+                self._req_pub = Publisher(self._participant, qos=Qos(Policy.Partition(
+                    partitions=[request_partition(self.security.user)])))
+            self._writer = DataWriter(self._req_pub or self._participant, self._req_topic, qos=_request_writer_qos())
         # Replies come in this client's own partition, from a writer the server makes at the first reply.
         with access_checked(self.security, "reply reader"):
             self._rep_sub = Subscriber(self._participant,
@@ -158,7 +168,7 @@ class Client:
         release_identity(self.security)
         if self._replies is None:  # the constructor failed part way (e.g. AccessDeniedError)
             self._closed = True
-            _delete(self._rep_sub, self._writer, self._rep_topic, self._req_topic, self._participant)
+            _delete(self._rep_sub, self._writer, self._req_pub, self._rep_topic, self._req_topic, self._participant)
             return
         # Sessions detach so the server can drop sessions nobody uses; when no server is matched any
         # more (it exited) the client counts as closed first, so they only mark themselves closed.
@@ -172,7 +182,8 @@ class Client:
                 _log.warning("closing %r failed", child, exc_info=True)
         self._closed = True
         self._replies.close()
-        _delete(self._writer, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
+        _delete(self._writer, self._req_pub, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic,
+                self._participant)
         if self._server is not None:
             stop_process(self._server)
             self._server = None

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 import pytest
 
@@ -25,22 +26,23 @@ def pytest_report_header(config: pytest.Config) -> str:
 
 @pytest.fixture(scope="session")
 def security_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A demo setup (scripts/make_security.py): server; alice and bob permitted (each reads replies
-    only in its own partitions); mallory with a valid identity but no surfeledit permission; eve
+    """A demo setup (scripts/make_security.py): server; alice, bob, carol and dave permitted (each
+    writes requests in "surfeledit.req.<user>" and reads replies only in its own partitions); mallory with a valid identity but no surfeledit permission; eve
     with permissions signed by her own CA."""
     if shutil.which("openssl") is None:
         pytest.skip("openssl not installed (Debian package openssl)")
     out = tmp_path_factory.mktemp("security")
     subprocess.run([sys.executable, str(REPO / "scripts" / "make_security.py"), str(out),
-                    "--clients", "alice,bob", "--denied", "mallory", "--rogue", "eve"],
+                    "--clients", "alice,bob,carol,dave", "--denied", "mallory", "--rogue", "eve"],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
 
 
 class SecuredServer(ManagedProcess):
-    def __init__(self, domain: int, log: Path, security: Path) -> None:
+    def __init__(self, domain: int, log: Path, security: Path, extra: Sequence[str] = ()) -> None:
         self.domain = domain
-        super().__init__([server_executable()] + server_args(domain, None) + ["--security", str(security)], log)
+        super().__init__([server_executable()] + server_args(domain, None) + ["--security", str(security)]
+                         + list(extra), log)
 
     def wait_ready(self, timeout: float = 30.0) -> None:
         deadline = time.monotonic() + timeout

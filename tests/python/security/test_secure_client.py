@@ -143,3 +143,64 @@ def test_one_identity_per_process(security_dir: Path) -> None:
         assert e.value.field == "identity_certificate"
     with Client(1, security=conf(security_dir, "bob")) as b:
         assert b.client_id.startswith("bob.")
+
+
+def test_roles_granted_to_authenticated_users(request, tmp_path: Path, security_dir: Path) -> None:
+    """`--grant bob=editor:shared --grant carol=viewer`: bob (his requests come in "surfeledit.req.bob",
+    which only his identity may write in) joins alice's private session "shared" without a token and
+    edits it; carol joins and reads but her deform is refused; dave, authenticated but granted
+    nothing, gets the same NotFound as for a session that does not exist; bob's grant names one session."""
+    from service.conftest import free_domain
+
+    from .conftest import SecuredServer
+
+    srv = SecuredServer(free_domain(), tmp_path / "server.log", security_dir / "server" / "security.conf",
+                        ["--grant", "bob=editor:shared", "--grant", "carol=viewer"])
+    request.addfinalizer(srv.stop)
+    srv.wait_ready()
+
+    def peer(user: str, session: str) -> dict:
+        r = subprocess.run([sys.executable, str(Path(__file__).with_name("grant_peer.py")), str(conf(security_dir, user)),
+                            str(srv.domain), session, str(len(bp))], capture_output=True, text=True, timeout=90)
+        assert r.returncode == 0, r.stderr[-3000:]
+        return dict(line.split("=", 1) for line in r.stdout.splitlines() if "=" in line)
+
+    sp, sn = sphere(300, 2)
+    bp, bn = slab(15)
+    positions = np.vstack([bp, sp])
+    with surfeledit.connect(srv.domain, security=conf(security_dir, "alice"), timeout=15) as alice, \
+            alice.open_session("shared") as s, alice.open_session("private") as other:
+        s.load_points(positions, np.vstack([bn, sn]))  # the tools (regions) are the peers'
+        other.load_points(positions, np.vstack([bn, sn]))
+        s.info()
+        v0 = s.version
+
+        bob = peer("bob", "shared")
+        assert bob["join"] == "ok" and bob["surfels"] == str(len(positions)) and bob["regions"] == "ok", bob
+        assert bob["deform"].startswith("ok:") and int(bob["version"]) > v0, bob
+        # Independent truth: bob's step moved the sphere by (0, 0, -0.01) in alice's view too.
+        np.testing.assert_allclose(s.positions()[len(bp):], sp + (0.0, 0.0, -0.01), atol=1e-9)
+        s.info()
+        v1, h1 = s.version, s.info().state_hash
+
+        carol = peer("carol", "shared")
+        assert carol["join"] == "ok" and carol["surfels"] == str(len(positions)), carol
+        assert carol["regions"] == carol["deform"] == "PermissionDeniedError" and int(carol["version"]) == v1, carol
+
+        assert peer("dave", "shared") == {"join": "NotFoundError"}
+        assert peer("dave", "no-such-session") == {"join": "NotFoundError"}
+        assert peer("bob", "private") == {"join": "NotFoundError"}  # his grant names "shared" only
+        assert s.info().state_hash == h1 and s.version == v1 and other.info().surfels == len(positions)
+    assert "is user 'bob'" in srv.log_tail(200_000) and srv.alive
+
+
+def test_grant_needs_security(tmp_path: Path) -> None:
+    import subprocess as sp_
+
+    from service.conftest import server_executable
+    r = sp_.run([server_executable(), "--domain", "0", "--grant", "bob=editor"], capture_output=True, text=True,
+                timeout=30)
+    assert r.returncode != 0 and "--grant needs --security" in r.stdout + r.stderr
+    r = sp_.run([server_executable(), "--domain", "0", "--grant", "bob=owner"], capture_output=True, text=True,
+                timeout=30)
+    assert r.returncode != 0 and "role must be editor or viewer" in r.stdout + r.stderr
