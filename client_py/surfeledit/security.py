@@ -185,8 +185,8 @@ _identity_users = 0
 
 def claim_identity(security: Optional[SecurityConfig]) -> None:
     """Registers a secured client of this process. Cyclone 0.10.2 does not keep two identities apart
-    in one process (measured: a second participant with another identity was refused its own
-    permitted reply reader, or allowed what its permissions deny, depending on which was first), so
+    in one process (measured: a second participant with another identity was allowed a reader
+    its permissions deny, and in another run refused one they allow), so
     a client with a different certificate while one is open raises :class:`SecurityConfigError`."""
     global _identity, _identity_users
     if security is None:
