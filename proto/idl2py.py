@@ -98,6 +98,10 @@ def generate(spec: Spec, source_name: str = "") -> str:
         "from cyclonedds.idl import IdlEnum as _IdlEnum, IdlStruct as _IdlStruct, types as _t",
         "from cyclonedds.idl.annotations import key as _key",
         "",
+        "# IDL octet is XTypes TK_BYTE: types.byte in cyclonedds-python 11, types.uint8 in 0.10 (the",
+        "# binding of .venv-secure, which maps uint8 to TK_BYTE); the same wire type either way.",
+        "_byte = getattr(_t, 'byte', _t.uint8)",
+        "",
         "__all__ = [" + ", ".join(repr(d.name) for d in spec.definitions) + "]",
         "",
     ]

@@ -36,7 +36,7 @@ class IdlError(Exception):
 # IDL primitive spelling -> expression of the cyclonedds-python type.
 PRIMITIVES: Dict[str, str] = {
     "boolean": "bool",
-    "octet": "_t.byte",  # XTypes TK_BYTE, as idlc types IDL octet (uint8 would be TK_UINT8: no match)
+    "octet": "_byte",  # XTypes TK_BYTE, as idlc types IDL octet (idl2py defines _byte per binding version)
     "char": "_t.char",
     "short": "_t.int16",
     "unsigned short": "_t.uint16",

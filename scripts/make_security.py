@@ -17,7 +17,10 @@ Needs only the `openssl` command (Debian package openssl). Everything is written
     OUT/<user>/security.conf                     the file to give `surfeledit-server --security` or a client
 
 Users: `--server` may read requests and write replies and updates; each of `--clients` may write
-requests and read replies and updates; each of `--denied` has a valid identity and permissions that
+requests only in the default partition and its own "surfeledit.req.<user>" (which the server reads as
+the authenticated user, for --grant), read updates, and read replies only in its own reply partitions "surfeledit.reply.<user>.*"
+(so its client ids must start with "<user>.": the Python client does that with `user` of its
+security.conf); each of `--denied` has a valid identity and permissions that
 allow the domain but none of surfeledit's topics; each of `--rogue` has a valid identity but
 permissions (and governance) signed by a CA of its own, which grant everything (an attacker who
 signs its own permissions). The private keys are unencrypted: a demo, not a deployment.
@@ -112,22 +115,45 @@ def governance_xml(domains: Tuple[int, int]) -> str:
         "</dds>\n")
 
 
-def criteria_xml(kind: str, topics: Sequence[str]) -> str:
-    """A publish or subscribe criterion over `topics` in every partition (the per-client reply
-    partitions are made at run time; "*" also matches the default partition)."""
+def reply_partitions(user: str) -> str:
+    """The partitions a client user may read replies in: those of its own client ids, which start
+    with "<user>." (the client's reply partition is "surfeledit.reply.<client id>"; user names have
+    no ".", so no user's pattern matches another's partitions)."""
+    return f"surfeledit.reply.{user}.*"
+
+
+def request_partitions(user: str) -> List[str]:
+    """The partitions a client user may write requests in: its own "surfeledit.req.<user>" (which
+    therefore names the authenticated user to the server: its --grant roles apply there) and the
+    default partition (requests the server cannot attribute to a user: no granted role)."""
+    return ["", f"surfeledit.req.{user}"]
+
+
+def criteria_xml(kind: str, topics: Sequence[str], partitions: Sequence[str] = ("*",)) -> str:
+    """A publish or subscribe criterion over `topics` in the partitions matching one of `partitions`
+    ("*": every partition, the default one included; the per-client reply partitions are made at run time)."""
     names = "".join(f"<topic>{t}</topic>" for t in topics)
+    parts = "".join(f"<partition>{p}</partition>" for p in partitions)
     return (f"        <{kind}>\n          <topics>{names}</topics>\n"
-            f"          <partitions><partition>*</partition></partitions>\n        </{kind}>\n")
+            f"          <partitions>{parts}</partitions>\n        </{kind}>\n")
 
 
 def permissions_xml(user: str, publish: Sequence[str], subscribe: Sequence[str], domains: Tuple[int, int],
-                    days: int) -> str:
+                    days: int, own_replies: bool = False) -> str:
+    """`own_replies` (client users): surfeledit_reply (in `subscribe`) only in the user's own reply
+    partitions, surfeledit_request (in `publish`) only in its request partitions."""
     now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0, tzinfo=None)
     not_before = (now - dt.timedelta(days=1)).isoformat()
     not_after = (now + dt.timedelta(days=days)).isoformat()
     rules = ""
+    if own_replies and "surfeledit_request" in publish:
+        rules += criteria_xml("publish", ["surfeledit_request"], request_partitions(user))
+        publish = [t for t in publish if t != "surfeledit_request"]
     if publish:
         rules += criteria_xml("publish", publish)
+    if own_replies and "surfeledit_reply" in subscribe:
+        rules += criteria_xml("subscribe", ["surfeledit_reply"], [reply_partitions(user)])
+        subscribe = [t for t in subscribe if t != "surfeledit_reply"]
     if subscribe:
         rules += criteria_xml("subscribe", subscribe)
     return (
@@ -147,7 +173,7 @@ def permissions_xml(user: str, publish: Sequence[str], subscribe: Sequence[str],
         "</dds>\n")
 
 
-def write_conf(directory: Path, identity_ca: Path, permissions_ca: Path, governance: Path) -> None:
+def write_conf(directory: Path, user: str, identity_ca: Path, permissions_ca: Path, governance: Path) -> None:
     rel = lambda p: Path(p).resolve().relative_to(directory.parent.resolve())  # noqa: E731
     (directory / "security.conf").write_text(
         "# DDS Security files of one participant (surfeledit-server --security, or a client's option).\n"
@@ -157,7 +183,9 @@ def write_conf(directory: Path, identity_ca: Path, permissions_ca: Path, governa
         "private_key = key.pem\n"
         f"permissions_ca = ../{rel(permissions_ca)}\n"
         f"governance = ../{rel(governance)}\n"
-        "permissions = permissions.p7s\n")
+        "permissions = permissions.p7s\n"
+        "# The certificate's CN: a client's ids start with '<user>.' (its reply partitions).\n"
+        f"user = {user}\n")
 
 
 def parse_names(text: str) -> List[str]:
@@ -196,18 +224,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     governance.write_text(governance_xml(domains))
     governance_p7s = sign(governance, perm_ca, perm_key)
 
-    def user(name: str, publish: Sequence[str], subscribe: Sequence[str], ca: Tuple[Path, Path], gov: Path) -> None:
+    def user(name: str, publish: Sequence[str], subscribe: Sequence[str], ca: Tuple[Path, Path], gov: Path,
+             own_replies: bool = False) -> None:
         d = out / name
         d.mkdir(exist_ok=True)
         make_identity(d, name, id_ca, id_key, a.days)
         perms = d / "permissions.xml"
-        perms.write_text(permissions_xml(name, publish, subscribe, domains, a.days))
+        perms.write_text(permissions_xml(name, publish, subscribe, domains, a.days, own_replies))
         sign(perms, *ca)
-        write_conf(d, id_ca, ca[0], gov)
+        write_conf(d, name, id_ca, ca[0], gov)
 
     user(a.server, TOPICS_SERVER_PUBLISHES, TOPICS_SERVER_SUBSCRIBES, (perm_ca, perm_key), governance_p7s)
     for name in clients:
-        user(name, TOPICS_CLIENT_PUBLISHES, TOPICS_CLIENT_SUBSCRIBES, (perm_ca, perm_key), governance_p7s)
+        user(name, TOPICS_CLIENT_PUBLISHES, TOPICS_CLIENT_SUBSCRIBES, (perm_ca, perm_key), governance_p7s,
+             own_replies=True)
     for name in denied:  # the domain only: a participant, but no endpoint on any surfeledit topic
         user(name, ("surfeledit_none",), (), (perm_ca, perm_key), governance_p7s)
     if rogue:

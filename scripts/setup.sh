@@ -45,6 +45,33 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   echo "$want" >"$stamp"
 fi
 
+# 2b. .venv-secure: the same client on the cyclonedds 0.10.2 binding, built from source against
+# Debian's libddsc (which has the DDS Security plugins; the 11.x wheel has none); the secured Python
+# tests (tests/python/security) run in it. SURFELEDIT_SECURE_VENV=0 skips it.
+VENV_SECURE="$ROOT/.venv-secure"
+if [ "${SURFELEDIT_SECURE_VENV:-1}" != 0 ]; then
+  [ -x "$VENV_SECURE/bin/python" ] || { log "creating $VENV_SECURE"; python3 -m venv "$VENV_SECURE"; }
+  stamp="$VENV_SECURE/.requirements.sha256"
+  want="$(sha256sum "$ROOT/scripts/requirements-secure.txt" "$ROOT/client_py/pyproject.toml" | sha256sum | cut -d' ' -f1)"
+  if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+    log "installing Python packages into $VENV_SECURE (cyclonedds 0.10.2 built against Debian's libddsc)"
+    # The binding's build wants one prefix with include/, lib/ and bin/ (CYCLONEDDS_HOME); Debian
+    # splits them, so a prefix of links inside the venv stands in for it.
+    home="$VENV_SECURE/cyclonedds-home"
+    mkdir -p "$home"
+    ln -sfn /usr/include "$home/include"
+    ln -sfn "$(pkg-config --variable=libdir CycloneDDS)" "$home/lib"
+    ln -sfn /usr/bin "$home/bin"
+    # The binding alone without pip's wheel cache: a wheel cached from a build against another
+    # prefix would record that prefix's libddsc.
+    CYCLONEDDS_HOME="$home" "$VENV_SECURE/bin/pip" install -q --disable-pip-version-check --no-cache-dir \
+      --no-binary cyclonedds "$(grep -E '^cyclonedds==' "$ROOT/scripts/requirements-secure.txt")"
+    "$VENV_SECURE/bin/pip" install -q --disable-pip-version-check -r "$ROOT/scripts/requirements-secure.txt"
+    "$VENV_SECURE/bin/pip" install -q --disable-pip-version-check --no-deps -e "$ROOT/client_py"
+    echo "$want" >"$stamp"
+  fi
+fi
+
 # 3. Build: core library, server, pybind11 module (into client_py/surfeledit), C++ tests, benchmarks.
 mkdir -p "$BUILD"
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then

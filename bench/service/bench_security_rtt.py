@@ -97,7 +97,7 @@ def main() -> int:
         samples: Dict[str, List[float]] = {k: [] for k in domains}
         try:
             for r in range(args.rounds):
-                got = run_probe(probe, domains, confs["security on"][1], args, f"bench-{r}")
+                got = run_probe(probe, domains, confs["security on"][1], args, f"alice.bench-{r}")  # alice's reply partitions
                 for k in domains:
                     samples[k] += got[k]
                 print(f"round {r}: median on {benchlib.median(got['security on']):.3f} ms, off "

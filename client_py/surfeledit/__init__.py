@@ -34,7 +34,8 @@ from .watcher import Watcher
 from .errors import (ConflictError, InternalServerError, InvalidArgumentError, NotFoundError, RequestTimeoutError,
                      ServerIOError, ServerStartError, SurfelEditError, TooLargeError)
 
-from .errors import PermissionDeniedError, ReplyMismatchError, ServerGoneError
+from .errors import AccessDeniedError, PermissionDeniedError, ReplyMismatchError, SecurityConfigError, ServerGoneError
+from .security import SecurityConfig
 
 logging.getLogger("surfeledit").addHandler(logging.NullHandler())
 
@@ -56,4 +57,5 @@ __all__ = [
     "errors", "find_server_executable", "SurfelEditError", "InvalidArgumentError", "NotFoundError",
     "ConflictError", "TooLargeError", "ServerIOError", "InternalServerError", "RequestTimeoutError",
     "ServerStartError", "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError", "Peer", "PresenceEvent",
+    "SecurityConfig", "SecurityConfigError", "AccessDeniedError",
 ]

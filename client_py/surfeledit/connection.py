@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, List, Optional, Union
 
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.pub import DataWriter
+from cyclonedds.pub import DataWriter, Publisher
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import Subscriber
 from cyclonedds.topic import Topic
@@ -27,8 +27,11 @@ from cyclonedds.util import duration
 
 from . import errors
 from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
+from .dds_status import alive_writers, publication_matched
 from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
+from .security import (SecurityConfig, access_checked, claim_identity, participant_qos, release_identity,
+                       security_config)
 from .server_process import exit_message, spawn_server, stop_process
 from .session import Session
 
@@ -43,6 +46,12 @@ _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's upda
 CLIENT_LIVELINESS_S = 1.0
 _GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
 _GONE_GRACE_S = 0.3  # how long it may be not alive before the server counts as gone
+
+
+def request_partition(user: str) -> str:
+    """The partition a secured client of ``user`` writes its requests in (PROTOCOL.md, "Security"):
+    only that identity may write there, so the server reads it as the authenticated user."""
+    return "surfeledit.req." + user
 
 
 def reply_partition(client_id: str) -> str:
@@ -84,7 +93,8 @@ class Client:
     """
 
     def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
-                 reconnect: float = 0.0, client_id: Optional[str] = None) -> None:
+                 reconnect: float = 0.0, client_id: Optional[str] = None,
+                 security: Optional[Union[str, "os.PathLike[str]", SecurityConfig]] = None) -> None:
         self.domain = int(domain)
         self.timeout = float(timeout)
         # > 0: a request whose server is gone is re-sent (same id) for this many seconds (reconnect.py)
@@ -93,7 +103,11 @@ class Client:
             raise errors.InvalidArgumentError(f"client_id {client_id!r}: expected 1..256 characters", "client_id")
         # A fresh id, or the caller's: a restarted process reusing its id finds its sessions again once
         # the server detached the old process (its lease) and within the grace period (PROTOCOL.md).
-        self.client_id = client_id or f"{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
+        # DDS Security (security.py): the participant authenticates with this identity; its client id
+        # starts with "<user>." (the reply partition its permissions let it read).
+        self.security = security_config(security)
+        prefix = self.security.client_id_prefix() if self.security else ""
+        self.client_id = client_id or f"{prefix}{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
         self._next_id = 1
         self._lock = threading.RLock()
         self._server = _server
@@ -102,16 +116,34 @@ class Client:
         self._closed = False
         self._children: List[Any] = []  # sessions and watchers, closed with the client
 
-        self._participant = DomainParticipant(self.domain)
-        self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
-        self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
+        self._participant = self._req_topic = self._rep_topic = self._writer = self._rep_sub = self._req_pub = None
         self._upd_topic: Optional[Topic] = None
-        self._writer = DataWriter(self._participant, self._req_topic, qos=_request_writer_qos())
-        # Replies come in this client's own partition, from a writer the server makes at the first reply.
-        self._rep_sub = Subscriber(self._participant,
-                                   qos=Qos(Policy.Partition(partitions=[reply_partition(self.client_id)])))
-        self._replies = Inbox(self._participant, self._rep_topic, _reply_reader_qos(), parent=self._rep_sub)
+        self._replies: Optional[Inbox] = None
         self._server_seen = False  # a reply writer was alive once: losing it then means the server is gone
+        claim_identity(self.security)  # one identity per process (security.py)
+        try:
+            self._make_entities()
+        except BaseException:
+            self.close()
+            raise
+
+    def _make_entities(self) -> None:
+        with access_checked(self.security, "participant"):
+            self._participant = DomainParticipant(self.domain, qos=participant_qos(self.security))
+        with access_checked(self.security, "request topic"):
+            self._req_topic = Topic(self._participant, TOPIC_REQUEST, proto.Request)
+            self._rep_topic = Topic(self._participant, TOPIC_REPLY, proto.Reply)
+        with access_checked(self.security, "request writer"):
+            # With a user: requests in its own partition, which names it to the server (--grant roles).
+            if self.security is not None and self.security.user:
+                self._req_pub = Publisher(self._participant, qos=Qos(Policy.Partition(
+                    partitions=[request_partition(self.security.user)])))
+            self._writer = DataWriter(self._req_pub or self._participant, self._req_topic, qos=_request_writer_qos())
+        # Replies come in this client's own partition, from a writer the server makes at the first reply.
+        with access_checked(self.security, "reply reader"):
+            self._rep_sub = Subscriber(self._participant,
+                                       qos=Qos(Policy.Partition(partitions=[reply_partition(self.client_id)])))
+            self._replies = Inbox(self._participant, self._rep_topic, _reply_reader_qos(), parent=self._rep_sub)
 
     # -- lifecycle -------------------------------------------------------------------------------
     def __enter__(self) -> "Client":
@@ -133,9 +165,14 @@ class Client:
         """Closes sessions, watchers and DDS entities, then stops the server if this client spawned it."""
         if self._closed:
             return
+        release_identity(self.security)
+        if self._replies is None:  # the constructor failed part way (e.g. AccessDeniedError)
+            self._closed = True
+            _delete(self._rep_sub, self._writer, self._req_pub, self._rep_topic, self._req_topic, self._participant)
+            return
         # Sessions detach so the server can drop sessions nobody uses; when no server is matched any
         # more (it exited) the client counts as closed first, so they only mark themselves closed.
-        if self._writer.get_publication_matched_status().current_count == 0 or (
+        if publication_matched(self._writer) == 0 or (
                 self._server_seen and not self.server_alive()):
             self._closed = True
         for child in list(self._children):
@@ -145,7 +182,8 @@ class Client:
                 _log.warning("closing %r failed", child, exc_info=True)
         self._closed = True
         self._replies.close()
-        _delete(self._writer, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic, self._participant)
+        _delete(self._writer, self._req_pub, self._rep_sub, self._rep_topic, self._req_topic, self._upd_topic,
+                self._participant)
         if self._server is not None:
             stop_process(self._server)
             self._server = None
@@ -167,10 +205,11 @@ class Client:
         tells whether the wait succeeded. Greetings are ``Update`` samples with cause ``"watch"`` and no
         session; later ones (greeting other readers) may arrive too.
         ``compact``: read the compact encoding (PROTOCOL.md "Updates, compact") instead of doubles."""
-        if self._upd_topic is None:
-            self._upd_topic = Topic(self._participant, TOPIC_UPDATE, proto.Update)
-        inbox = Inbox(self._participant, self._upd_topic, update_qos(),
-                      partition=COMPACT_UPDATE_PARTITION if compact else None)
+        with access_checked(self.security, "update reader"):
+            if self._upd_topic is None:
+                self._upd_topic = Topic(self._participant, TOPIC_UPDATE, proto.Update)
+            inbox = Inbox(self._participant, self._upd_topic, update_qos(),
+                          partition=COMPACT_UPDATE_PARTITION if compact else None)
         deadline = time.monotonic() + match_timeout
         if wait_matched(self._participant, (inbox.reader,), match_timeout):
             inbox.await_greeting(max(0.0, deadline - time.monotonic()))
@@ -253,7 +292,7 @@ class Client:
     def server_alive(self) -> bool:
         """Whether a reply writer (the server's) is matched and alive by DDS liveliness."""
         reader = self._replies.reader
-        return _matched(reader) > 0 and int(reader.get_liveliness_changed_status().alive_count) > 0
+        return _matched(reader) > 0 and alive_writers(reader) > 0
 
     def _check_server_alive(self, request_id: int, not_alive_since: Optional[float]) -> Optional[float]:
         """Raises ServerGoneError once a reply writer seen alive before has not been alive for
@@ -310,16 +349,18 @@ class Client:
         return True
 
 
-def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 10.0,
+def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout: float = 10.0,
             data_root: Optional[Union[str, "os.PathLike[str]"]] = None, reconnect: float = 0.0,
-            client_id: Optional[str] = None) -> Client:
+            client_id: Optional[str] = None,
+            security: Optional[Union[str, "os.PathLike[str]", SecurityConfig]] = None) -> Client:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
         domain: DDS domain id; None -> env ``SURFELEDIT_DOMAIN`` or 0.
         spawn: when no server answers ``OP_INFO`` within a short probe, start
             ``surfeledit-server --domain D`` (see :func:`~surfeledit.server_process.find_server_executable`),
-            wait until it answers, and stop it when the client closes.
+            wait until it answers, and stop it when the client closes. None: True without
+            ``security``, False with it (a secured server needs its own identity: start it yourself).
         timeout: seconds to wait for each reply (a request is retried once) and for a spawned
             server to come up.
         data_root: for a spawned server: the directory ``Session.load_file`` may read below
@@ -330,18 +371,29 @@ def connect(domain: Optional[int] = None, spawn: bool = True, timeout: float = 1
             reopen its sessions after the server detached it (``--client-lease-ms``) and before its
             grace period ended (``--session-grace-ms``); until the old one is detached the server
             does not answer the new one (the id is bound to the old writer), so the probe fails.
+        security: DDS Security (PROTOCOL.md "Security"): a configuration file as
+            ``scripts/make_security.py`` writes one per user, or a :class:`~surfeledit.security.SecurityConfig`.
+            The participant authenticates with that identity and is encrypted; a fresh client id
+            starts with ``"<user>."``. Needs a binding with the security plugins (``.venv-secure``).
 
     Raises:
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
+        SecurityConfigError: ``security`` cannot be used (bad file, no plugins in this binding).
+        AccessDeniedError: DDS Security refused this identity the participant or a surfeledit endpoint.
     """
     if domain is None:
         domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
-    client = Client(domain, timeout, reconnect=reconnect, client_id=client_id)
+    client = Client(domain, timeout, reconnect=reconnect, client_id=client_id, security=security)
+    if spawn is None:
+        spawn = client.security is None
     try:
-        if client.probe(min(_PROBE_S, timeout)):
+        # A secured participant is matched only after the authentication handshake: give it the timeout.
+        if client.probe(timeout if client.security else min(_PROBE_S, timeout)):
             return client
         if not spawn:
-            raise errors.ServerStartError(f"no surfeledit server answers on DDS domain {domain}")
+            why = (" (with DDS Security: or the server did not authenticate this identity or its permissions)"
+                   if client.security else "")
+            raise errors.ServerStartError(f"no surfeledit server answers on DDS domain {domain}{why}")
         proc, log = spawn_server(domain, data_root)
         client._server, client._server_log = proc, log
         deadline = time.monotonic() + timeout

@@ -14,7 +14,9 @@ the ``Status`` enum of ``proto/surfeledit.idl`` (whose numbers equal the core's 
 The client itself raises :class:`RequestTimeoutError` when no reply arrives in time,
 :class:`ServerGoneError` when the server's reply writer is no longer alive (DDS liveliness, about a
 second after the server died), and :class:`ReplyMismatchError` when a reply carrying the request's
-client id and request id answers another op or lacks the op's result.
+client id and request id answers another op or lacks the op's result. With DDS Security
+(``connect(security=...)``) it raises :class:`SecurityConfigError` for a configuration it cannot use
+and :class:`AccessDeniedError` when DDS Security refuses this identity the surfeledit topics.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import Dict, Optional, Type
 __all__ = [
     "SurfelEditError", "InvalidArgumentError", "NotFoundError", "ConflictError", "TooLargeError",
     "ServerIOError", "InternalServerError", "RequestTimeoutError", "ServerStartError", "error_for_status",
-    "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError",
+    "PermissionDeniedError", "ServerGoneError", "ReplyMismatchError", "SecurityConfigError", "AccessDeniedError",
 ]
 
 
@@ -112,6 +114,22 @@ class RequestTimeoutError(SurfelEditError, TimeoutError):
 
 class ServerStartError(SurfelEditError, RuntimeError):
     """No server answered and none could be started (spawn=True) or found (spawn=False)."""
+
+    status = 0
+
+
+class SecurityConfigError(SurfelEditError, ValueError):
+    """The client's DDS Security configuration cannot be used: a malformed file, a missing key or
+    file, or a cyclonedds binding without the security plugins (use ``.venv-secure``). ``field``
+    names the key."""
+
+    status = 0
+
+
+class AccessDeniedError(SurfelEditError, PermissionError):
+    """DDS Security refused this participant: its identity or permissions are not valid for the
+    domain, or its permissions do not allow a surfeledit topic or partition it needs (``field``:
+    the entity refused, e.g. ``"reply reader"``). Nothing was sent."""
 
     status = 0
 

@@ -14,6 +14,7 @@ from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
 
 from ._protocol import proto
+from .dds_status import publication_matched, subscription_matched
 
 __all__ = ["Inbox", "wait_matched"]
 
@@ -39,8 +40,8 @@ def _delete(*entities: Any) -> None:
 def _matched(entity: Any) -> int:
     """Number of matched remote endpoints of a writer (publications) or a reader (subscriptions)."""
     if isinstance(entity, DataWriter):
-        return int(entity.get_publication_matched_status().current_count)
-    return int(entity.get_subscription_matched_status().current_count)
+        return publication_matched(entity)
+    return subscription_matched(entity)
 
 
 def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeout: float) -> bool:

@@ -99,6 +99,19 @@ int main(int argc, char** argv) {
                  "scripts/make_security.py writes one per user): participants must authenticate and hold "
                  "permissions, discovery and data are encrypted; without it, security is off")
       ->check(CLI::ExistingFile);
+  std::vector<std::string> grants;
+  app.add_option("--grant", grants,
+                 "USER=ROLE[:SESSION] (repeatable; needs --security): the authenticated USER (certificate CN, "
+                 "writing requests in partition surfeledit.req.USER) may join SESSION, or every session, as "
+                 "ROLE (editor or viewer) without a token")
+      ->check([](const std::string& text) {
+        try {
+          surfeledit::service::parse_grant(text);
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+      });
   // The journal (proto/PROTOCOL.md, "Journal").
   app.add_option("--journal", config.journal.dir,
                  "Directory of the journal: every accepted op is made durable before its reply is written, and a "
@@ -120,6 +133,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
   CLI11_PARSE(app, argc, argv);
+  for (const std::string& g : grants) config.grants.push_back(surfeledit::service::parse_grant(g));
   config.journal.sync = journal_sync == "group" ? surfeledit::service::JournalSync::Group
                                                 : surfeledit::service::JournalSync::Op;
   config.max_client_upload_bytes = client_upload_mb << 20;

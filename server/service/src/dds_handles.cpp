@@ -53,6 +53,13 @@ Qos& Qos::partition(const std::string& name) {
   return *this;
 }
 
+Qos& Qos::partitions(const std::vector<std::string>& names) {
+  std::vector<const char*> ps;
+  for (const std::string& n : names) ps.push_back(n.c_str());
+  dds_qset_partition(qos_, static_cast<std::uint32_t>(ps.size()), ps.data());
+  return *this;
+}
+
 Qos& Qos::property(const std::string& name, const std::string& value) {
   dds_qset_prop(qos_, name.c_str(), value.c_str());
   return *this;
@@ -127,6 +134,27 @@ Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos) {
 
 Entity make_publisher(const Entity& participant, const Qos& qos) {
   return Entity(dds_create_publisher(participant.get(), qos.get(), nullptr), "dds_create_publisher");
+}
+
+Entity make_subscriber(const Entity& participant, const Qos& qos) {
+  return Entity(dds_create_subscriber(participant.get(), qos.get(), nullptr), "dds_create_subscriber");
+}
+
+std::vector<std::string> matched_writer_partitions(const Entity& reader, dds_instance_handle_t publication) {
+  std::vector<std::string> out;
+  dds_builtintopic_endpoint_t* data = dds_get_matched_publication_data(reader.get(), publication);
+  if (!data) return out;
+  std::uint32_t n = 0;
+  char** ps = nullptr;
+  if (data->qos && dds_qget_partition(data->qos, &n, &ps)) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+      out.emplace_back(ps[i]);
+      dds_free(ps[i]);
+    }
+    dds_free(ps);
+  }
+  dds_builtintopic_free_endpoint(data);
+  return out;
 }
 
 std::uint32_t matched_readers(const Entity& writer) {

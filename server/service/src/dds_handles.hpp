@@ -63,6 +63,8 @@ class Qos {
   Qos& transient_local(int32_t depth);
   // The one partition of a publisher or subscriber.
   Qos& partition(const std::string& name);
+  // Several partitions of a subscriber (names or wildcard patterns).
+  Qos& partitions(const std::vector<std::string>& names);
   // One participant property (e.g. a "dds.sec.*" DDS Security setting).
   Qos& property(const std::string& name, const std::string& value);
 
@@ -86,6 +88,12 @@ Entity make_reader(const Entity& participant, const Entity& topic, const Qos& qo
 Entity make_writer(const Entity& parent, const Entity& topic, const Qos& qos);
 // A publisher whose QoS names its partition.
 Entity make_publisher(const Entity& participant, const Qos& qos);
+// A subscriber whose QoS names its partitions.
+Entity make_subscriber(const Entity& participant, const Qos& qos);
+// The partitions of the remote writer `publication` matched with `reader` (from Cyclone's discovery
+// data; under DDS Security that is the partition access control let the writer's identity use);
+// empty when the writer is not matched (any more) or uses the default partition.
+std::vector<std::string> matched_writer_partitions(const Entity& reader, dds_instance_handle_t publication);
 // The number of readers the writer is matched with now.
 std::uint32_t matched_readers(const Entity& writer);
 // Makes the writer's status condition (an entity attached to a waitset) trigger on new matches.

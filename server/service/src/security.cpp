@@ -84,7 +84,8 @@ std::vector<SecurityProperty> security_properties(const std::string& config_path
     if (eq == std::string::npos) fail(config_path, where + ": expected 'key = value', got '" + text + "'");
     const std::string key = trim(text.substr(0, eq));
     const std::string value = trim(text.substr(eq + 1));
-    bool known = key == "plugin_dir";
+    // `user` names the certificate's CN for clients (their id prefix); the server does not need it.
+    bool known = key == "plugin_dir" || key == "user";
     for (const auto& k : kFileKeys) known = known || key == k.key;
     if (!known) fail(config_path, where + ": unknown key '" + key + "'");
     if (value.empty()) fail(config_path, where + ": empty value for '" + key + "'");

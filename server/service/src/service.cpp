@@ -1,6 +1,7 @@
 #include "surfeledit/service/service.hpp"
 
 #include <algorithm>
+#include <map>
 #include <atomic>
 #include <numeric>
 #include <optional>
@@ -28,6 +29,12 @@ constexpr const char* kReplyTopic = "surfeledit_reply";
 constexpr const char* kUpdateTopic = "surfeledit_update";
 // Watchers that choose the compact encoding read updates in this partition (PROTOCOL.md).
 constexpr const char* kCompactUpdatePartition = "surfeledit.update.compact";
+
+// The request reader's partitions: the default one (clients without DDS Security) and every
+// authenticated user's "surfeledit.req.<user>" (access.hpp, request_partition).
+const std::vector<std::string> kRequestPartitions{"", "surfeledit.req.*"};
+// Request writers whose subject is remembered at once (subject_of).
+constexpr std::size_t kMaxSubjects = 4096;
 
 // Waitset tags.
 constexpr dds_attach_t kRequestsTag = 1;
@@ -70,7 +77,14 @@ HandlerConfig handler_config(const ServiceConfig& c) {
   if (c.max_client_upload_bytes == 0 || c.max_upload_bytes == 0 || c.max_reply_cache_bytes == 0) {
     throw std::invalid_argument("upload and reply cache limits must be positive");
   }
+  if (!c.grants.empty() && c.security.empty()) {
+    throw std::invalid_argument("--grant needs --security (without it a request partition proves no identity)");
+  }
+  if (!c.grants.empty() && !c.journal.dir.empty()) {
+    throw std::invalid_argument("--grant cannot be combined with --journal yet (a granted join would not replay)");
+  }
   HandlerConfig h{c.max_chunk_surfels, c.max_model_surfels, c.threads, c.data_root, c.max_file_bytes};
+  h.grants = c.grants;
   h.max_client_upload_bytes = c.max_client_upload_bytes;
   h.max_upload_bytes = c.max_upload_bytes;
   h.max_reply_cache_bytes = c.max_reply_cache_bytes;
@@ -92,6 +106,7 @@ struct Service::Impl {
         request_topic(dds::make_topic(participant, &kRequestType, kRequestTopic, qos)),
         reply_topic(dds::make_topic(participant, &kReplyType, kReplyTopic, qos)),
         update_topic(dds::make_topic(participant, &kUpdateType, kUpdateTopic, qos)),
+        request_subscriber(dds::make_subscriber(participant, dds::Qos().partitions(kRequestPartitions))),
         writer_wake(participant),
         request_reader(make_request_reader()),
         reply_qos(dds::protocol_qos()),
@@ -133,7 +148,7 @@ struct Service::Impl {
 
   dds::Entity make_request_reader() {
     writer_events.wake_with(writer_wake.entity().get());
-    return dds::make_reader(participant, request_topic, qos, writer_events.listener());
+    return dds::make_reader(request_subscriber, request_topic, qos, writer_events.listener());
   }
   // Sends a reply (when not null) and publishes the events, once the journal made the ops durable
   // (at once without a journal or with fsync per op; after the group's fsync with group commit).
@@ -146,6 +161,8 @@ struct Service::Impl {
   // How long the waitset may sleep: until the next lease check or the open group's deadline.
   dds_duration_t next_wake() const;
 
+  // The authenticated user of a request writer (Command::subject); "" without security.
+  const std::string& subject_of(dds_instance_handle_t sender);
   void serve_available();
   void serve(const surfeledit_proto_Request& request, dds_instance_handle_t sender);
   // Request thread: copies the event's surfels and queues them for the publisher thread.
@@ -168,6 +185,10 @@ struct Service::Impl {
   dds::Entity request_topic;
   dds::Entity reply_topic;
   dds::Entity update_topic;
+  dds::Entity request_subscriber;    // partitions kRequestPartitions
+  // DDS Security on: publication handle of a request writer -> its authenticated user (from its
+  // partition; "" when it writes in the default partition). Dropped when the writer is lost.
+  std::map<dds_instance_handle_t, std::string> subjects;
   dds::WriterEvents writer_events;   // before the reader whose listener refers to it
   dds::GuardCondition writer_wake;   // triggered by writer_events
   dds::Entity request_reader;
@@ -199,6 +220,22 @@ struct Service::Impl {
   }
 };
 
+const std::string& Service::Impl::subject_of(dds_instance_handle_t sender) {
+  static const std::string none;
+  if (config.security.empty() || sender == 0) return none;
+  auto it = subjects.find(sender);
+  if (it == subjects.end()) {
+    // Access control let only the user's identity create a writer in "surfeledit.req.<user>"
+    // (its permissions), so the partition names the authenticated subject.
+    const std::vector<std::string> parts = dds::matched_writer_partitions(request_reader, sender);
+    std::string user = parts.size() == 1 ? request_partition_user(parts[0]) : std::string();
+    if (subjects.size() >= kMaxSubjects) subjects.clear();  // bounded: re-read on the next request
+    it = subjects.emplace(sender, std::move(user)).first;
+    if (!it->second.empty()) logger()->info("request writer {:x} is user '{}'", sender, it->second);
+  }
+  return it->second;
+}
+
 void Service::Impl::serve_available() {
   while (!stopping.load()) {
     dds::Loan<surfeledit_proto_Request> loan(request_reader.get(), kTakeBatch);
@@ -224,6 +261,7 @@ void Service::Impl::serve(const surfeledit_proto_Request& request, dds_instance_
   try {
     Command command = decode(request);
     command.sender = sender;
+    command.subject = subject_of(sender);
     if (journal) {
       journal->serving(&request);
       if (request.op == surfeledit_proto_OP_LOAD_FILE) journal->keep_for_later(request);
@@ -319,6 +357,7 @@ void Service::Impl::check_leases() {
     if (e.alive) {
       handler.writer_alive(e.writer);
     } else {
+      subjects.erase(e.writer);
       handler.writer_lost(e.writer);
     }
   }

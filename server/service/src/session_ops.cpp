@@ -73,7 +73,8 @@ void serve_open_session(OpContext& c) {
 
 void serve_join_session(OpContext& c) {
   const bool was_attached = is_attached(c.state, c.command.session, c.command.client_id);
-  c.entry = &c.state.sessions.join(c.command.session, c.command.client_id, c.command.token);
+  c.entry = &c.state.sessions.join(c.command.session, c.command.client_id, c.command.token,
+                                   granted_role(c.state.config.grants, c.command.subject, c.command.session));
   announce_join(c, was_attached);
 }
 

@@ -47,18 +47,20 @@ SessionEntry& SessionRegistry::open(const std::string& name, const std::string& 
   return it->second;
 }
 
-SessionEntry& SessionRegistry::join(const std::string& name, const std::string& client, const std::string& token) {
+SessionEntry& SessionRegistry::join(const std::string& name, const std::string& client, const std::string& token,
+                                    std::optional<Role> granted) {
   validate_name(name);
   auto it = sessions_.find(name);
   if (it == sessions_.end()) throw no_such_session(name);
   SessionEntry& entry = it->second;
   const Role* member = entry.role_of(client);
   auto invite = token.empty() ? entry.invites.end() : entry.invites.find(token);
-  if (!member && invite == entry.invites.end()) throw no_such_session(name);
-  if (invite != entry.invites.end()) {
-    const Role granted = member ? std::max(*member, invite->second) : invite->second;
-    entry.members[client] = granted;
-  }
+  if (!member && invite == entry.invites.end() && !granted) throw no_such_session(name);
+  std::optional<Role> role;
+  if (member) role = *member;
+  if (invite != entry.invites.end()) role = role ? std::max(*role, invite->second) : invite->second;
+  if (granted) role = role ? std::max(*role, *granted) : *granted;
+  entry.members[client] = *role;
   entry.clients.insert(client);
   entry.orphaned_since.reset();
   return entry;

@@ -27,6 +27,7 @@ from cyclonedds.topic import Topic
 
 import surfeledit
 from surfeledit._protocol import TOPIC_REQUEST, proto, request_qos
+from surfeledit.dds_status import publication_matched
 from surfeledit.demo import default_scene
 from surfeledit.server_process import server_args
 
@@ -60,7 +61,7 @@ def domain_in_use(domain: int, wait: float = 0.3) -> bool:
                      DataWriter(dp, Topic(dp, "echo_in_Request", proto.Request), qos=request_qos())]
         deadline = time.monotonic() + wait
         while time.monotonic() < deadline:
-            if any(w.get_publication_matched_status().current_count for w in endpoints):
+            if any(publication_matched(w) for w in endpoints):  # either cyclonedds binding
                 return True
             time.sleep(0.005)
         return False

@@ -111,7 +111,7 @@ def intruder_args(domain: int, conf: Optional[Path], victim: str, session: str, 
 def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_path: Path,
                                            security_dir: Path) -> None:
     srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
-    p = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", "alice-1", "secured"),
+    p = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", "alice.1", "secured"),
                     tmp_path / "alice.log")
     out = finish(p, 60)
     assert p.proc.returncode == 0, p.log_tail()
@@ -126,7 +126,7 @@ def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_p
 def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pytest.FixtureRequest, tmp_path: Path,
                                                                    security_dir: Path, stranger_dir: Path) -> None:
     srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
-    victim, session = "victim-1", "taken"
+    victim, session = "alice.victim", "taken"  # a client id of alice's (her reply partitions)
     intruders = {
         "outsider": None,  # no security at all
         "stranger": stranger_dir / "alice" / "security.conf",  # a permitted client of another CA pair
@@ -164,7 +164,7 @@ def test_control_without_security_the_outsider_gets_in(request: pytest.FixtureRe
     """The same outsider against a server without --security: it binds the victim's id and reads
     replies, so the shut-out test above measures what security prevents."""
     srv = start_server(request, tmp_path, None)
-    victim, session = "victim-1", "taken"
+    victim, session = "alice.victim", "taken"  # a client id of alice's (her reply partitions)
     outsider = start_probe(intruder_args(srv.domain, None, victim, session, 6.0), tmp_path / "outsider.log")
     request.addfinalizer(outsider.stop)
     time.sleep(3.0)

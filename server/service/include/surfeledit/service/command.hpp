@@ -144,6 +144,9 @@ struct Command {
   // The DDS writer that sent the request (its publication handle); 0: not from DDS (tests, in-process),
   // then the client id is not bound to a sender.
   std::uint64_t sender = 0;
+  // The authenticated user that sent it (DDS Security on: the user of the request partition
+  // "surfeledit.req.<user>" its writer uses, which only that identity may write in); empty: unknown.
+  std::string subject;
 };
 
 }  // namespace surfeledit::service

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "surfeledit/core/surfel_model.hpp"
+#include "surfeledit/service/access.hpp"
 #include "surfeledit/service/command.hpp"
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/update.hpp"
@@ -34,6 +35,8 @@ struct HandlerConfig {
   // A session whose last client was detached by its lease (not one closed by its last client) is kept
   // this long, and a detached client's memberships too, so that a restarted client finds them.
   std::chrono::milliseconds session_grace{30000};
+  // Roles granted to authenticated subjects (access.hpp, Grant); used only for requests with a subject.
+  std::vector<Grant> grants;
 };
 
 struct HandlerState;

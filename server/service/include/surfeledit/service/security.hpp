@@ -22,7 +22,8 @@ struct SecurityProperty {
 //   identity_ca, identity_certificate, private_key   authentication (X.509 PEM, key unencrypted)
 //   permissions_ca, governance, permissions          access control (governance and permissions
 //                                                    S/MIME signed by the permissions CA)
-// and, optional, `plugin_dir`: the directory of libdds_security_{auth,ac,crypto}.so (default: where
+// and, optional, `user` (the certificate's CN; clients prefix their ids with it, ignored here) and
+// `plugin_dir`: the directory of libdds_security_{auth,ac,crypto}.so (default: where
 // Debian's libddsc0debian installs them, found at build time). '#' starts a comment line.
 //
 // Reads `config_path` and returns the properties (every file checked to be a readable regular

@@ -10,7 +10,9 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "surfeledit/service/access.hpp"
 #include "surfeledit/service/journal.hpp"
 
 namespace surfeledit::service {
@@ -43,6 +45,8 @@ struct ServiceConfig {
   // DDS Security configuration file (surfeledit/service/security.hpp; PROTOCOL.md, "Security");
   // empty: security off (any participant on the domain may match).
   std::string security;
+  // Roles granted to authenticated users (--grant USER=ROLE[:SESSION]; access.hpp); needs `security`.
+  std::vector<Grant> grants;
   JournalConfig journal;  // --journal DIR and its durability policy (PROTOCOL.md, "Journal"); dir empty: off
 };
 

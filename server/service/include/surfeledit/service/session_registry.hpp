@@ -49,9 +49,11 @@ class SessionRegistry {
   // InvalidArgument (field "session") on an empty or overlong name, Conflict (field "session")
   // when the name belongs to a session the client is not a member of (join it with a token).
   SessionEntry& open(const std::string& name, const std::string& client);
-  // Attaches a member, or makes the client a member with the role a valid `token` grants. A
-  // session that does not exist and a non-member without a valid token get the same NotFound.
-  SessionEntry& join(const std::string& name, const std::string& client, const std::string& token);
+  // Attaches a member, or makes the client a member with the role a valid `token` grants, or the
+  // role `granted` to its authenticated subject (--grant; the stronger of those that apply). A
+  // session that does not exist and a non-member without a valid token or grant get the same NotFound.
+  SessionEntry& join(const std::string& name, const std::string& client, const std::string& token,
+                     std::optional<Role> granted = std::nullopt);
   // The session the client is attached to; throws Conflict (field "session") otherwise, with the
   // same message whether the session exists or not.
   SessionEntry& attached(const std::string& name, const std::string& client);
