@@ -102,6 +102,27 @@ TEST(JournalLog, NotAJournalIsAnError) {
   EXPECT_THROW(read_all(dir.path / "journal.log" / "sub"), JournalError);
 }
 
+// The header's record format (journal.hpp kRecordFormat): a log written by this server carries it; one of
+// another record format (0: before the header held it, or a later one) is refused and left as it was.
+TEST(JournalLog, OtherRecordFormatIsRefused) {
+  TempDir dir;
+  { JournalLog log(dir.path.string(), [](RecordKind, const Payload&) {}); }
+  std::vector<std::uint8_t> bytes = file_bytes(dir.path / "journal.log");
+  ASSERT_EQ(bytes.size(), 16u);
+  EXPECT_EQ(bytes[12], surfeledit::service::kRecordFormat);
+  for (std::uint8_t other : {std::uint8_t{0}, static_cast<std::uint8_t>(surfeledit::service::kRecordFormat + 1)}) {
+    bytes[12] = other;
+    write_bytes(dir.path / "journal.log", bytes);
+    try {
+      read_all(dir.path);
+      ADD_FAILURE() << "record format " << int(other) << " was read";
+    } catch (const JournalError& e) {
+      EXPECT_NE(std::string(e.what()).find("records of format " + std::to_string(other)), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(file_bytes(dir.path / "journal.log"), bytes);
+  }
+}
+
 // Truncating the file at every byte of the last record, or flipping any bit of it, loses exactly
 // that record; the ones before come back intact and the log accepts appends again.
 TEST(JournalLog, TornOrCorruptLastRecordIsCutAtEveryPosition) {

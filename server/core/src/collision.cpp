@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "collision/improved_sweep.hpp"
+#include "collision/kernel_snapshot.hpp"
 #include "collision/robust_kernel.hpp"
 #include "collision/row_detector.hpp"
 #include "collision/temporal_kernel.hpp"

@@ -122,6 +122,12 @@ std::vector<HistoryItem> History::items() const {
   return out;
 }
 
+void History::restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare) {
+  entries_ = std::move(entries);
+  spare_ = std::move(spare);
+  recount();
+}
+
 void History::recount() {
   bytes_ = 0;
   for (const HistoryEntry& e : entries_) bytes_ += e.bytes;

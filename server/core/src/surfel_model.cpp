@@ -295,6 +295,33 @@ void SurfelModel::set_clips(const IdList& ids, const Points& points, const Point
   }
 }
 
+SurfelModel SurfelModel::from_parts(SurfelArrays arrays, IdList ids, SurfelId next_id) {
+  const Eigen::Index n = static_cast<Eigen::Index>(ids.size());
+  auto fits = [&](Eigen::Index rows, bool optional) { return rows == n || (optional && rows == 0); };
+  const SurfelArrays& a = arrays;
+  if (!fits(a.positions.rows(), false) || !fits(a.normals.rows(), false) || !fits(a.radii.size(), false) ||
+      !fits(a.tangent_u.rows(), true) || a.tangent_v.rows() != a.tangent_u.rows() || !fits(a.colors.rows(), true) ||
+      !fits(a.clip_points.rows(), true) || a.clip_dirs.rows() != a.clip_points.rows()) {
+    throw Error(ErrorCode::InvalidArgument, "snapshot", "corrupt snapshot: model arrays of different lengths");
+  }
+  if (next_id > (SurfelId{1} << 40)) throw Error(ErrorCode::InvalidArgument, "snapshot", "corrupt snapshot: next id too large");
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (ids[i] >= next_id || (i > 0 && ids[i] <= ids[i - 1])) {
+      throw Error(ErrorCode::InvalidArgument, "snapshot", "corrupt snapshot: model ids not ascending below the next id");
+    }
+  }
+  if (next_id > 16 * static_cast<SurfelId>(ids.size()) + (SurfelId{1} << 24)) {
+    throw Error(ErrorCode::InvalidArgument, "snapshot", "corrupt snapshot: next id out of bounds");
+  }
+  SurfelModel m;
+  m.a_ = std::move(arrays);
+  m.ids_ = std::move(ids);
+  m.next_id_ = next_id;
+  m.row_of_id_.assign(static_cast<std::size_t>(next_id), -1);
+  for (std::size_t i = 0; i < m.ids_.size(); ++i) m.row_of_id_[m.ids_[i]] = static_cast<Index>(i);
+  return m;
+}
+
 std::size_t SurfelModel::memory_bytes() const {
   return sizeof(double) * (a_.positions.size() + a_.normals.size() + a_.radii.size() +
                            a_.tangent_u.size() + a_.tangent_v.size() + a_.clip_points.size() +

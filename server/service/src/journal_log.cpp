@@ -19,7 +19,7 @@ namespace {
 
 constexpr std::array<char, 8> kMagic = {'S', 'E', 'J', 'O', 'U', 'R', 'N', 'L'};
 constexpr std::uint32_t kFormat = 1;       // framing version in the header
-constexpr std::size_t kHeaderBytes = 16;   // magic, format, reserved
+constexpr std::size_t kHeaderBytes = 16;   // magic, format, record format, reserved
 constexpr std::size_t kFrameBytes = 9;     // length, crc, kind
 
 [[noreturn]] void fail(const std::string& what, int err) {
@@ -132,6 +132,7 @@ JournalLog::JournalLog(const std::string& dir,
     std::array<std::uint8_t, kHeaderBytes> header{};
     std::memcpy(header.data(), kMagic.data(), kMagic.size());
     put_u32(header.data() + 8, kFormat);
+    put_u32(header.data() + 12, kRecordFormat);
     if (::lseek(fd_.get(), 0, SEEK_SET) < 0) fail("cannot seek in journal '" + path_ + "'", errno);
     write_all(fd_.get(), header.data(), header.size(), path_);
     if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
@@ -148,6 +149,15 @@ JournalLog::JournalLog(const std::string& dir,
   if (get_u32(header.data() + 8) != kFormat) {
     throw JournalError("journal '" + path_ + "' has format " + std::to_string(get_u32(header.data() + 8)) +
                        "; this server reads format " + std::to_string(kFormat));
+  }
+  const std::uint32_t records = get_u32(header.data() + 12);
+  if (records != kRecordFormat) {
+    throw JournalError("journal '" + path_ + "' holds records of format " + std::to_string(records) +
+                       (records == 0 ? " (written before record formats were recorded: its requests may lack fields "
+                                       "added since, e.g. the blend / fill_holes projection)"
+                                     : "") +
+                       "; this server reads record format " + std::to_string(kRecordFormat) +
+                       ": recover it with the server that wrote it, or move it away");
   }
 
   // Intact records, up to the first bad frame.

@@ -113,6 +113,21 @@ def test_unusable_journal_directory_exits_with_code_3(tmp_path: Path) -> None:
     assert "not a surfeledit journal" in srv.log_tail()
 
 
+@pytest.mark.parametrize("record_format", [0, 7])
+def test_journal_of_another_record_format_is_refused(tmp_path: Path, record_format: int) -> None:
+    """The header's record format (PROTOCOL.md "Journal"): a journal written before it was recorded (0)
+    or by a later server (7) is refused with a message naming both formats, never replayed."""
+    journal = tmp_path / "j"
+    journal.mkdir()
+    header = b"SEJOURNL" + (1).to_bytes(4, "little") + record_format.to_bytes(4, "little") + bytes(4)
+    (journal / "journal.log").write_bytes(header)
+    srv = ServerProcess(server_executable(), free_domain(), tmp_path / "fmt.log", extra=("--journal", str(journal)))
+    assert _exit_code(srv) == JOURNAL_EXIT
+    tail = srv.log_tail()
+    assert f"records of format {record_format}" in tail and "reads record format 1" in tail
+    assert (journal / "journal.log").read_bytes() == header  # left as it was
+
+
 def test_second_server_on_the_same_journal_is_refused(tmp_path: Path) -> None:
     journal = tmp_path / "journal"
     first = _server(tmp_path, free_domain(), journal, 0)

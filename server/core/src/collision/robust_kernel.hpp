@@ -29,8 +29,10 @@ class RobustKernel {
     Sphere sphere;                     // holds no original surfel
     Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
     std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
+    std::uint8_t pad[7] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
     bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
   };
+  static_assert(sizeof(State) == 64, "State has padding bytes");
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
 
@@ -93,6 +95,11 @@ class RobustKernel {
                       std::vector<State>& states, int threads);
   const ZeroSet* zero_set() const { return nullptr; }
   std::size_t memory_bytes() const;
+  // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
+  // same order, which gives the same tree); load() checks them against `rows` model rows.
+  bool snapshottable() const { return !inside_; }  // not with an inside model (winding, vote, swept)
+  void save(SnapshotWriter& out) const;
+  void load(SnapshotReader& in, Index rows);
 
  private:
   // The original model, frozen at reset (#O rows = rows at reset).

@@ -7,10 +7,12 @@
 
 #include <chrono>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <type_traits>
 
 #include "kernel_rows.hpp"
+#include "surfeledit/core/snapshot_io.hpp"
 
 namespace surfeledit::detail {
 
@@ -121,6 +123,26 @@ struct ParallelSweep {
     return {tested, queries};
   }
 };
+
+// Snapshots of per-row states: count, capacity, then each state through put_state / get_state (one
+// overload per kernel State, kernel_snapshot.hpp; field by field, never padding bytes).
+template <typename State>
+void put_states(SnapshotWriter& out, const std::vector<State>& states) {
+  out.u64(states.size());
+  out.u64(states.capacity());
+  for (const State& s : states) put_state(out, s);
+}
+template <typename State>
+std::vector<State> get_states(SnapshotReader& in) {
+  const std::size_t n = in.count("detector states", 1);
+  std::vector<State> states;
+  states.reserve(in.capacity("detector states", n, sizeof(State)));
+  states.resize(n);
+  for (State& s : states) get_state(in, s);
+  return states;
+}
+// Rows of a snapshot: ascending, in [0, rows).
+void check_rows(SnapshotReader& in, const IndexList& list, Index rows, const char* what);
 
 template <typename Kernel, typename Sweep = ParallelSweep>
 class RowDetector final : public NarrowDetector {
@@ -282,6 +304,64 @@ class RowDetector final : public NarrowDetector {
       dense_skip_ = 2 * n > rows_.deformable.size() ? kDenseSkip : 0;
     }
     journal_.on = false;
+  }
+
+  // Snapshots: the kernel's references, the deformable rows, every state, and what decides the next steps'
+  // history images (the dense-journal countdown) and the history's byte counts (capacities). Not for an
+  // order-dependent sweep (Improved) nor a kernel with an inside model.
+  bool snapshottable() const override {
+    if constexpr (!std::is_same_v<Sweep, ParallelSweep>) {
+      return false;
+    } else {
+      return rows_.kernel.snapshottable();
+    }
+  }
+  void save_state(SnapshotWriter& out) const override {
+    if (!snapshottable()) throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+    put_states(out, rows_.states);
+    out.vec(rows_.deformable);
+    rows_.kernel.save(out);
+    out.f64(preprocess_ms_);
+    out.u32(static_cast<std::uint32_t>(dense_skip_));
+    out.u64(hit_.capacity());
+    out.u64(journal_.saved.capacity());
+  }
+  void load_state(SnapshotReader& in) override {
+    if (!snapshottable()) throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+    KernelRows<Kernel> rows(params_);
+    rows.states = get_states<typename Kernel::State>(in);
+    rows.deformable = in.vec<Index>("deformable rows");
+    check_rows(in, rows.deformable, rows.rows(), "deformable rows");
+    rows.kernel.load(in, rows.rows());
+    const double preprocess = in.f64("preprocess_ms");
+    const std::uint32_t skip = in.u32("dense_skip");
+    if (skip > static_cast<std::uint32_t>(kDenseSkip)) in.fail("dense_skip", "out of range");
+    const std::size_t hit_cap = in.capacity("hit capacity", 0, 1);
+    const std::size_t saved_cap = in.capacity("journal capacity", 0, 1);
+    rows_ = std::move(rows);
+    sweep_.reset();
+    preprocess_ms_ = preprocess;
+    dense_skip_ = static_cast<int>(skip);
+    journal_ = Journal<typename Kernel::State>();
+    journal_.saved.reserve(saved_cap);
+    hit_ = std::vector<std::uint8_t>();
+    hit_.reserve(hit_cap);
+  }
+  void save_image_state(SnapshotWriter& out, const DetectorImage& image) const override {
+    const auto* mine = dynamic_cast<const Image*>(&image);
+    if (!mine) throw Error(ErrorCode::Internal, "snapshot", "detector image of another detector type");
+    out.vec(mine->rows);
+    out.boolean(mine->listed);
+    put_states(out, mine->states);
+  }
+  std::shared_ptr<const DetectorImage> load_image_state(SnapshotReader& in) const override {
+    auto image = std::make_shared<Image>();
+    image->rows = in.vec<Index>("detector image rows");
+    check_rows(in, image->rows, std::numeric_limits<Index>::max(), "detector image rows");
+    image->listed = in.boolean("detector image listed");
+    image->states = get_states<typename Kernel::State>(in);
+    if (!image->rows.empty() && image->rows.size() != image->states.size()) in.fail("detector image", "rows and states differ");
+    return image;
   }
 
  private:

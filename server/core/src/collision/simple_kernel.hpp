@@ -22,6 +22,11 @@ class ZeroSetKernel {
   void on_inserted(Index /*added*/) {}
   const ZeroSet* zero_set() const { return &zero_; }
   std::size_t memory_bytes() const { return zero_.memory_bytes(); }
+  // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
+  // same order, which gives the same tree); load() checks them against `rows` model rows.
+  bool snapshottable() const { return true; }
+  void save(SnapshotWriter& out) const;
+  void load(SnapshotReader& in, Index rows);
 
  protected:
   // The §4.1 test of a point against its nearest zero surfel k (`previous_state`: before the step).
@@ -39,8 +44,10 @@ class SimpleKernel : public ZeroSetKernel {
     double depth = 0.0;     // |d| at the last test (model units)
     std::uint8_t hit = 0;   // colliding
     std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
+    std::uint8_t pad[6] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
     bool colliding() const { return hit != 0; }
   };
+  static_assert(sizeof(State) == 16, "State has padding bytes");
   static constexpr bool kSeeded = false;  // nothing to measure at reset
   static constexpr int kChunk = 256;
 

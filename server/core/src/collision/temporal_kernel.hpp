@@ -23,8 +23,10 @@ class TemporalKernel : public ZeroSetKernel {
     double depth = 0.0;     // depth estimate of the last evaluation (model units)
     std::uint8_t hit = 0;   // colliding (1: by the test, 2: only by the swept test this step)
     std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
+    std::uint8_t pad[6] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
     bool colliding() const { return hit != 0; }
   };
+  static_assert(sizeof(State) == 48, "State has padding bytes");
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
 
@@ -40,6 +42,8 @@ class TemporalKernel : public ZeroSetKernel {
     if (zero_.tree.get() != before) build_inside();
   }
   std::size_t memory_bytes() const { return ZeroSetKernel::memory_bytes() + (inside_ ? inside_->memory_bytes() : 0); }
+  // Snapshots: the zero set's (ZeroSetKernel); not with an inside model (winding, vote, swept).
+  bool snapshottable() const { return !inside_; }
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             std::vector<State>& states) const {

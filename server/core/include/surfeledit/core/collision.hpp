@@ -111,6 +111,8 @@ struct HierarchyInfo {
 };
 
 struct SessionSettings;
+class SnapshotWriter;
+class SnapshotReader;
 
 // What one detect() changes in a detector (per-row states, the step's tallies), saved for undo
 // (history.hpp). Opaque; only the detector that saved it reads it.
@@ -192,6 +194,18 @@ class CollisionDetector {
   // (flags untouched) without a journal.
   virtual bool journal_tested(std::vector<std::uint8_t>& flags) const;
   virtual void stop_journal();
+
+  // Snapshots (docs/journal.md; detector_snapshot.hpp writes a detector with its params): the structures
+  // themselves, never a rebuild from the model, so that every later result equals this detector's.
+  // snapshottable(): whether this detector can (false: the default; the session falls back to log replay).
+  // save_state() / load_state(): everything but the params (load_state() on a detector made for the same
+  // params; validates sizes and rows, InvalidArgument "snapshot" otherwise). save_image_state() /
+  // load_image_state(): a DetectorImage this detector type saved.
+  virtual bool snapshottable() const;
+  virtual void save_state(SnapshotWriter& out) const;
+  virtual void load_state(SnapshotReader& in);
+  virtual void save_image_state(SnapshotWriter& out, const DetectorImage& image) const;
+  virtual std::shared_ptr<const DetectorImage> load_image_state(SnapshotReader& in) const;
 
  protected:
   explicit CollisionDetector(CollisionParams params) : params_(params) {}

@@ -21,6 +21,7 @@
 #include "surfeledit/core/response/curves.hpp"
 #include "surfeledit/core/selector.hpp"
 #include "surfeledit/core/settings.hpp"
+#include "surfeledit/core/snapshot_io.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 #include "surfeledit/core/tool.hpp"
 
@@ -236,6 +237,18 @@ class EditSession {
   Changes changes_since(std::uint64_t since) const;
   SessionReport report() const;
   std::uint64_t state_hash() const;
+
+  // Snapshots (session_snapshot.cpp, docs/journal.md): the whole session in a versioned binary format --
+  // model, row versions, removal log, rest radii, version, every tool, and the history (entries, images,
+  // spare buffers) with every detector object written once (shared objects stay shared) through its own
+  // save_state(), never rebuilt: a restored session's every later step, undo and redo give what this one's
+  // give. not_snapshottable(): why not ("" when it can be): a detector, live or in the history, whose type
+  // has no snapshot (detector_snapshot.hpp). save(): Internal when not snapshottable. restore(): replaces
+  // everything by a saved state (the name and SessionParams stay this session's); InvalidArgument
+  // ("snapshot") for a corrupt or unknown-version snapshot, and then nothing changed.
+  std::string not_snapshottable() const;
+  void save(SnapshotWriter& out) const;
+  void restore(SnapshotReader& in);
 
  private:
   void touch_rows(const IndexList& rows);

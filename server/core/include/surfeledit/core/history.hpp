@@ -117,6 +117,9 @@ class History {
   std::size_t bytes() const { return bytes_; }
   // Replaces an entry's image (undo / redo swap), keeping the byte count.
   void replace_image(HistoryEntry& entry, SessionImage image);
+  // Snapshots (session_snapshot.cpp): the entries and spare buffers as saved (each entry's `bytes` kept).
+  const std::vector<RowsImage>& spare() const { return spare_; }
+  void restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare);
   // A rows image of a dropped entry, whose buffers a new image can reuse (empty when there is none):
   // memory already touched costs no page faults.
   RowsImage take_spare();

@@ -33,6 +33,9 @@ class SurfelModel {
   // normals, estimates missing radii, and assigns ids 0..#P-1. Throws Error naming the
   // field and row. An empty model is rejected (InvalidArgument).
   static SurfelModel from_arrays(SurfelArrays arrays);
+  // A model exactly as saved (snapshots): arrays as they are (not normalised again), `ids` ascending and
+  // below `next_id`. Throws InvalidArgument ("snapshot") when shapes or ids do not fit.
+  static SurfelModel from_parts(SurfelArrays arrays, IdList ids, SurfelId next_id);
 
   Index size() const { return static_cast<Index>(ids_.size()); }
   bool empty() const { return ids_.empty(); }

@@ -41,6 +41,13 @@ class JournalError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The format of the records (the header's second version): what a Request record's CDR holds (the IDL's
+// Request as of this server) and the other records' layouts. Bumped whenever either changes (a field added
+// to a request type changes the CDR); a journal of another record format is refused (JournalError) rather
+// than replayed wrongly. 0: journals written before the header held it (before the blend / fill_holes
+// `projection` field was journaled alike).
+constexpr std::uint32_t kRecordFormat = 1;
+
 // Exit code of surfeledit-server when the journal cannot be used.
 constexpr int kJournalExitCode = 3;
 
@@ -67,7 +74,8 @@ class UniqueFd {
   int fd_ = -1;
 };
 
-// The log file DIR/journal.log: a 16-byte header, then records framed as
+// The log file DIR/journal.log: a 16-byte header (magic "SEJOURNL", u32 framing format 1, u32 record
+// format kRecordFormat, 4 reserved bytes), then records framed as
 //   u32 payload length | u32 CRC-32 (zlib) of kind and payload | u8 kind | payload
 // (little endian). Opening it reads every intact record and cuts a torn or corrupt tail (a short
 // frame, a length beyond the file or kMaxRecordBytes, a checksum mismatch, an unknown kind) with a

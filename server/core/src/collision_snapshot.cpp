@@ -1,0 +1,198 @@
+// Snapshots of the collision detectors (detector_snapshot.hpp): params, the row detectors' kernels.
+// The k-d trees are not written: a tree's build is a deterministic function of its points, their
+// order and its params (kdtree_build.cpp: sequential, no randomness), so the tree built again from
+// the saved points answers every query as the saved one did (tests/core/test_session_snapshot.cpp
+// checks this against the tree of the live detector).
+#include <limits>
+#include <sstream>
+
+#include "collision/kernel_snapshot.hpp"
+#include "collision/row_detector.hpp"
+#include "surfeledit/core/detector_snapshot.hpp"
+
+namespace surfeledit {
+
+bool CollisionDetector::snapshottable() const { return false; }
+
+void CollisionDetector::save_state(SnapshotWriter&) const {
+  throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+}
+
+void CollisionDetector::load_state(SnapshotReader&) {
+  throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+}
+
+void CollisionDetector::save_image_state(SnapshotWriter&, const DetectorImage&) const {
+  throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+}
+
+std::shared_ptr<const DetectorImage> CollisionDetector::load_image_state(SnapshotReader&) const {
+  throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+}
+
+void save_params(SnapshotWriter& out, const CollisionParams& p) {
+  out.u8(static_cast<std::uint8_t>(p.algorithm));
+  out.f64(p.threshold);
+  out.boolean(p.boundary);
+  out.i64(p.boundary_n);
+  out.i64(p.boundary_i);
+  out.boolean(p.step_bound);
+  out.f64(p.sphere_margin);
+  out.i64(p.threads);
+  out.f64(p.knn_eps);
+  out.u8(static_cast<std::uint8_t>(p.inside));
+  out.f64(p.winding_beta);
+  out.i64(p.vote_k);
+  out.boolean(p.swept);
+}
+
+namespace {
+int get_int(SnapshotReader& in, const char* what) {
+  const std::int64_t v = in.i64(what);
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) in.fail(what, "out of range");
+  return static_cast<int>(v);
+}
+}  // namespace
+
+CollisionParams load_params(SnapshotReader& in) {
+  CollisionParams p;
+  const std::uint8_t algorithm = in.u8("algorithm");
+  if (algorithm > static_cast<std::uint8_t>(CollisionAlgorithm::Robust)) in.fail("algorithm", "unknown value");
+  p.algorithm = static_cast<CollisionAlgorithm>(algorithm);
+  p.threshold = in.f64("threshold");
+  p.boundary = in.boolean("boundary");
+  p.boundary_n = get_int(in, "boundary_n");
+  p.boundary_i = get_int(in, "boundary_i");
+  p.step_bound = in.boolean("step_bound");
+  p.sphere_margin = in.f64("sphere_margin");
+  p.threads = get_int(in, "threads");
+  p.knn_eps = in.f64("knn_eps");
+  const std::uint8_t inside = in.u8("inside");
+  if (inside > static_cast<std::uint8_t>(InsideMode::Vote)) in.fail("inside", "unknown value");
+  p.inside = static_cast<InsideMode>(inside);
+  p.winding_beta = in.f64("winding_beta");
+  p.vote_k = get_int(in, "vote_k");
+  p.swept = in.boolean("swept");
+  try {
+    validate(p);
+  } catch (const Error& e) {
+    in.fail("collision params", e.what());
+  }
+  return p;
+}
+
+void save_detector(SnapshotWriter& out, const CollisionDetector& detector) {
+  if (!detector.snapshottable()) throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
+  save_params(out, detector.params());
+  detector.save_state(out);
+}
+
+std::unique_ptr<CollisionDetector> load_detector(SnapshotReader& in) {
+  const CollisionParams params = load_params(in);
+  if (params.algorithm == CollisionAlgorithm::None) in.fail("algorithm", "a detector of algorithm none");
+  if (params.inside != InsideMode::Nearest || params.swept) in.fail("inside", "an inside model is not snapshottable");
+  std::unique_ptr<CollisionDetector> d = detail::make_narrow_detector(params);
+  if (!d->snapshottable()) in.fail("algorithm", std::string(to_string(params.algorithm)) + " with these params is not snapshottable");
+  d->load_state(in);
+  return d;
+}
+
+namespace detail {
+
+void check_rows(SnapshotReader& in, const IndexList& list, Index rows, const char* what) {
+  Index last = -1;
+  for (Index r : list) {
+    if (r <= last || r >= rows) in.fail(what, "row " + std::to_string(r) + " not ascending in [0, " + std::to_string(rows) + ")");
+    last = r;
+  }
+}
+
+namespace {
+
+void put_zero_set(SnapshotWriter& out, const ZeroSet& z) {
+  out.mat(z.positions);
+  out.mat(z.normals);
+  out.mat(z.radii);
+  out.vec(z.marked);
+  out.vec(z.rows);
+  out.f64(z.knn_eps);
+}
+
+ZeroSet get_zero_set(SnapshotReader& in, Index rows) {
+  ZeroSet z;
+  z.positions = in.mat<Points>("zero positions");
+  z.normals = in.mat<Points>("zero normals");
+  z.radii = in.mat<Values>("zero radii");
+  z.marked = in.vec<std::uint8_t>("zero marks");
+  z.rows = in.vec<Index>("zero rows");
+  z.knn_eps = in.f64("zero knn_eps");
+  const std::size_t n = z.rows.size();
+  if (n == 0 || static_cast<std::size_t>(z.positions.rows()) != n || static_cast<std::size_t>(z.normals.rows()) != n ||
+      static_cast<std::size_t>(z.radii.size()) != n || z.marked.size() != n) {
+    in.fail("zero set", "arrays of different lengths");
+  }
+  check_rows(in, z.rows, rows, "zero rows");
+  if (!(z.knn_eps >= 0.0) || !std::isfinite(z.knn_eps)) in.fail("zero knn_eps", "out of range");
+  try {
+    z.tree = std::make_shared<const KdTree>(z.positions, nearest_tree_params(z.knn_eps));
+  } catch (const Error& e) {
+    in.fail("zero positions", e.what());
+  }
+  return z;
+}
+
+}  // namespace
+
+void ZeroSetKernel::save(SnapshotWriter& out) const { put_zero_set(out, zero_); }
+
+void ZeroSetKernel::load(SnapshotReader& in, Index rows) { zero_ = get_zero_set(in, rows); }
+
+void RobustKernel::save(SnapshotWriter& out) const {
+  out.mat(orig_.positions);
+  out.mat(orig_.normals);
+  out.mat(orig_.radii);
+  out.vec(orig_.zero);
+  out.vec(orig_.alive);
+  out.vec(orig_of_row_);
+}
+
+void RobustKernel::load(SnapshotReader& in, Index rows) {
+  Snapshot orig;
+  orig.positions = in.mat<Points>("original positions");
+  orig.normals = in.mat<Points>("original normals");
+  orig.radii = in.mat<Values>("original radii");
+  orig.zero = in.vec<std::uint8_t>("original zero flags");
+  orig.alive = in.vec<std::uint8_t>("original alive flags");
+  IndexList orig_of_row = in.vec<Index>("original rows");
+  const std::size_t n = orig.zero.size();
+  if (static_cast<std::size_t>(orig.positions.rows()) != n || static_cast<std::size_t>(orig.normals.rows()) != n ||
+      static_cast<std::size_t>(orig.radii.size()) != n || orig.alive.size() != n) {
+    in.fail("original model", "arrays of different lengths");
+  }
+  if (orig_of_row.size() != static_cast<std::size_t>(rows)) in.fail("original rows", "not one per model row");
+  for (Index o : orig_of_row)
+    if (o < -1 || o >= static_cast<Index>(n)) in.fail("original rows", "row " + std::to_string(o) + " out of range");
+  // The tree as reset / on_removed / on_rigid_moved build it: over every row while every zero surfel is
+  // alive, else over the alive rows (a removal never comes back).
+  IndexList alive;
+  bool all_alive = true, any_zero = false;
+  for (std::size_t o = 0; o < n; ++o) {
+    if (orig.alive[o] > 1 || orig.zero[o] > 1) in.fail("original flags", "not 0 or 1");
+    if (orig.alive[o]) alive.push_back(static_cast<Index>(o));
+    all_alive = all_alive && orig.alive[o];
+    any_zero = any_zero || (orig.zero[o] && orig.alive[o]);
+  }
+  if (!any_zero) in.fail("original model", "no zero surfel");
+  try {
+    orig.tree = all_alive ? std::make_shared<const KdTree>(orig.positions, nearest_tree_params(params_.knn_eps))
+                          : std::make_shared<const KdTree>(orig.positions, alive, nearest_tree_params(params_.knn_eps));
+  } catch (const Error& e) {
+    in.fail("original positions", e.what());
+  }
+  orig_ = std::move(orig);
+  orig_of_row_ = std::move(orig_of_row);
+  inside_.reset();
+}
+
+}  // namespace detail
+}  // namespace surfeledit
