@@ -99,7 +99,7 @@ struct PairCoefficients {
         aR(p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion),
         keep_dphi(p.drop_dphi ? 0.0 : 1.0) {}
 };
-inline void pair_lane(const PairCoefficients& a, double nix, double niy, double niz, const WeightSample& w, double rho,
+[[gnu::always_inline]] inline void pair_lane(const PairCoefficients& a, double nix, double niy, double niz, const WeightSample& w, double rho,
                       double e_rep, double d1_rep, double k_rep, PairBlock& b, int l) {
   const double aP = a.aP, aN = a.aN, aC = a.aC, aR = a.aR;
   const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
@@ -182,6 +182,8 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
     Vec3 f, t;
     double k;
   };
+  // Accumulated as scalars: as Vec3 the compiler adds (x, y) as one vector load of two just-stored lanes,
+  // which cannot be store-forwarded and stalled every lane (half of compute_forces' own time in perf).
   const bool compact = p.weight.kind == WeightKind::Compact &&
                        (p.repulsion.kind == RepulsionKind::Weight || p.repulsion.kind == RepulsionKind::None);
   const double far = 2.0 * p.weight.radius;  // padding lanes: out of range, so they give zeros
@@ -192,8 +194,7 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
   const auto row = [&](Index i, PairBlock& b, auto&& lower) {
     const double xix = x[3 * i], xiy = x[3 * i + 1], xiz = x[3 * i + 2];
     const Vec3 ni(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
-    Upper up{Vec3::Zero(), Vec3::Zero(), 0.0};
-    double e = 0.0;
+    double fx = 0.0, fy = 0.0, fz = 0.0, tx = 0.0, ty = 0.0, tz = 0.0, k = 0.0, e = 0.0;
     for (std::int64_t c0 = upper_begin(nb, i), end = offsets[i + 1]; c0 < end; c0 += kLanes) {
       const int count = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
       const Index* js = indices + c0;
@@ -216,15 +217,15 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
         pair_kernel(p, ni, b);
       }
       for (int l = 0; l < count; ++l) {
-        up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
-        up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
-        up.k += b.k[l];
+        fx += b.fx[l], fy += b.fy[l], fz += b.fz[l];
+        tx += b.tix[l], ty += b.tiy[l], tz += b.tiz[l];
+        k += b.k[l];
         e += b.e[l];
         lower(js[l], c0 + l, b, l);
       }
     }
     energy[i] = e;
-    return up;
+    return Upper{Vec3(fx, fy, fz), Vec3(tx, ty, tz), k};
   };
 
   if (threads == 1) {
