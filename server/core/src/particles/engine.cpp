@@ -72,7 +72,10 @@ void ParticleEngine::refresh_neighbours(bool force) {
     case NeighbourMode::Cached:  // the one query by the grid: the same lists, built faster than by the k-d tree
       if (force) neighbours_grid(state_.x, r, params_.threads, grid_, nbrs_);
       break;
-    case NeighbourMode::RecomputeGrid: neighbours_grid(state_.x, r, params_.threads, grid_, nbrs_); break;
+    case NeighbourMode::RecomputeGrid:  // exact every iteration; the Verlet list only saves grid queries
+      if (force) verlet_.anchor.resize(0, 3);  // the particles may have changed (split / kill, constraint)
+      neighbours_verlet(state_.x, r, params_.neighbour_skin * r, params_.threads, verlet_, nbrs_);
+      break;
     case NeighbourMode::RecomputeKdTree: nbrs_ = neighbours_kdtree(state_.x, r, params_.threads); break;
   }
   evaluated_ = false;

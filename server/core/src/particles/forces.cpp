@@ -32,6 +32,7 @@ namespace {
 #endif
 
 constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
+constexpr int kPad = 4;     // lanes evaluated in multiples of this (divides kLanes)
 
 // Pairs (i, j_l), i < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises.
 struct PairBlock {
@@ -86,40 +87,75 @@ SURFELEDIT_SIMD_CLONES void radial_terms(const ParticleParams& p, PairBlock& b) 
   }
 }
 
-// The terms of potentials.hpp and repulsion.hpp for every lane, written out with their common factors
-// shared (a term whose alpha is 0 adds zeros). `ni` is the normal of particle i.
+// The terms of potentials.hpp and repulsion.hpp for lane l, written out with their common factors shared (a
+// term whose alpha is 0 adds zeros). `ni` is the normal of particle i; `w`, `e_rep`, `d1_rep`, `k_rep` the
+// lane's weight and repulsion.
+struct PairCoefficients {
+  double aP, aN, aC, aR, keep_dphi;
+  explicit PairCoefficients(const ParticleParams& p)
+      : aP(p.alpha_planarity),
+        aN(2.0 * p.alpha_normality),
+        aC(2.0 * p.alpha_circularity),
+        aR(p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion),
+        keep_dphi(p.drop_dphi ? 0.0 : 1.0) {}
+};
+[[gnu::always_inline]] inline void pair_lane(const PairCoefficients& a, double nix, double niy, double niz, const WeightSample& w, double rho,
+                      double e_rep, double d1_rep, double k_rep, PairBlock& b, int l) {
+  const double aP = a.aP, aN = a.aN, aC = a.aC, aR = a.aR;
+  const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
+  const double phi = w.phi, dr = a.keep_dphi * w.dphi_r;
+  const double ai = nix * rx + niy * ry + niz * rz, aj = njx * rx + njy * ry + njz * rz;  // Phi_P: n . r
+  const double bx = nix - njx, by = niy - njy, bz = niz - njz, bn = bx * bx + by * by + bz * bz;  // Phi_N
+  const double c = (nix + njx) * rx + (niy + njy) * ry + (niz + njz) * rz;  // Phi_C: (n_i + n_j) . r
+  b.e[l] = aP * (ai * ai * phi + aj * aj * phi) + aN * (bn * phi) + aC * (c * c * phi) + aR * e_rep;
+  const double rc = aP * (ai * ai * dr + aj * aj * dr) + aN * (bn * dr) + aC * (c * c * dr) + aR * d1_rep;
+  const double ci = aP * (2.0 * ai * phi) + aC * (2.0 * c * phi), cj = aP * (2.0 * aj * phi) + aC * (2.0 * c * phi);
+  const double tn = aN * (2.0 * phi);
+  b.k[l] = aP * (2.0 * projection_stiffness(1.0, rho, w)) + aN * conormality_stiffness(bn, w) +
+           aC * projection_stiffness(2.0, rho, w) + aR * k_rep;
+  // f = rc r + ci n_i + cj n_j; torques: -grad over a rotation of i is (dPhi/dn_i) x n_i, for j the same
+  // with r -> -r: t_i = ci r x n_i + tn n_i x n_j, t_j = cj r x n_j - tn n_i x n_j.
+  b.fx[l] = rc * rx + ci * nix + cj * njx;
+  b.fy[l] = rc * ry + ci * niy + cj * njy;
+  b.fz[l] = rc * rz + ci * niz + cj * njz;
+  const double nnx = tn * (niy * njz - niz * njy), nny = tn * (niz * njx - nix * njz), nnz = tn * (nix * njy - niy * njx);
+  b.tix[l] = ci * (ry * niz - rz * niy) + nnx;
+  b.tiy[l] = ci * (rz * nix - rx * niz) + nny;
+  b.tiz[l] = ci * (rx * niy - ry * nix) + nnz;
+  b.tjx[l] = cj * (ry * njz - rz * njy) - nnx;
+  b.tjy[l] = cj * (rz * njx - rx * njz) - nny;
+  b.tjz[l] = cj * (rx * njy - ry * njx) - nnz;
+}
+
+// Every lane after radial_terms.
 SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
-  const double aP = p.alpha_planarity, aN = 2.0 * p.alpha_normality, aC = 2.0 * p.alpha_circularity;
-  const double aR = p.repulsion.kind == RepulsionKind::None ? 0.0 : 2.0 * p.alpha_repulsion;
-  const double keep_dphi = p.drop_dphi ? 0.0 : 1.0;
+  const PairCoefficients a(p);
   const double nix = ni.x(), niy = ni.y(), niz = ni.z();
   const int m = b.size;
 #pragma omp simd
+  for (int l = 0; l < m; ++l)
+    pair_lane(a, nix, niy, niz, WeightSample{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]}, b.rho[l], b.e_rep[l],
+              b.d1_rep[l], b.k_rep[l], b, l);
+}
+
+// The common case in one pass: compact weight, weight-based repulsion (or none). The same expressions as
+// radial_terms followed by pair_kernel (up to the rounding of the weight, see below), without storing the
+// radial terms.
+SURFELEDIT_SIMD_CLONES void compact_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
+  const PairCoefficients a(p);
+  const double nix = ni.x(), niy = ni.y(), niz = ni.z();
+  const double d = p.weight.radius, d2 = d * d, inv_d2 = 1.0 / d2, A = p.repulsion.amplitude;
+  const int m = b.size;
+#pragma omp simd
   for (int l = 0; l < m; ++l) {
-    const double rx = b.rx[l], ry = b.ry[l], rz = b.rz[l], njx = b.njx[l], njy = b.njy[l], njz = b.njz[l];
-    const WeightSample w{b.phi[l], b.dphi[l], b.ddphi[l], b.dphi_r[l]};
-    const double phi = w.phi, dr = keep_dphi * w.dphi_r, rho = b.rho[l];
-    const double ai = nix * rx + niy * ry + niz * rz, aj = njx * rx + njy * ry + njz * rz;  // Phi_P: n . r
-    const double bx = nix - njx, by = niy - njy, bz = niz - njz, bn = bx * bx + by * by + bz * bz;  // Phi_N
-    const double c = (nix + njx) * rx + (niy + njy) * ry + (niz + njz) * rz;  // Phi_C: (n_i + n_j) . r
-    b.e[l] = aP * (ai * ai * phi + aj * aj * phi) + aN * (bn * phi) + aC * (c * c * phi) + aR * b.e_rep[l];
-    const double rc = aP * (ai * ai * dr + aj * aj * dr) + aN * (bn * dr) + aC * (c * c * dr) + aR * b.d1_rep[l];
-    const double ci = aP * (2.0 * ai * phi) + aC * (2.0 * c * phi), cj = aP * (2.0 * aj * phi) + aC * (2.0 * c * phi);
-    const double tn = aN * (2.0 * phi);
-    b.k[l] = aP * (2.0 * projection_stiffness(1.0, rho, w)) + aN * conormality_stiffness(bn, w) +
-             aC * projection_stiffness(2.0, rho, w) + aR * b.k_rep[l];
-    // f = rc r + ci n_i + cj n_j; torques: -grad over a rotation of i is (dPhi/dn_i) x n_i, for j the same
-    // with r -> -r: t_i = ci r x n_i + tn n_i x n_j, t_j = cj r x n_j - tn n_i x n_j.
-    b.fx[l] = rc * rx + ci * nix + cj * njx;
-    b.fy[l] = rc * ry + ci * niy + cj * njy;
-    b.fz[l] = rc * rz + ci * niz + cj * njz;
-    const double nnx = tn * (niy * njz - niz * njy), nny = tn * (niz * njx - nix * njz), nnz = tn * (nix * njy - niy * njx);
-    b.tix[l] = ci * (ry * niz - rz * niy) + nnx;
-    b.tiy[l] = ci * (rz * nix - rx * niz) + nny;
-    b.tiz[l] = ci * (rx * niy - ry * nix) + nnz;
-    b.tjx[l] = cj * (ry * njz - rz * njy) - nnx;
-    b.tjy[l] = cj * (rz * njx - rx * njz) - nny;
-    b.tjz[l] = cj * (rx * njy - ry * njx) - nnz;
+    // compact_weight_inside with 1 / d^2 multiplied instead of divided by, and t^2 from |r|^2 rather than
+    // from the square root: the sqrt and three divisions were the kernel's critical path.
+    const double r2 = b.rx[l] * b.rx[l] + b.ry[l] * b.ry[l] + b.rz[l] * b.rz[l], rho = std::sqrt(r2);
+    const double in = static_cast<double>(r2 < d2);  // 1 or 0, without a branch
+    const double t2 = r2 * inv_d2, u = t2 - 1.0, dphi_r = 4.0 * u * inv_d2;
+    const WeightSample w{in * (u * u), in * (dphi_r * rho), in * (4.0 * (3.0 * t2 - 1.0) * inv_d2), in * dphi_r};
+    const RadialTerm t = weight_repulsion(A, w);
+    pair_lane(a, nix, niy, niz, w, rho, t.energy, t.d1_r, t.stiffness, b, l);
   }
 }
 
@@ -149,39 +185,65 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
     Vec3 f, t;
     double k;
   };
+  // Accumulated as scalars: as Vec3 the compiler adds (x, y) as one vector load of two just-stored lanes,
+  // which cannot be store-forwarded and stalled every lane (half of compute_forces' own time in perf).
+  const bool compact = p.weight.kind == WeightKind::Compact &&
+                       (p.repulsion.kind == RepulsionKind::Weight || p.repulsion.kind == RepulsionKind::None);
+  const double far = 2.0 * p.weight.radius;  // padding lanes: out of range, so they give zeros
+  const double* x = s.x.data();               // row-major #P by 3
+  const double* nrm = normals.data();
+  const std::int64_t* offsets = nb.offsets.data();
+  const Index* indices = nb.indices.data();
   const auto row = [&](Index i, PairBlock& b, auto&& lower) {
-    const Vec3 xi = s.x.row(i).transpose(), ni = normals.row(i).transpose();
-    Upper up{Vec3::Zero(), Vec3::Zero(), 0.0};
-    double e = 0.0;
-    for (std::int64_t c0 = upper_begin(nb, i), end = nb.offsets[i + 1]; c0 < end; c0 += kLanes) {
-      b.size = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
-      for (int l = 0; l < b.size; ++l) {
-        const Index j = nb.indices[c0 + l];
-        b.rx[l] = s.x(j, 0) - xi.x(), b.ry[l] = s.x(j, 1) - xi.y(), b.rz[l] = s.x(j, 2) - xi.z();
-        b.njx[l] = normals(j, 0), b.njy[l] = normals(j, 1), b.njz[l] = normals(j, 2);
+    const double xix = x[3 * i], xiy = x[3 * i + 1], xiz = x[3 * i + 2];
+    const Vec3 ni(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
+    double fx = 0.0, fy = 0.0, fz = 0.0, tx = 0.0, ty = 0.0, tz = 0.0, k = 0.0, e = 0.0;
+    for (std::int64_t c0 = upper_begin(nb, i), end = offsets[i + 1]; c0 < end; c0 += kLanes) {
+      const int count = static_cast<int>(std::min<std::int64_t>(kLanes, end - c0));
+      const Index* js = indices + c0;
+      for (int l = 0; l < count; ++l) {
+        const double* xj = x + 3 * js[l];
+        const double* nj = nrm + 3 * js[l];
+        b.rx[l] = xj[0] - xix, b.ry[l] = xj[1] - xiy, b.rz[l] = xj[2] - xiz;
+        b.njx[l] = nj[0], b.njy[l] = nj[1], b.njz[l] = nj[2];
       }
-      radial_terms(p, b);
-      pair_kernel(p, ni, b);
-      for (int l = 0; l < b.size; ++l) {
-        up.f += Vec3(b.fx[l], b.fy[l], b.fz[l]);
-        up.t += Vec3(b.tix[l], b.tiy[l], b.tiz[l]);
-        up.k += b.k[l];
+      // Whole vectors only: a scalar remainder of this kernel costs as much as several vectors.
+      b.size = (count + kPad - 1) / kPad * kPad;
+      for (int l = count; l < b.size; ++l) {
+        b.rx[l] = far, b.ry[l] = 0.0, b.rz[l] = 0.0;
+        b.njx[l] = 0.0, b.njy[l] = 0.0, b.njz[l] = 1.0;
+      }
+      if (compact) {
+        compact_kernel(p, ni, b);
+      } else {
+        radial_terms(p, b);
+        pair_kernel(p, ni, b);
+      }
+      for (int l = 0; l < count; ++l) {
+        fx += b.fx[l], fy += b.fy[l], fz += b.fz[l];
+        tx += b.tix[l], ty += b.tiy[l], tz += b.tiz[l];
+        k += b.k[l];
         e += b.e[l];
-        lower(nb.indices[c0 + l], c0 + l, b, l);
+        lower(js[l], c0 + l, b, l);
       }
     }
     energy[i] = e;
-    return up;
+    return Upper{Vec3(fx, fy, fz), Vec3(tx, ty, tz), k};
   };
 
   if (threads == 1) {
     // out.* of row j hold lower_j (complete once the rows below j are done) until row j adds upper_j.
     PairBlock b;
+    double* force = out.force.data();
+    double* torque = out.torque.data();
+    double* stiffness = out.stiffness.data();
     for (Index i = 0; i < n; ++i) {
       const Upper up = row(i, b, [&](Index j, std::int64_t, const PairBlock& pb, int l) {
-        out.force.row(j) -= Vec3(pb.fx[l], pb.fy[l], pb.fz[l]).transpose();
-        out.torque.row(j) += Vec3(pb.tjx[l], pb.tjy[l], pb.tjz[l]).transpose();
-        out.stiffness[j] += pb.k[l];
+        double* f = force + 3 * j;
+        double* t = torque + 3 * j;
+        f[0] -= pb.fx[l], f[1] -= pb.fy[l], f[2] -= pb.fz[l];
+        t[0] += pb.tjx[l], t[1] += pb.tjy[l], t[2] += pb.tjz[l];
+        stiffness[j] += pb.k[l];
       });
       out.force.row(i) = up.f.transpose() + out.force.row(i);
       out.torque.row(i) = up.t.transpose() + out.torque.row(i);

@@ -33,6 +33,7 @@ void validate(const ParticleParams& p) {
   require(p.dt > 0.0 && std::isfinite(p.dt), "dt", p.dt, "> 0");
   require(p.dt_safety > 0.0 && p.dt_safety <= 1.0, "dt_safety", p.dt_safety, "in (0, 1]");
   require(p.max_substeps >= 1, "max_substeps", p.max_substeps, ">= 1");
+  require(p.neighbour_skin >= 0.0 && std::isfinite(p.neighbour_skin), "neighbour_skin", p.neighbour_skin, ">= 0");
   require(p.split_below >= 0, "split_below", p.split_below, ">= 0");
   require(p.kill_above >= 0, "kill_above", p.kill_above, ">= 0");
   require(p.kill_above == 0 || p.kill_above > p.split_below, "kill_above", p.kill_above, "0 or > split_below");

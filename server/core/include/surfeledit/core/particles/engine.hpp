@@ -7,6 +7,7 @@
 
 #include "surfeledit/core/particles/forces.hpp"
 #include "surfeledit/core/particles/projection.hpp"
+#include "surfeledit/core/particles/verlet.hpp"
 
 namespace surfeledit {
 
@@ -59,7 +60,8 @@ class ParticleEngine {
   ParticleParams params_;
   Values scale_;
   Neighbourhood nbrs_;
-  GridWorkspace grid_;  // the grid builder's buffers, reused by every recomputation
+  GridWorkspace grid_;  // the grid builder's buffers (cached neighbourhoods)
+  VerletList verlet_;   // recomputed grid neighbourhoods
   SystemForces forces_;
   bool evaluated_ = false;
   std::unique_ptr<SurfaceProjector> surface_;

@@ -47,6 +47,8 @@ struct ParticleParams {
   bool velocity_control = true;     // §12.3.5: zero a velocity the new force points against
   bool only_grow = false;           // §12.3.6: move only along +n
   NeighbourMode neighbours = NeighbourMode::Cached;  // how neighbourhoods are found
+  double neighbour_skin = 0.1;      // RecomputeGrid: Verlet skin as a fraction of weight.radius (the exact
+                                    // neighbourhood is filtered every iteration; 0 = a grid query), >= 0
   bool project_tangent = false;     // §12.3.7: after each move, onto the nearest original tangent plane
                                     // (needs the original surface, ParticleEngine::set_surface)
   int split_below = 0;              // §12.3.7: a particle with fewer neighbours splits (0 = never)
