@@ -18,15 +18,15 @@ DeformParams down(double dz) {
   return p;
 }
 
-struct Run {
+struct StepsRun {
   std::vector<IdList> colliding;
   std::vector<std::vector<double>> depths;
   Points positions;
 };
 
 // Five steps (the last ones collide) and what they found.
-Run steps(EditSession& s) {
-  Run r;
+StepsRun steps(EditSession& s) {
+  StepsRun r;
   for (int k = 0; k < 5; ++k) {
     const StepResult out = s.deform(down(0.1));
     r.colliding.push_back(out.colliding);
@@ -36,7 +36,7 @@ Run steps(EditSession& s) {
   return r;
 }
 
-void expect_same_run(const Run& a, const Run& b) {
+void expect_same_run(const StepsRun& a, const StepsRun& b) {
   EXPECT_EQ(a.colliding, b.colliding);
   EXPECT_EQ(a.depths, b.depths);  // exact: the detectors' states are the same bit for bit
   EXPECT_TRUE(a.positions == b.positions);
@@ -77,7 +77,7 @@ TEST(HistoryImages, UndoOfConfigureRederivesTheDetectorExactly) {
   // Reference: a session that never configured.
   SessionFixture ref;
   ref.session.set_regions({ref.zero, {}}, {ref.one, {}});
-  const Run expected = steps(ref.session);
+  const StepsRun expected = steps(ref.session);
 
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
@@ -91,7 +91,7 @@ TEST(HistoryImages, RedoOfConfigureAfterUndoneStepsMatchesAReplay) {
   SessionFixture ref;
   ref.session.set_regions({ref.zero, {}}, {ref.one, {}});
   ref.session.configure({{"algorithm", std::string("temporal")}});
-  const Run expected = steps(ref.session);
+  const StepsRun expected = steps(ref.session);
 
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
@@ -112,7 +112,7 @@ TEST(HistoryImages, RedoOfConfigureAfterUndoneStepsMatchesAReplay) {
 TEST(HistoryImages, UndoOfReleaseBringsRegionsAndDetectorBack) {
   SessionFixture ref;
   ref.session.set_regions({ref.zero, {}}, {ref.one, {}});
-  const Run expected = steps(ref.session);
+  const StepsRun expected = steps(ref.session);
 
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
@@ -129,7 +129,7 @@ TEST(HistoryImages, AStepMakesTheDetectorNotDerivable) {
   // configure gives back that object (later steps continue as if configure never happened).
   SessionFixture ref;
   ref.session.set_regions({ref.zero, {}}, {ref.one, {}});
-  const Run expected = steps(ref.session);
+  const StepsRun expected = steps(ref.session);
 
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
@@ -137,7 +137,7 @@ TEST(HistoryImages, AStepMakesTheDetectorNotDerivable) {
   f.session.configure({{"algorithm", std::string("simple")}});
   EXPECT_GT(kind(f.session.report(), "tool").bytes, structure(f.session.report(), "collision_simple"));
   f.session.undo();
-  Run r;
+  StepsRun r;
   r.colliding.push_back(first.colliding);
   r.depths.push_back(first.depths);
   for (int k = 1; k < 5; ++k) {
