@@ -41,7 +41,7 @@ void RobustKernel::build_inside() {
 }
 
 void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
-                        int threads, std::vector<State>& states) const {
+                        int threads, RowStates<State>& states) const {
   const KdTree zero_tree(scene.positions, zero_rows, nearest_tree_params(params_.knn_eps));
   seed_states(
       *this, scene.positions, deformable, threads,
@@ -72,7 +72,7 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
 }
 
 bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                                  std::vector<State>& states, int threads) {
+                                  RowStates<State>& states, int threads) {
   if (inside_ || !orig_.tree) return false;
   for (Index r : rows) {
     if (r < 0 || static_cast<std::size_t>(r) >= orig_of_row_.size()) return false;

@@ -40,7 +40,7 @@ class RobustKernel {
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
   // Spheres start with the distance to the nearest zero surfel (a temporary tree over the zero rows).
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads,
-            std::vector<State>& states) const;
+            RowStates<State>& states) const;
   State init(const Vec3& p, const NearestZero& z) const {
     State s;
     s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
@@ -90,7 +90,7 @@ class RobustKernel {
   // compares a point's inside state with the rigid part where it is now. Not with an inside model
   // (winding, vote, swept).
   bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      std::vector<State>& states, int threads);
+                      RowStates<State>& states, int threads);
   const ZeroSet* zero_set() const { return nullptr; }
   std::size_t memory_bytes() const;
 
