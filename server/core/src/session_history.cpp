@@ -291,8 +291,8 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
     if (!whole) tools_.at(e.image.tool).mark_stale(nullptr);
   } else {
     // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
-    if (!e.image.tool_only) throw Error(ErrorCode::Internal, "history", "the entry holds no tool image");
-    const ToolImage& t = e.image.tool_only->tool;
+    // (A whole image without touched surfels, e.g. a resampling step that moved nothing: its tool alone.)
+    const ToolImage& t = e.image.tool_only ? e.image.tool_only->tool : e.image.whole->tools.at(e.image.tool);
     if (t.fields && t.fields->regions.size() != static_cast<std::size_t>(model_.size()))
       throw Error(ErrorCode::Internal, "history", "the tool image does not fit the model");
     for (const auto& [id, other] : tools_) {
@@ -305,7 +305,7 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
       }
     }
     use(e.image.tool);
-    SessionImage now = capture_tool(t.fields_kept);
+    SessionImage now = e.image.tool_only ? capture_tool(t.fields_kept) : capture_whole(false);
     restore_tool(*tool_, t, false);
     tool_->mark_stale(nullptr);
     history_.replace_image(e, std::move(now));
