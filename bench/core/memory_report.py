@@ -5,8 +5,10 @@ after two deformation steps (so per-step structures exist), in-process, one thre
 
     .venv/bin/python bench/core/memory_report.py [--scale 1.0] [--steps 2]
 
-Prints one markdown table per configuration (structure, bytes, bytes per surfel, share) and a summary
-table (total bytes per surfel per configuration). Bytes are what the structures report (capacities of
+Prints one markdown table per configuration (structure, bytes, bytes per surfel, share; the history
+split by image kind -- rows: steps, tool: set_regions / configure / release, whole: every other op -- as
+"history[kind] (entries)" rows under it, not counted twice) and a summary table (total bytes per
+surfel per configuration). Bytes are what the structures report (capacities of
 their arrays), not the process's resident set.
 """
 
@@ -56,6 +58,10 @@ def main() -> int:
         total = rep["total_bytes"]
         rows = [[name, f"{b:,}", f"{b / n:.1f}", f"{100.0 * b / total:.1f}%"]
                 for name, b in sorted(rep["structures"].items(), key=lambda kv: -kv[1])]
+        for kind, k in rep.get("history_kinds", {}).items():
+            if k["entries"]:
+                b = k["bytes"]
+                rows.append([f"  history[{kind}] ({k['entries']})", f"{b:,}", f"{b / n:.1f}", f"{100.0 * b / total:.1f}%"])
         print(f"\n## {label}: {n:,} surfels, {rep['bytes_per_surfel']:.1f} bytes per surfel")
         print(benchlib.table(["structure", "bytes", "bytes/surfel", "share"], rows))
         summary.append([label, f"{rep['bytes_per_surfel']:.1f}"])

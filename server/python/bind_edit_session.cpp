@@ -406,8 +406,17 @@ void bind_edit_session(pyb::module_& m) {
         d["total_bytes"] = r.total_bytes;
         d["bytes_per_surfel"] = r.bytes_per_surfel;
         d["hierarchy_status"] = r.hierarchy_status;
+        pyb::dict kinds;
+        for (const auto& k : r.history_kinds) {
+          pyb::dict one;
+          one["entries"] = k.entries;
+          one["bytes"] = k.bytes;
+          kinds[pyb::str(k.kind)] = one;
+        }
+        d["history_kinds"] = kinds;
         return d;
-      }, "What the session holds: surfels, structures {name: bytes}, total_bytes, bytes_per_surfel");
+      }, "What the session holds: surfels, structures {name: bytes}, total_bytes, bytes_per_surfel, "
+         "hierarchy_status, history_kinds {rows|tool|whole: {entries, bytes}}");
 }
 
 }  // namespace surfeledit::py

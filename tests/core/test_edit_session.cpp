@@ -53,9 +53,10 @@ TEST(EditSession, BuildsFieldsOnlyWhenRegionsAreSet) {
   EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "history"}));  // issue 9: the history is listed last
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   // The default settings run the Robust detector once regions are set.
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust", "history"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust",
+                                               "merge_origins", "history"}));
   f.session.configure({{"algorithm", std::string("none")}});
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "history"}));
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "merge_origins", "history"}));
   const SessionReport r = f.session.report();
   EXPECT_GT(r.bytes_per_surfel, 0.0);
   EXPECT_EQ(r.surfels, static_cast<Index>(f.s.part.size()));

@@ -15,10 +15,8 @@ void RobustKernel::reset(const CollisionScene& scene, const IndexList&, const In
   for (Index r = 0; r < rows; ++r) orig.zero[r] = scene.regions[r] == Region::Zero;
   orig.alive.assign(static_cast<std::size_t>(rows), 1);
   orig.tree = std::make_unique<KdTree>(orig.positions, nearest_tree_params(params_.knn_eps));
-  IndexList orig_of_row(static_cast<std::size_t>(rows));
-  for (Index r = 0; r < rows; ++r) orig_of_row[r] = r;
   orig_ = std::move(orig);
-  orig_of_row_ = std::move(orig_of_row);
+  orig_of_row_ = IndexList();  // the identity
   build_inside();
 }
 
@@ -41,7 +39,7 @@ void RobustKernel::build_inside() {
 }
 
 void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
-                        int threads, std::vector<State>& states) const {
+                        int threads, RowStates<State>& states) const {
   const KdTree zero_tree(scene.positions, zero_rows, nearest_tree_params(params_.knn_eps));
   seed_states(
       *this, scene.positions, deformable, threads,
@@ -55,7 +53,7 @@ void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable
 void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
   bool zero_removed = false;
   for (std::size_t r = 0; r < keep.size(); ++r) {
-    const Index o = orig_of_row_[r];
+    const Index o = orig_of(static_cast<Index>(r));
     if (!keep[r] && o >= 0 && orig_.zero[o]) {
       orig_.alive[o] = 0;
       zero_removed = true;
@@ -68,15 +66,16 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
     orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
     build_inside();
   }
+  spell_out_rows();
   compact(orig_of_row_, keep);
 }
 
 bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                                  std::vector<State>& states, int threads) {
+                                  RowStates<State>& states, int threads) {
   if (inside_ || !orig_.tree) return false;
   for (Index r : rows) {
-    if (r < 0 || static_cast<std::size_t>(r) >= orig_of_row_.size()) return false;
-    const Index o = orig_of_row_[r];
+    if (r < 0 || static_cast<std::size_t>(r) >= rows_now()) return false;
+    const Index o = orig_of(r);
     if (o < 0 || !orig_.zero[o] || !orig_.alive[o]) return false;  // not a zero surfel of the snapshot
   }
   if (rows.empty()) return true;
@@ -84,7 +83,7 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   // position gets it now, against the rigid part where it was: the next test then counts the change
   // when the other tool's part came over it.
   double reach = 0.0;
-  for (Index r : rows) reach = std::max(reach, (row3(orig_.positions, orig_of_row_[r]) - row3(scene.positions, r)).norm());
+  for (Index r : rows) reach = std::max(reach, (row3(orig_.positions, orig_of(r)) - row3(scene.positions, r)).norm());
   const IndexList hit = rows_near_moved<true>(scene, rows, reach, deformable, states, threads);
   for (Index r : hit) {
     State& s = states[r];
@@ -96,7 +95,7 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   bool all_alive = true;
   for (std::uint8_t a : orig_.alive) all_alive = all_alive && a;
   for (Index r : rows) {
-    const Index o = orig_of_row_[r];
+    const Index o = orig_of(r);
     orig_.positions.row(o) = scene.positions.row(r);
     orig_.normals.row(o) = scene.normals.row(r);
     orig_.radii[o] = scene.radii[r];

@@ -15,7 +15,7 @@ void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformab
   zero_ = std::move(zero);
 }
 
-Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, std::vector<SimpleKernel::State>& states,
+Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, RowStates<SimpleKernel::State>& states,
                          const CollisionScene& scene, const Points& previous,
                          const std::vector<std::uint8_t>* candidate, int /*threads*/, std::vector<std::uint8_t>& hit) {
   if (candidate) throw Error(ErrorCode::Internal, "algorithm", "improved cannot run on candidates only");

@@ -76,7 +76,7 @@ class SimplifiedDetector final : public ApproximateDetector {
     const Index nc = clusters_.cluster_count();
     const ZeroSet& zero = this->zero();
     const Kernel& kernel = rows_.kernel;
-    std::vector<State>& state = rows_.states;
+    RowStates<State>& state = rows_.states;
     // What one cluster's evaluation adds to the step's statistics (summed per thread, then merged).
     struct Counts {
       Index tested = 0, queries = 0, cluster_queries = 0, clusters = 0, singletons = 0, colliding_clusters = 0,

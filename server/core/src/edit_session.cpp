@@ -178,13 +178,14 @@ void EditSession::set_regions(const RegionSpec& zero, const RegionSpec& one, con
   auto fields = std::make_unique<DeformationFields>(compute_fields(model_.positions(), regions, params_.threads));
   std::shared_ptr<CollisionDetector> detector = fresh_detector(settings_of(author), *fields);
   use(author);
-  SessionImage before = capture_whole(false);
+  SessionImage before = capture_tool(false);
   tool_->fields = std::move(fields);
   tool_->detector = std::move(detector);
   tool_->colliding.clear();
   tool_->clear_stale();
   take_origins();
   ++version_;
+  tool_->mark_fresh(version_);
   record("set_regions", author, {}, std::move(before));
 }
 
@@ -194,6 +195,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   if (!own || !own->fields) throw Error(ErrorCode::Conflict, "regions", "set the zero and one regions before deforming");
   validate(params, *own->fields);
   use(author);
+  tool_->fresh_at = 0;  // a step changes the detector (or may: a cancelled one puts its states back)
   sync_tool();
   const std::uint64_t version_before = version_;
   const Index rows_before = model_.size();
@@ -341,13 +343,14 @@ void EditSession::configure(const std::vector<NamedSetting>& changes, const std:
   std::shared_ptr<CollisionDetector> detector;
   if (own && own->fields && !model_.empty()) detector = fresh_detector(next, *own->fields);
   use(author);
-  SessionImage before = capture_whole(false);
+  SessionImage before = capture_tool(true);
   tool_->settings = next;
   history_params_ = next.history;
   tool_->detector = std::move(detector);
   tool_->colliding.clear();
   tool_->clear_stale();
   if (tool_->fields) take_origins();
+  tool_->mark_fresh(version_);
   record("configure", author, {}, std::move(before));
 }
 
@@ -355,6 +358,7 @@ bool EditSession::rebuild_hierarchies(const std::string& tool) {
   Tool* t = tools_.count(tool) ? &tools_.at(tool) : nullptr;
   // A stale detector is re-initialised at the tool's next step anyway.
   if (!t || !t->detector || !t->fields || t->stale) return false;
+  t->fresh_at = 0;  // the rebuilt tree may be adopted at the next step
   return t->detector->start_rebuild(scene_of(model_, *t->fields));
 }
 
@@ -367,7 +371,7 @@ bool EditSession::release(const std::string& author) {
   const Tool* own = find_tool(author);
   if (!own || !own->fields) return false;
   use(author);
-  SessionImage before = capture_whole(false);
+  SessionImage before = capture_tool(false);
   tool_->clear_regions();
   ++version_;
   record("release", author, {}, std::move(before));
@@ -466,6 +470,8 @@ SessionReport EditSession::report() const {
       for (auto& [name, bytes] : t.detector->structures()) rep.structures.push_back({name, bytes});
       if (rep.hierarchy_status.empty()) rep.hierarchy_status = t.detector->hierarchy_info().status;
     }
+    const std::size_t origins = static_cast<std::size_t>(t.merge.origin_positions.size() + t.merge.origin_normals.size());
+    if (origins > 0) rep.structures.push_back({"merge_origins", origins * sizeof(double)});
     if (t.previous.size() > 0) {
       rep.structures.push_back({"step_scratch", static_cast<std::size_t>(t.previous.size()) * sizeof(double)});
     }
@@ -474,6 +480,14 @@ SessionReport EditSession::report() const {
     rep.structures.push_back({"resampling", static_cast<std::size_t>(rest_radius_.size()) * sizeof(double)});
   }
   rep.structures.push_back({"history", history_.bytes()});
+  for (const char* kind : {"rows", "tool", "whole"}) rep.history_kinds.push_back({kind, 0, 0});
+  for (const HistoryEntry& e : history_.entries()) {
+    for (auto& k : rep.history_kinds) {
+      if (k.kind != e.image.kind()) continue;
+      ++k.entries;
+      k.bytes += e.bytes;
+    }
+  }
   for (const auto& s : rep.structures) rep.total_bytes += s.bytes;
   rep.bytes_per_surfel = rep.surfels ? static_cast<double>(rep.total_bytes) / rep.surfels : 0.0;
   return rep;

@@ -22,6 +22,7 @@ std::size_t SessionImage::bytes() const {
          array_bytes(rows->normals) + array_bytes(rows->tangent_u) + array_bytes(rows->tangent_v) +
          rows->version_runs.capacity() * sizeof(rows->version_runs[0]);
   }
+  if (tool_only) b += tool_only->tool.bytes();
   if (whole) {
     b += whole->model.memory_bytes() + whole->row_version.capacity() * sizeof(std::uint64_t) +
          array_bytes(whole->rest_radius);
@@ -29,6 +30,8 @@ std::size_t SessionImage::bytes() const {
   }
   return b;
 }
+
+const char* SessionImage::kind() const { return rows ? "rows" : tool_only ? "tool" : "whole"; }
 
 void History::push(HistoryEntry entry, std::size_t limit_bytes) {
   std::deque<HistoryEntry> kept;

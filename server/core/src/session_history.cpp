@@ -120,6 +120,37 @@ SessionImage EditSession::capture_whole(bool clone) {
   return image;
 }
 
+SessionImage EditSession::capture_tool(bool keep_fields) {
+  SessionImage image;
+  ToolOnlyImage o;
+  o.tool = tool_->image(false);
+  if (keep_fields) {
+    o.tool.fields.reset();
+    o.tool.fields_kept = true;
+  }
+  // A detector (and merge origins) as a reset from this very model made them: re-derived on restore.
+  if (tool_->detector_fresh(version_)) {
+    o.tool.detector.reset();
+    o.tool.merge.origin_positions.resize(0, 3);
+    o.tool.merge.origin_normals.resize(0, 3);
+    o.tool.derive_detector = true;
+  }
+  o.history = history_params_;
+  image.tool_only = std::move(o);
+  image.tool = tool_id_;
+  return image;
+}
+
+void EditSession::restore_tool(Tool& t, const ToolImage& image, bool clone) {
+  t.restore(image, clone);
+  if (!image.derive_detector || !t.fields || model_.empty()) return;
+  t.detector = fresh_detector(t.settings, *t.fields);
+  Tool* acting = tool_;
+  tool_ = &t;
+  take_origins();
+  tool_ = acting;
+}
+
 void EditSession::restore(const SessionImage& image, bool clone) {
   if (!image.complete) throw Error(ErrorCode::Internal, "history", "the image holds no detector state");
   Tool& t = use(image.tool);
@@ -140,6 +171,10 @@ void EditSession::restore(const SessionImage& image, bool clone) {
     else if (t.detector && t.journaling) t.detector->restore_journal();
     t.colliding = image.colliding;
     t.steps = image.steps;
+    t.fresh_at = 0;
+  } else if (image.tool_only) {
+    history_params_ = image.tool_only->history;
+    restore_tool(t, image.tool_only->tool, clone);
   } else {
     const WholeImage& w = *image.whole;
     model_ = w.model;
@@ -174,7 +209,9 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
   use(entry.image.tool);
-  SessionImage now = entry.image.rows ? capture_rows(*entry.image.rows->rows) : capture_whole(false);
+  SessionImage now = entry.image.rows        ? capture_rows(*entry.image.rows->rows)
+                     : entry.image.tool_only ? capture_tool(entry.image.tool_only->tool.fields_kept)
+                                             : capture_whole(false);
   const IdList ids_before = model_.ids();
   restore(entry.image, false);
   // A step's rows moved under the other tools' detectors (a whole image puts every tool back as it was).
@@ -254,7 +291,8 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
     if (!whole) tools_.at(e.image.tool).mark_stale(nullptr);
   } else {
     // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
-    const ToolImage& t = e.image.whole->tools.at(e.image.tool);
+    // (A whole image without touched surfels, e.g. a resampling step that moved nothing: its tool alone.)
+    const ToolImage& t = e.image.tool_only ? e.image.tool_only->tool : e.image.whole->tools.at(e.image.tool);
     if (t.fields && t.fields->regions.size() != static_cast<std::size_t>(model_.size()))
       throw Error(ErrorCode::Internal, "history", "the tool image does not fit the model");
     for (const auto& [id, other] : tools_) {
@@ -267,8 +305,8 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
       }
     }
     use(e.image.tool);
-    SessionImage now = capture_whole(false);
-    tool_->restore(t, false);
+    SessionImage now = e.image.tool_only ? capture_tool(t.fields_kept) : capture_whole(false);
+    restore_tool(*tool_, t, false);
     tool_->mark_stale(nullptr);
     history_.replace_image(e, std::move(now));
     v = ++version_;

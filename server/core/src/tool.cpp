@@ -6,8 +6,12 @@
 namespace surfeledit {
 
 std::size_t ToolImage::bytes() const {
+  const auto points = [](const Points& p) { return static_cast<std::size_t>(p.size()) * sizeof(double); };
   return sizeof(*this) + colliding.capacity() * sizeof(SurfelId) + (fields ? fields->memory_bytes() : 0) +
-         (detector ? detector->memory_bytes() : 0);
+         (detector ? detector->memory_bytes() : 0) + points(merge.origin_positions) + points(merge.origin_normals) +
+         points(merge.crease_positions) + points(merge.crease_from) +
+         static_cast<std::size_t>(merge.crease_radii.size()) * sizeof(double) +
+         (merge.features.capacity() + merge.crease_moved.capacity() + merge.crease_copies.capacity()) * sizeof(SurfelId);
 }
 
 ToolImage Tool::image(bool clone) const {
@@ -23,13 +27,17 @@ ToolImage Tool::image(bool clone) const {
 }
 
 void Tool::restore(const ToolImage& t, bool clone) {
-  if (t.fields) fields = std::make_unique<DeformationFields>(*t.fields);
-  else fields.reset();
+  if (!t.fields_kept) {
+    if (t.fields) fields = std::make_unique<DeformationFields>(*t.fields);
+    else fields.reset();
+  }
   settings = t.settings;
   detector = clone && t.detector ? std::shared_ptr<CollisionDetector>(t.detector->clone()) : t.detector;
   merge = t.merge;
   colliding = t.colliding;
   steps = t.steps;
+  fresh_at = 0;
+  fresh_object = nullptr;
   // The rows moved since are not in the image: a stale tool that comes back is re-initialised.
   clear_stale();
   if (t.stale) mark_stale(nullptr);
@@ -62,6 +70,8 @@ void Tool::clear_stale() {
 void Tool::clear_regions() {
   fields.reset();
   detector.reset();
+  fresh_at = 0;
+  fresh_object = nullptr;
   colliding.clear();
   merge = MergeMemo();
   clear_stale();

@@ -18,7 +18,7 @@ class ImprovedSweep {
   explicit ImprovedSweep(const CollisionParams&) {}  // one thread always: nothing to take from the settings
   void reset() { mean_dist2_ = 0.0; }
 
-  Tally run(const SimpleKernel& kernel, const IndexList& rows, std::vector<SimpleKernel::State>& states,
+  Tally run(const SimpleKernel& kernel, const IndexList& rows, RowStates<SimpleKernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
             int threads, std::vector<std::uint8_t>& hit);
 

@@ -24,7 +24,7 @@
 //                int threads);
 //     // Row detector: the initial states of the deformable rows (`states` has #P entries).
 //     void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
-//               int threads, std::vector<State>& states) const;
+//               int threads, RowStates<State>& states) const;
 //     // The state right after reset of a point at p whose nearest zero surfel is `zero`.
 //     State init(const Vec3& p, const NearestZero& zero) const;
 //     // One step for a tested point. Returns the nearest-neighbour queries made (> 0: it was tested).
@@ -45,7 +45,7 @@
 //     // for them and the states of `deformable` that depended on where they were; false, nothing
 //     // changed, when the kernel cannot (the detector is then reset).
 //     bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-//                         std::vector<State>& states, int threads);
+//                         RowStates<State>& states, int threads);
 //     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
 //     const ZeroSet* zero_set() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
@@ -101,11 +101,58 @@ struct Sphere {
   }
 };
 
+// One state per deformable row, indexed by model row (issue 14): rows without a state (zero rows) hold
+// nothing but their entry of the row -> slot map (4 bytes), and are never indexed. States are kept in
+// ascending row order, so a sweep over the deformable rows walks them in storage order.
+template <typename State>
+class RowStates {
+ public:
+  // `rows` model rows; the rows `with_state` (ascending) get a default State.
+  void assign(Index rows, const IndexList& with_state) {
+    slot_.assign(static_cast<std::size_t>(rows), -1);
+    dense_.assign(with_state.size(), State());
+    for (std::size_t q = 0; q < with_state.size(); ++q) slot_[static_cast<std::size_t>(with_state[q])] = static_cast<Index>(q);
+  }
+  template <typename I>
+  State& operator[](I r) { return dense_[static_cast<std::size_t>(slot_[static_cast<std::size_t>(r)])]; }
+  template <typename I>
+  const State& operator[](I r) const { return dense_[static_cast<std::size_t>(slot_[static_cast<std::size_t>(r)])]; }
+  // Model rows (with or without a state).
+  std::size_t size() const { return slot_.size(); }
+  // Appends a row with state `s` (after every row that has one).
+  void push_back(const State& s) {
+    slot_.push_back(static_cast<Index>(dense_.size()));
+    dense_.push_back(s);
+  }
+  // Keeps the rows with keep[r] (one flag per row), in order.
+  void compact(const std::vector<bool>& keep) {
+    std::size_t w = 0, d = 0;
+    for (std::size_t r = 0; r < slot_.size(); ++r) {
+      if (!keep[r]) continue;
+      const Index s = slot_[r];
+      if (s >= 0) {
+        dense_[d] = dense_[static_cast<std::size_t>(s)];  // s >= d: states are in row order
+        slot_[w] = static_cast<Index>(d++);
+      } else {
+        slot_[w] = -1;
+      }
+      ++w;
+    }
+    slot_.resize(w);
+    dense_.resize(d);
+  }
+  std::size_t memory_bytes() const { return slot_.capacity() * sizeof(Index) + dense_.capacity() * sizeof(State); }
+
+ private:
+  std::vector<Index> slot_;   // #P: index into dense_, -1 for a row without a state
+  std::vector<State> dense_;  // one per row with a state, in ascending row order
+};
+
 // The initial states of `rows` (ascending) at their positions, multithreaded; `nearest(p)` gives
 // the NearestZero of p.
-template <typename Kernel, typename Nearest>
+template <typename Kernel, typename Nearest, typename States>
 void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads,
-                 Nearest nearest, std::vector<typename Kernel::State>& states) {
+                 Nearest nearest, States& states) {
   const Index n = static_cast<Index>(rows.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (Index q = 0; q < n; ++q) {
@@ -127,9 +174,9 @@ inline NearestZero nearest_zero(const ZeroSet& zero, const Vec3& p) {
 // (at its position in `scene` now) is selected; with `kSphere`, also every point whose sphere now holds
 // (strictly) a moved surfel. The others keep their states: no surface crossed them, and their spheres
 // still hold no reference surfel.
-template <bool kSphere, typename State>
+template <bool kSphere, typename States>
 IndexList rows_near_moved(const CollisionScene& scene, const IndexList& moved, double reach, const IndexList& deformable,
-                          const std::vector<State>& states, int threads) {
+                          const States& states, int threads) {
   IndexList out;
   if (moved.empty()) return out;
   const KdTree near(scene.positions, moved);
@@ -161,9 +208,8 @@ IndexList rows_near_moved(const CollisionScene& scene, const IndexList& moved, d
 
 // Appends the states of split surfels: rows first_child + k were split from parents[k] (all children
 // first, from their parent's state before the split; then the parents).
-template <typename Kernel>
-void split_states(const Kernel& kernel, const Points& positions, const IndexList& parents,
-                  std::vector<typename Kernel::State>& states) {
+template <typename Kernel, typename States>
+void split_states(const Kernel& kernel, const Points& positions, const IndexList& parents, States& states) {
   const Index first_child = static_cast<Index>(states.size());
   for (std::size_t k = 0; k < parents.size(); ++k)
     states.push_back(kernel.child(states[parents[k]], row3(positions, first_child + static_cast<Index>(k))));

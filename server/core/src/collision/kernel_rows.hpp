@@ -13,7 +13,7 @@ struct KernelRows {
 
   Kernel kernel;              // the per-point update and its references (zero set, original model)
   IndexList deformable;       // rows with region != Zero, ascending
-  std::vector<State> states;  // #P: one per row (zero rows unused)
+  RowStates<State> states;    // one per deformable row, indexed by model row
 
   explicit KernelRows(const CollisionParams& params) : kernel(params) {}
 
@@ -24,7 +24,7 @@ struct KernelRows {
     KernelRows out(params);
     split_rows(scene, out.deformable, zero_rows);
     out.kernel.reset(scene, out.deformable, zero_rows, threads);
-    out.states.resize(scene.regions.size());
+    out.states.assign(static_cast<Index>(scene.regions.size()), out.deformable);
     return out;
   }
 
@@ -42,7 +42,7 @@ struct KernelRows {
     IndexList new_row = remap_rows(keep);
     kernel.on_removed(keep, new_row);
     deformable = remap_list(deformable, keep, new_row);
-    compact(states, keep);
+    states.compact(keep);
     return new_row;
   }
 
@@ -57,7 +57,7 @@ struct KernelRows {
   }
 
   std::size_t memory_bytes() const {
-    return kernel.memory_bytes() + deformable.capacity() * sizeof(Index) + states.capacity() * sizeof(State);
+    return kernel.memory_bytes() + deformable.capacity() * sizeof(Index) + states.memory_bytes();
   }
 };
 

@@ -42,7 +42,7 @@ class RobustKernel {
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
   // Spheres start with the distance to the nearest zero surfel (a temporary tree over the zero rows).
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads,
-            std::vector<State>& states) const;
+            RowStates<State>& states) const;
   State init(const Vec3& p, const NearestZero& z) const {
     State s;
     s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
@@ -84,7 +84,10 @@ class RobustKernel {
   // A removed zero surfel leaves the original model too (the rigid part no longer has it); removed
   // deformable surfels stay in it (they still describe the undeformed shape).
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
-  void on_inserted(Index added) { orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1); }
+  void on_inserted(Index added) {
+    spell_out_rows();
+    orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1);
+  }
   // Moved zero rows take their new place in the original model (the rigid part is where it is now; the
   // deformable part's original surfaces stay where they were at reset), the snapshot's tree is rebuilt (a
   // new object), and the points a moved surface may have crossed or whose sphere holds a moved surfel
@@ -92,7 +95,7 @@ class RobustKernel {
   // compares a point's inside state with the rigid part where it is now. Not with an inside model
   // (winding, vote, swept).
   bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      std::vector<State>& states, int threads);
+                      RowStates<State>& states, int threads);
   const ZeroSet* zero_set() const { return nullptr; }
   std::size_t memory_bytes() const;
   // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
@@ -175,7 +178,17 @@ class RobustKernel {
 
   CollisionParams params_;
   Snapshot orig_;
-  IndexList orig_of_row_;  // #P: row of the original model, -1 for inserted rows
+  // #P: row of the original model, -1 for inserted rows; empty while it is the identity (no row was
+  // inserted or removed since the reset: 4 bytes per row saved).
+  IndexList orig_of_row_;
+  Index orig_of(Index r) const { return orig_of_row_.empty() ? r : orig_of_row_[static_cast<std::size_t>(r)]; }
+  std::size_t rows_now() const { return orig_of_row_.empty() ? orig_.zero.size() : orig_of_row_.size(); }
+  // orig_of_row_ as a list (before rows are inserted or removed).
+  void spell_out_rows() {
+    if (!orig_of_row_.empty()) return;
+    orig_of_row_.resize(orig_.zero.size());
+    for (std::size_t r = 0; r < orig_of_row_.size(); ++r) orig_of_row_[r] = static_cast<Index>(r);
+  }
   std::shared_ptr<const InsideModel> inside_;  // over the alive zero surfels; null with nearest and no swept
 };
 

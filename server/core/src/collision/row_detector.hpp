@@ -85,7 +85,7 @@ struct ParallelSweep {
 
   // `journal` (may be null): notes each row's state before its update.
   template <typename Kernel>
-  Tally run(const Kernel& kernel, const IndexList& rows, std::vector<typename Kernel::State>& states,
+  Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
             int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());

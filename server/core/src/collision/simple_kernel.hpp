@@ -53,7 +53,7 @@ class SimpleKernel : public ZeroSetKernel {
 
   using ZeroSetKernel::ZeroSetKernel;
 
-  void seed(const CollisionScene&, const IndexList&, const IndexList&, int, std::vector<State>&) const {}
+  void seed(const CollisionScene&, const IndexList&, const IndexList&, int, RowStates<State>&) const {}
   State init(const Vec3&, const NearestZero&) const { return {}; }
   double depth(const State& s, const Vec3&) const { return s.depth; }
   // One §4.1 test of s; returns it (Improved's sweep needs |d|^2).
@@ -76,7 +76,7 @@ class SimpleKernel : public ZeroSetKernel {
   // Every point queries its nearest zero surfel every step: the zero copies are all there is to update.
   // The points the moved surfaces may have crossed are tested without the step bound next time.
   bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      std::vector<State>& states, int threads) {
+                      RowStates<State>& states, int threads) {
     const double reach = zero_.move_rows(scene, rows);
     if (reach < 0.0) return false;
     for (Index r : rows_near_moved<false>(scene, rows, reach, deformable, states, threads)) states[r].unbounded = 1;

@@ -46,7 +46,7 @@ class TemporalKernel : public ZeroSetKernel {
   bool snapshottable() const { return !inside_; }
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
-            std::vector<State>& states) const {
+            RowStates<State>& states) const {
     seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p) { return nearest_zero(zero_, p); },
                 states);
   }
@@ -81,7 +81,7 @@ class TemporalKernel : public ZeroSetKernel {
   // surfel: tested at their next step, without the step bound. Not with an inside model
   // (winding, vote, swept): a moved part changes the solid those test against everywhere near it.
   bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      std::vector<State>& states, int threads) {
+                      RowStates<State>& states, int threads) {
     if (inside_) return false;
     const double reach = zero_.move_rows(scene, rows);
     if (reach < 0.0) return false;

@@ -52,6 +52,14 @@ struct SessionReport {
   std::size_t total_bytes = 0;
   double bytes_per_surfel = 0.0;
   std::string hierarchy_status;  // "fresh" | "refit" | "rebuilding", "" without a hierarchy
+  // The "history" structure split by image kind (history.hpp): "rows" (steps), "tool" (set_regions,
+  // configure, release), "whole" (every other op); each kind listed once, with its entry count.
+  struct HistoryKind {
+    std::string kind;
+    std::size_t entries = 0;
+    std::size_t bytes = 0;
+  };
+  std::vector<HistoryKind> history_kinds;
 };
 
 // What a back-off response did (§7 c).
@@ -281,6 +289,12 @@ class EditSession {
   // `clone`: the op changes the acting tool's detector in place, so the image keeps the live object (which
   // the rows images of earlier entries refer to) and the tool goes on with an independent clone.
   SessionImage capture_whole(bool clone);
+  // The acting tool alone (an op that changes nothing else: set_regions, configure, release); `keep_fields`:
+  // the op keeps the tool's fields (configure), so the image holds none.
+  SessionImage capture_tool(bool keep_fields);
+  // Puts a tool image back into `t`, re-deriving a detector the image does not hold (derive_detector)
+  // from the model as it is now.
+  void restore_tool(Tool& t, const ToolImage& image, bool clone);
   // Puts an image back (`clone`: a Whole image's detector is cloned, so the image can be reused).
   void restore(const SessionImage& image, bool clone);
   // Appends rows (the last parents.size() rows) as extend_rows does, with or without regions.

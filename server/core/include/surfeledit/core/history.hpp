@@ -8,10 +8,13 @@
 //    tangents, per-row versions as runs) and the detector's per-row states (DetectorImage) -- for row
 //    detectors only the states the step changed (the detector's journal); buffers of dropped entries
 //    are reused. A step whose response merges upgrades its image to a whole one then;
-//  - Whole: every other change (load, set_regions, configure, remove, a step with resampling, release):
-//    the whole model and every tool (tool.hpp: regions and fields, settings, and the detector object
-//    itself: the live one after a change that replaced it, else an independent clone() of the acting
-//    tool's; another tool's detector is never changed in place by an op that is not its own).
+//  - Tool: a change of the acting tool alone (set_regions, configure, release): that tool's state and
+//    the session's history bound, nothing model-sized (ToolOnlyImage). Its detector is not kept when
+//    it is exactly what a reset from the model as it is then makes (ToolImage::derive_detector);
+//  - Whole: every other change (load, remove, merge, a step with resampling, ...): the whole model and
+//    every tool (tool.hpp: regions and fields, settings, and the detector object itself: the live one
+//    after a change that replaced it, else an independent clone() of the acting tool's; another tool's
+//    detector is never changed in place by an op that is not its own).
 // Undo and redo are last-in first-out per author (issue 11 §3): an author undoes its own last applied
 // entry and redoes its own last undone one. While no other author's entry changed state after it, the
 // whole image is swapped (exactly as a single author's history); otherwise only the entry's own part is
@@ -57,9 +60,16 @@ struct WholeImage {
                                                        // themselves, the acting tool's cloned when asked)
 };
 
+// The acting tool alone: an op that changed nothing but that tool (and the history bound).
+struct ToolOnlyImage {
+  ToolImage tool;          // the tool's state (fields omitted when the op keeps them: ToolImage::fields_kept)
+  HistoryParams history;   // the session's history bound
+};
+
 // One side (before or after) of an entry.
 struct SessionImage {
-  std::optional<RowsImage> rows;    // exactly one of rows / whole
+  std::optional<RowsImage> rows;    // exactly one of rows / tool_only / whole
+  std::optional<ToolOnlyImage> tool_only;
   std::optional<WholeImage> whole;
   // Rows images: the state of the tool `tool` that they belong to (a step changes only its own tool).
   std::string tool;                 // author of the step (whole images: the acting tool)
@@ -73,6 +83,8 @@ struct SessionImage {
                                     // save_image): the image cannot be restored
 
   std::size_t bytes() const;
+  // "rows", "tool" or "whole" (the history's split by image kind, EditSession::history_bytes()).
+  const char* kind() const;
 };
 
 // What history() lists of an entry.

@@ -43,9 +43,13 @@ struct MergeMemo {
 
 // A tool's state as a history image holds it (history.hpp: WholeImage keeps every tool's).
 struct ToolImage {
-  std::optional<DeformationFields> fields;      // none before set_regions / after a release
+  std::optional<DeformationFields> fields;      // none before set_regions / after a release / fields_kept
+  bool fields_kept = false;                     // the op kept the fields (configure): restoring keeps the
+                                                // tool's own, which are the same (no copy held)
   SessionSettings settings;                     // its settings (history_mb is the session's, see below)
   std::shared_ptr<CollisionDetector> detector;  // the detector object (may be null)
+  bool derive_detector = false;                 // detector not held: restoring re-derives it (a reset from
+                                                // the model then, which is the model it was reset from)
   MergeMemo merge;
   IdList colliding;
   std::uint64_t steps = 0;
@@ -70,13 +74,28 @@ struct Tool {
   bool journaling = false;  // during deform(): the detector's journal holds the step's before-states
   Points previous;          // #P by 3: positions before the current step (reused between steps)
   std::shared_ptr<const IndexList> shared_rows;  // the row list of its last rows image (shared by images)
+  // The detector is exactly as a reset from the model made it, and nothing changed since: while the
+  // session's version is `fresh_at` (a nonzero version at which it was reset) and the detector object
+  // is `fresh_object` (and the tool is not stale). A tool image then need not hold the detector.
+  std::uint64_t fresh_at = 0;
+  const CollisionDetector* fresh_object = nullptr;
 
   bool has_regions() const { return fields != nullptr; }
   // Copies the state (the detector object itself, or an independent clone when `clone`: nullptr
   // when the detector cannot be cloned).
   ToolImage image(bool clone) const;
-  // Puts an image back (`clone`: the image's detector is cloned, so the image can be reused).
+  // Puts an image back (`clone`: the image's detector is cloned, so the image can be reused). With
+  // derive_detector, the detector is null after it: the caller re-derives it (EditSession::restore).
+  // With fields_kept, the fields stay as they are.
   void restore(const ToolImage& image, bool clone);
+  // Whether the detector is fresh at session version `version` (see fresh_at).
+  bool detector_fresh(std::uint64_t version) const {
+    return detector && !stale && fresh_at != 0 && fresh_at == version && fresh_object == detector.get();
+  }
+  void mark_fresh(std::uint64_t version) {
+    fresh_at = version;
+    fresh_object = detector.get();
+  }
   // Frees the regions, the detector and what they found (the settings stay).
   void clear_regions();
   // Another tool's op changed rows this tool treats as rigid: `moved` (ascending model rows, the row
