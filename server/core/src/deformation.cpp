@@ -644,7 +644,11 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
     const int count = static_cast<int>(std::min<Eigen::Index>(kBlock, n_moved - k0));
     block(sc, rows, F, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
   };
-  if (nthreads == 1 || n_moved < 4096) {
+  // Several threads only for about a millisecond of one-thread work or more (~20 ns a row with a
+  // rotation, RESULTS §24): below that, on a busy machine, waking a descheduled worker costs a scheduler
+  // tick, more than the whole loop (RESULTS §35; the detector's rule is the same, row_detector.hpp).
+  constexpr Eigen::Index kParallelMinMoved = 50000;
+  if (nthreads == 1 || n_moved < kParallelMinMoved) {
     for (Eigen::Index b = 0; b < n_blocks; ++b) run(b);
   } else {
 #pragma omp parallel for schedule(static) num_threads(nthreads)
