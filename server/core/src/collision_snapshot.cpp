@@ -169,7 +169,10 @@ void RobustKernel::load(SnapshotReader& in, Index rows) {
       static_cast<std::size_t>(orig.radii.size()) != n || orig.alive.size() != n) {
     in.fail("original model", "arrays of different lengths");
   }
-  if (orig_of_row.size() != static_cast<std::size_t>(rows)) in.fail("original rows", "not one per model row");
+  // Empty: the identity (no row inserted or removed since the reset), so the original model has one row per row.
+  if ((orig_of_row.empty() ? n : orig_of_row.size()) != static_cast<std::size_t>(rows)) {
+    in.fail("original rows", "not one per model row");
+  }
   for (Index o : orig_of_row)
     if (o < -1 || o >= static_cast<Index>(n)) in.fail("original rows", "row " + std::to_string(o) + " out of range");
   // The tree as reset / on_removed / on_rigid_moved build it: over every row while every zero surfel is

@@ -25,6 +25,11 @@ struct Table {
     if (p && index.emplace(p, static_cast<std::uint32_t>(list.size() + 1)).second) list.push_back(p);
   }
   std::uint32_t at(const T* p) const { return p ? index.at(p) : 0; }
+  // Like at(), but 0 for a pointer not in the table (never dereferenced: it may be stale).
+  std::uint32_t find(const T* p) const {
+    const auto it = index.find(p);
+    return it == index.end() ? 0 : it->second;
+  }
 };
 
 struct Tables {
@@ -50,6 +55,7 @@ struct Tables {
     }
     if (!im.complete && why.empty()) why = "history: an incomplete image";
     if (im.rows) row_lists.add(im.rows->rows.get());
+    if (im.tool_only) detector(im.tool_only->tool.detector.get(), "history");
     if (im.whole)
       for (const auto& [id, t] : im.whole->tools) detector(t.detector.get(), "history");
   }
@@ -128,9 +134,13 @@ void put_fields(SnapshotWriter& out, const DeformationFields& f) {
   out.f64(f.box_extent);
 }
 
+// `rows`: the model rows the fields must cover; kAnyRows: as many as they say (a tool-only image's
+// fields cover the model as it was when the image was taken).
+constexpr std::size_t kAnyRows = static_cast<std::size_t>(-1);
 DeformationFields get_fields(SnapshotReader& in, std::size_t rows) {
   DeformationFields f;
   f.regions = in.vec<Region>("regions");
+  if (rows == kAnyRows) rows = f.regions.size();
   f.deformable = in.vec<Index>("fields deformable rows");
   f.blend = in.mat<BlendRows>("fields blend");
   const double x = in.f64("box centre"), y = in.f64("box centre"), z = in.f64("box centre");
@@ -232,6 +242,8 @@ struct Loaded {
 void put_tool_image(SnapshotWriter& out, const Tables& t, const ToolImage& im) {
   out.boolean(im.fields.has_value());
   if (im.fields) put_fields(out, *im.fields);
+  out.boolean(im.fields_kept);
+  out.boolean(im.derive_detector);
   put_settings(out, im.settings);
   out.u32(t.detectors.at(im.detector.get()));
   put_merge(out, im.merge);
@@ -243,6 +255,9 @@ void put_tool_image(SnapshotWriter& out, const Tables& t, const ToolImage& im) {
 ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) {
   ToolImage im;
   if (in.boolean("tool fields")) im.fields = get_fields(in, rows);
+  im.fields_kept = in.boolean("tool fields kept");
+  im.derive_detector = in.boolean("tool derives its detector");
+  if (im.fields_kept && im.fields) in.fail("tool fields kept", "an image that keeps the fields holds none");
   im.settings = get_settings(in);
   im.detector = Loaded::pick(in, l.detectors, "tool detector");
   im.merge = get_merge(in);
@@ -262,6 +277,11 @@ void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
     out.mat(r.tangent_u);
     out.mat(r.tangent_v);
     put_pairs_of(out, r.version_runs);
+  }
+  out.boolean(im.tool_only.has_value());
+  if (im.tool_only) {
+    put_tool_image(out, t, im.tool_only->tool);
+    out.f64(im.tool_only->history.history_mb);
   }
   out.boolean(im.whole.has_value());
   if (im.whole) {
@@ -308,6 +328,12 @@ RowsImage get_rows_image(SnapshotReader& in, const Loaded& l) {
 SessionImage get_image(SnapshotReader& in, const Loaded& l) {
   SessionImage im;
   if (in.boolean("image has rows")) im.rows = get_rows_image(in, l);
+  if (in.boolean("image has tool")) {
+    ToolOnlyImage t;
+    t.tool = get_tool_image(in, l, kAnyRows);
+    t.history.history_mb = in.f64("image history_mb");
+    im.tool_only = std::move(t);
+  }
   if (in.boolean("image has whole")) {
     WholeImage w;
     w.model = get_model(in);
@@ -325,7 +351,8 @@ SessionImage get_image(SnapshotReader& in, const Loaded& l) {
     }
     im.whole = std::move(w);
   }
-  if (im.rows.has_value() == im.whole.has_value()) in.fail("image", "not exactly one of rows and whole");
+  if (int(im.rows.has_value()) + int(im.tool_only.has_value()) + int(im.whole.has_value()) != 1)
+    in.fail("image", "not exactly one of rows, tool and whole");
   im.tool = in.str("image tool");
   im.detector = Loaded::pick(in, l.images, "image detector states");
   im.detector_object = Loaded::pick(in, l.detectors, "image detector");
@@ -406,6 +433,8 @@ void EditSession::save(SnapshotWriter& out) const {
     out.boolean(tool.stale_rows_known);
     out.vec(tool.stale_rows);
     out.u32(t.row_lists.at(tool.shared_rows.get()));
+    out.u64(tool.fresh_at);
+    out.u32(t.detectors.find(tool.fresh_object));
   }
   out.boolean(tool_ != nullptr);
   out.str(tool_id_);
@@ -483,6 +512,8 @@ void EditSession::restore(SnapshotReader& in) {
     tool.stale_rows_known = in.boolean("tool stale rows known");
     tool.stale_rows = in.vec<Index>("tool stale rows");
     tool.shared_rows = Loaded::pick(in, l.row_lists, "tool row list");
+    tool.fresh_at = in.u64("tool fresh at");
+    tool.fresh_object = Loaded::pick(in, l.detectors, "tool fresh detector").get();
   }
   const bool has_acting = in.boolean("acting tool");
   std::string acting = in.str("acting tool author");

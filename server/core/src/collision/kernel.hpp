@@ -143,6 +143,16 @@ class RowStates {
   }
   std::size_t memory_bytes() const { return slot_.capacity() * sizeof(Index) + dense_.capacity() * sizeof(State); }
 
+  // The storage itself, for snapshots (row_detector.hpp put_states / get_states).
+  const std::vector<Index>& slots() const { return slot_; }
+  const std::vector<State>& dense() const { return dense_; }
+  // Adopts `slots` and `dense` as read from a snapshot; the caller has checked that the slots >= 0 are
+  // 0, 1, ... in row order and that there are dense.size() of them.
+  void adopt(std::vector<Index> slots, std::vector<State> dense) {
+    slot_ = std::move(slots);
+    dense_ = std::move(dense);
+  }
+
  private:
   std::vector<Index> slot_;   // #P: index into dense_, -1 for a row without a state
   std::vector<State> dense_;  // one per row with a state, in ascending row order

@@ -141,6 +141,27 @@ std::vector<State> get_states(SnapshotReader& in) {
   for (State& s : states) get_state(in, s);
   return states;
 }
+// A RowStates: its row -> slot map (each row's slot, -1 without a state), then its states.
+template <typename State>
+void put_states(SnapshotWriter& out, const RowStates<State>& states) {
+  out.vec(states.slots());
+  put_states(out, states.dense());
+}
+template <typename State>
+RowStates<State> get_row_states(SnapshotReader& in) {
+  std::vector<Index> slots = in.vec<Index>("detector state slots");
+  std::vector<State> dense = get_states<State>(in);
+  Index next = 0;
+  for (Index s : slots) {
+    if (s == -1) continue;
+    if (s != next) in.fail("detector state slots", "not the states in row order");
+    ++next;
+  }
+  if (static_cast<std::size_t>(next) != dense.size()) in.fail("detector state slots", "count differs from the states");
+  RowStates<State> out;
+  out.adopt(std::move(slots), std::move(dense));
+  return out;
+}
 // Rows of a snapshot: ascending, in [0, rows).
 void check_rows(SnapshotReader& in, const IndexList& list, Index rows, const char* what);
 
@@ -329,9 +350,13 @@ class RowDetector final : public NarrowDetector {
   void load_state(SnapshotReader& in) override {
     if (!snapshottable()) throw Error(ErrorCode::Internal, "snapshot", "this detector cannot be snapshotted");
     KernelRows<Kernel> rows(params_);
-    rows.states = get_states<typename Kernel::State>(in);
+    rows.states = get_row_states<typename Kernel::State>(in);
     rows.deformable = in.vec<Index>("deformable rows");
     check_rows(in, rows.deformable, rows.rows(), "deformable rows");
+    if (rows.states.dense().size() != rows.deformable.size()) in.fail("detector states", "not one per deformable row");
+    for (Index r : rows.deformable) {
+      if (rows.states.slots()[static_cast<std::size_t>(r)] < 0) in.fail("detector states", "a deformable row without one");
+    }
     rows.kernel.load(in, rows.rows());
     const double preprocess = in.f64("preprocess_ms");
     const std::uint32_t skip = in.u32("dense_skip");
