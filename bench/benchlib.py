@@ -10,7 +10,7 @@ import platform
 import statistics
 import time
 from pathlib import Path
-from typing import List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -61,6 +61,12 @@ def percentile(values: Sequence[float], q: float) -> float:
 
 def median(values: Sequence[float]) -> float:
     return statistics.median(values)
+
+
+def latency_stats(values: Sequence[float]) -> Dict[str, float]:
+    """Count, p50, p90, p99 and max of latencies (any unit; the benches' JSON and tables)."""
+    return {"n": len(values), "p50": median(values), "p90": percentile(values, 0.9),
+            "p99": percentile(values, 0.99), "max": max(values)}
 
 
 def table(header: Sequence[str], rows: List[Sequence[object]]) -> str:

@@ -78,11 +78,6 @@ def worker(domain: int, session: str, spacing: float, steps: int) -> int:
     return 0
 
 
-def stats(values: List[float]) -> Dict[str, float]:
-    return {"n": len(values), "p50": benchlib.median(values), "p90": benchlib.percentile(values, 0.9),
-            "p99": benchlib.percentile(values, 0.99), "max": max(values)}
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build-dir")
@@ -137,13 +132,13 @@ def main() -> int:
             for s in servers:
                 s.terminate()
                 s.wait(timeout=20)
-    results = {k: stats(v) for k, v in samples.items()}
+    results = {k: benchlib.latency_stats(v) for k, v in samples.items()}
     print()
     print(benchlib.table(["step round trip (Python client)", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"],
                          [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
                           for k, st in results.items()]))
     diffs = [a - b for a, b in zip(samples[ON], samples[OFF])]
-    results["paired difference"] = stats(diffs)
+    results["paired difference"] = benchlib.latency_stats(diffs)
     print(f"secured / plain (same binding) at p50: {results[ON]['p50'] / results[OFF]['p50']:.2f}x; median of the "
           f"paired differences (on - off, same step index): {benchlib.median(diffs):+.3f} ms; {n_surfels:,} surfels, "
           f"{args.rounds} rounds x {args.steps} step pairs (after {args.warmup} warm-up pairs)")

@@ -64,11 +64,6 @@ def run_probe(probe: Path, domains: Dict[str, int], alice: Path, args: argparse.
     return {k: v[args.warmup:] for k, v in out.items()}
 
 
-def stats(values: List[float]) -> Dict[str, float]:
-    return {"n": len(values), "p50": benchlib.median(values), "p90": benchlib.percentile(values, 0.9),
-            "p99": benchlib.percentile(values, 0.99), "max": max(values)}
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build-dir")
@@ -107,14 +102,14 @@ def main() -> int:
             for s in servers.values():
                 s.terminate()
                 s.wait(timeout=20)
-    results = {k: stats(v) for k, v in samples.items()}
+    results = {k: benchlib.latency_stats(v) for k, v in samples.items()}
     rows = [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
             for k, st in results.items()]
     print()
     print(benchlib.table(["step round trip", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"], rows))
     on, off = results["security on"]["p50"], results["security off"]["p50"]
     diffs = [a - b for a, b in zip(samples["security on"], samples["security off"])]
-    results["paired difference"] = stats(diffs)
+    results["paired difference"] = benchlib.latency_stats(diffs)
     print(f"security on / off at p50: {on / off:.2f}x; median of the paired differences (on - off, same step "
           f"index): {benchlib.median(diffs):+.3f} ms; {args.surfels_actual:,} surfels (half deformable), {args.rounds} rounds x "
           f"{args.steps} step pairs (after {args.warmup} warm-up pairs)")

@@ -133,11 +133,6 @@ def connect_when_up(domain: int, srv: subprocess.Popen, log: Path, timeout_s: fl
                 raise
 
 
-def stats(values: List[float]) -> Dict[str, float]:
-    return {"n": len(values), "p50": benchlib.median(values), "p99": benchlib.percentile(values, 0.99),
-            "max": max(values)}
-
-
 def run_scenes(client: "surfeledit.Client", echo: Echo, args: argparse.Namespace, threads: int,
                results: Dict[str, dict], rows: List[list]) -> None:
     for name, make in [("small", small_scene), ("60k", scene_60k)]:
@@ -179,8 +174,8 @@ def run_scenes(client: "surfeledit.Client", echo: Echo, args: argparse.Namespace
         pings += ping_block()
         sess.close()
         res = {"server_threads": threads, "surfels": len(sc["positions"]), "deformable": sc["deformable"],
-               "ping": stats(pings), "step": stats(rtt), "server_total": stats(total),
-               "server_apply": stats(apply_ms)}
+               "ping": benchlib.latency_stats(pings), "step": benchlib.latency_stats(rtt),
+               "server_total": benchlib.latency_stats(total), "server_apply": benchlib.latency_stats(apply_ms)}
         res["ratio_p50"] = res["step"]["p50"] / res["ping"]["p50"]
         res["ratio_p99"] = res["step"]["p99"] / res["ping"]["p99"]
         key = f"{name} (server --threads {threads})"

@@ -8,16 +8,13 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
-from typing import Sequence
 
 import pytest
 
 from surfeledit.security import security_available
 
-from service.conftest import REPO, ManagedProcess, free_domain, server_executable  # noqa: F401
-from surfeledit.server_process import server_args
+from service.conftest import REPO, SecuredServer, free_domain  # noqa: F401
 
 def pytest_report_header(config: pytest.Config) -> str:
     return ("secured client tests: on (this binding's libddsc has the DDS Security plugins)" if security_available()
@@ -36,23 +33,6 @@ def security_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
                     "--clients", "alice,bob,carol,dave", "--denied", "mallory", "--rogue", "eve"],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
-
-
-class SecuredServer(ManagedProcess):
-    def __init__(self, domain: int, log: Path, security: Path, extra: Sequence[str] = ()) -> None:
-        self.domain = domain
-        super().__init__([server_executable()] + server_args(domain, None) + ["--security", str(security)]
-                         + list(extra), log)
-
-    def wait_ready(self, timeout: float = 30.0) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if not self.alive:
-                pytest.fail(f"surfeledit-server exited with {self.proc.returncode}:\n{self.log_tail()}")
-            if "ready on domain" in self.log_tail(100_000):
-                return
-            time.sleep(0.05)
-        pytest.fail(f"surfeledit-server not ready within {timeout} s:\n{self.log_tail()}")
 
 
 @pytest.fixture

@@ -152,7 +152,7 @@ def test_roles_granted_to_authenticated_users(request, tmp_path: Path, security_
     nothing, gets the same NotFound as for a session that does not exist; bob's grant names one session."""
     from service.conftest import free_domain
 
-    from .conftest import SecuredServer
+    from service.conftest import SecuredServer
 
     srv = SecuredServer(free_domain(), tmp_path / "server.log", security_dir / "server" / "security.conf",
                         ["--grant", "bob=editor:shared", "--grant", "carol=viewer"])

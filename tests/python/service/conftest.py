@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Callable, Iterator, List, Optional, Tuple
+from typing import Callable, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 import pytest
@@ -118,6 +118,18 @@ class ManagedProcess:
         except OSError:
             return ""
 
+    def wait_ready(self, timeout: float = 30.0, text: str = "ready on domain") -> None:
+        """Until the log holds `text` (a server writes "ready on domain" once it serves, after any journal
+        recovery); fails the test if the process exits first or the time runs out."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if not self.alive:
+                pytest.fail(f"{Path(self.argv[0]).name} exited with {self.proc.returncode}:\n{self.log_tail()}")
+            if text in self.log_tail(100_000):
+                return
+            time.sleep(0.01)
+        pytest.fail(f"{Path(self.argv[0]).name} not ready within {timeout} s:\n{self.log_tail()}")
+
     def stop(self, grace: float = 5.0) -> Optional[int]:
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
@@ -127,6 +139,15 @@ class ManagedProcess:
                 self.proc.kill()
                 self.proc.wait()
         return self.proc.returncode
+
+
+class SecuredServer(ManagedProcess):
+    """A surfeledit-server with ``--security CONFIG`` (none: a plain one, the control case), no data root."""
+
+    def __init__(self, domain: int, log: Path, security: Optional[Path], extra: Sequence[str] = ()) -> None:
+        self.domain = domain
+        flags = ["--security", str(security)] if security else []
+        super().__init__([server_executable()] + server_args(domain, None) + flags + list(extra), log)
 
 
 class ServerProcess(ManagedProcess):

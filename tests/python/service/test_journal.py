@@ -17,7 +17,6 @@ from surfeledit._protocol import proto
 from surfeledit.local import LocalSession
 
 from .conftest import ServerProcess, free_domain, generated_scene, server_executable
-from .test_journal_crash import _wait_ready
 
 JOURNAL_EXIT = 3
 
@@ -25,7 +24,7 @@ JOURNAL_EXIT = 3
 def _server(tmp_path: Path, domain: int, journal: Path, n: int, *extra: str) -> ServerProcess:
     srv = ServerProcess(server_executable(), domain, tmp_path / f"server-{n}.log",
                         extra=("--journal", str(journal), "--threads", "1") + extra)
-    _wait_ready(srv)
+    srv.wait_ready(20.0)
     return srv
 
 
@@ -218,7 +217,7 @@ def test_load_file_is_replayed_from_the_file_and_a_changed_file_stops_recovery(t
         return srv
 
     srv = start(0)
-    _wait_ready(srv)
+    srv.wait_ready(20.0)
     client = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, reconnect=20.0)
     try:
         s = client.open_session("from-file")
@@ -228,7 +227,7 @@ def test_load_file_is_replayed_from_the_file_and_a_changed_file_stops_recovery(t
         srv.proc.kill()
         srv.proc.wait()
         srv = start(1)
-        _wait_ready(srv)
+        srv.wait_ready(20.0)
         assert int(s.info().state_hash) == want
         assert [h.op for h in s.history()] == ["load", "remove"]
         srv.stop()

@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import Dict, List, Tuple
 
 import numpy as np
-import pytest
 
 import surfeledit
 from surfeledit.demo import sphere_sectors
@@ -37,18 +36,6 @@ def _start(exe: str, domain: int, log: Path, journal: Path, sync: Tuple[str, ...
     return ServerProcess(exe, domain, log, extra=("--journal", str(journal), "--threads", "1") + sync)
 
 
-def _wait_ready(srv: ServerProcess, timeout: float = 20.0) -> None:
-    """Until the server logged that it serves (after its recovery)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if not srv.alive:
-            pytest.fail(f"surfeledit-server exited with {srv.proc.returncode}:\n{srv.log_tail()}")
-        if "ready on domain" in srv.log_tail(100000):
-            return
-        time.sleep(0.01)
-    pytest.fail(f"surfeledit-server did not get ready:\n{srv.log_tail()}")
-
-
 def _translation(client: int, i: int) -> Tuple[float, float, float]:
     """The scripted step of client `client`'s op `i` (small, away from the slab, never colliding)."""
     return (0.002 * ((i % 5) - 2) * (1 if client == 0 else -1), 0.001 * ((i * 7 + client) % 3 - 1), 0.003)
@@ -63,7 +50,7 @@ def _run(tmp_path: Path, sync: Tuple[str, ...], kills: int) -> None:
     servers = [srv]
     clients: List[surfeledit.Client] = []
     try:
-        _wait_ready(srv)
+        srv.wait_ready(20.0)
         positions, normals, radii, part = generated_scene(0.1)
         ids = np.arange(len(positions), dtype=np.uint64)  # the server numbers a loaded model 0..P-1
         # Two tools (issue 11 §1): each editing client moves one half of the sphere, the rest is rigid to it.
@@ -109,7 +96,7 @@ def _run(tmp_path: Path, sync: Tuple[str, ...], kills: int) -> None:
             srv.proc.wait()
             srv = _start(exe, domain, tmp_path / f"server-{next(logs)}.log", journal, sync)
             servers.append(srv)
-            _wait_ready(srv)
+            srv.wait_ready(20.0)
             info = viewer.info()  # read-only: the recovered state before anyone changes it again
             restarts.append((before, int(viewer.version), int(info.state_hash)))
             assert not errors, errors

@@ -20,8 +20,7 @@ from typing import Dict, List, Optional
 
 import pytest
 
-from .conftest import REPO, ManagedProcess, find_executable, free_domain, server_executable
-from surfeledit.server_process import server_args
+from .conftest import REPO, ManagedProcess, SecuredServer, find_executable, free_domain, server_executable
 
 def probe_executable() -> str:
     exe = find_executable("SURFELEDIT_SECURE_PROBE", "build/tests/surfeledit-secure-probe",
@@ -50,23 +49,6 @@ def stranger_dir(tmp_path_factory: pytest.TempPathFactory, security_dir: Path) -
                     "--clients", "alice", "--denied", "", "--rogue", ""],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
-
-
-class SecuredServer(ManagedProcess):
-    def __init__(self, domain: int, log: Path, security: Optional[Path]) -> None:
-        self.domain = domain
-        extra = ["--security", str(security)] if security else []
-        super().__init__([server_executable()] + server_args(domain, None) + extra, log)
-
-    def wait_ready(self, timeout: float = 30.0) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if not self.alive:
-                pytest.fail(f"surfeledit-server exited with {self.proc.returncode}:\n{self.log_tail()}")
-            if "ready on domain" in self.log_tail(100_000):
-                return
-            time.sleep(0.05)
-        pytest.fail(f"surfeledit-server not ready within {timeout} s:\n{self.log_tail()}")
 
 
 def start_server(request: pytest.FixtureRequest, tmp_path: Path, security: Optional[Path]) -> SecuredServer:
