@@ -6,10 +6,13 @@
 #include <map>
 #include <unordered_map>
 
+#include "session_snapshot_values.hpp"
 #include "surfeledit/core/detector_snapshot.hpp"
 #include "surfeledit/core/edit_session.hpp"
 
 namespace surfeledit {
+
+using namespace snapshot_values;
 
 namespace {
 
@@ -60,170 +63,6 @@ struct Tables {
       for (const auto& [id, t] : im.whole->tools) detector(t.detector.get(), "history");
   }
 };
-
-void put_pairs(SnapshotWriter& out, const std::vector<std::pair<std::uint64_t, std::uint64_t>>& v) {
-  out.u64(v.size());
-  out.u64(v.capacity());
-  for (const auto& [a, b] : v) {
-    out.u64(a);
-    out.u64(b);
-  }
-}
-template <typename A, typename B>
-std::vector<std::pair<A, B>> get_pairs(SnapshotReader& in, const char* what) {
-  const std::size_t n = in.count(what, 16);
-  std::vector<std::pair<A, B>> v;
-  v.reserve(in.capacity(what, n, sizeof(std::pair<A, B>)));
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::uint64_t a = in.u64(what), b = in.u64(what);
-    if (static_cast<std::uint64_t>(static_cast<B>(b)) != b) in.fail(what, "value out of range");
-    v.emplace_back(static_cast<A>(a), static_cast<B>(b));
-  }
-  return v;
-}
-
-template <typename A, typename B>
-void put_pairs_of(SnapshotWriter& out, const std::vector<std::pair<A, B>>& v) {
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> w;
-  w.reserve(v.capacity());
-  for (const auto& [a, b] : v) w.emplace_back(a, b);
-  put_pairs(out, w);
-}
-
-// A flag (false: no model, as before the first load), then the arrays, ids and next id.
-void put_model(SnapshotWriter& out, const SurfelModel& m) {
-  out.boolean(!m.empty());
-  if (m.empty()) return;
-  const SurfelArrays& a = m.arrays();
-  out.mat(a.positions);
-  out.mat(a.normals);
-  out.mat(a.radii);
-  out.mat(a.tangent_u);
-  out.mat(a.tangent_v);
-  out.mat(a.colors);
-  out.mat(a.clip_points);
-  out.mat(a.clip_dirs);
-  out.vec(m.ids());
-  out.u64(m.next_id());
-}
-
-SurfelModel get_model(SnapshotReader& in) {
-  if (!in.boolean("has model")) return SurfelModel();
-  SurfelArrays a;
-  a.positions = in.mat<Points>("positions");
-  a.normals = in.mat<Points>("normals");
-  a.radii = in.mat<Values>("radii");
-  a.tangent_u = in.mat<Points>("tangent_u");
-  a.tangent_v = in.mat<Points>("tangent_v");
-  a.colors = in.mat<Colors>("colors");
-  a.clip_points = in.mat<Points>("clip_points");
-  a.clip_dirs = in.mat<Points>("clip_dirs");
-  IdList ids = in.vec<SurfelId>("ids");
-  const SurfelId next = in.u64("next id");
-  if (ids.empty()) in.fail("ids", "an empty model");
-  return SurfelModel::from_parts(std::move(a), std::move(ids), next);
-}
-
-void put_fields(SnapshotWriter& out, const DeformationFields& f) {
-  out.vec(f.regions);
-  out.vec(f.deformable);
-  out.mat(f.blend);
-  out.f64(f.box_centre.x());
-  out.f64(f.box_centre.y());
-  out.f64(f.box_centre.z());
-  out.f64(f.box_extent);
-}
-
-// `rows`: the model rows the fields must cover; kAnyRows: as many as they say (a tool-only image's
-// fields cover the model as it was when the image was taken).
-constexpr std::size_t kAnyRows = static_cast<std::size_t>(-1);
-DeformationFields get_fields(SnapshotReader& in, std::size_t rows) {
-  DeformationFields f;
-  f.regions = in.vec<Region>("regions");
-  if (rows == kAnyRows) rows = f.regions.size();
-  f.deformable = in.vec<Index>("fields deformable rows");
-  f.blend = in.mat<BlendRows>("fields blend");
-  const double x = in.f64("box centre"), y = in.f64("box centre"), z = in.f64("box centre");
-  f.box_centre = Vec3(x, y, z);
-  f.box_extent = in.f64("box extent");
-  if (f.regions.size() != rows) in.fail("regions", "not one per row");
-  Index last = -1;
-  std::size_t deformable = 0;
-  for (std::size_t r = 0; r < rows; ++r) {
-    if (static_cast<std::uint8_t>(f.regions[r]) > static_cast<std::uint8_t>(Region::One)) in.fail("regions", "unknown region");
-    deformable += f.regions[r] != Region::Zero;
-  }
-  for (Index r : f.deformable) {
-    if (r <= last || static_cast<std::size_t>(r) >= rows || f.regions[r] == Region::Zero)
-      in.fail("fields deformable rows", "not the ascending deformable rows");
-    last = r;
-  }
-  if (f.deformable.size() != deformable || static_cast<std::size_t>(f.blend.rows()) != deformable)
-    in.fail("fields", "not one blend row per deformable row");
-  return f;
-}
-
-void put_settings(SnapshotWriter& out, const SessionSettings& s) {
-  const std::vector<NamedSetting> all = describe(s);
-  out.u64(all.size());
-  for (const NamedSetting& n : all) {
-    out.str(n.name);
-    out.u8(static_cast<std::uint8_t>(n.value.index()));
-    if (const double* d = std::get_if<double>(&n.value)) out.f64(*d);
-    else if (const std::int64_t* i = std::get_if<std::int64_t>(&n.value)) out.i64(*i);
-    else if (const bool* b = std::get_if<bool>(&n.value)) out.boolean(*b);
-    else out.str(std::get<std::string>(n.value));
-  }
-}
-
-SessionSettings get_settings(SnapshotReader& in) {
-  const std::size_t n = in.count("settings", 10);
-  std::vector<NamedSetting> all;
-  for (std::size_t k = 0; k < n; ++k) {
-    NamedSetting s;
-    s.name = in.str("setting name");
-    switch (in.u8("setting kind")) {
-      case 0: s.value = in.f64("setting"); break;
-      case 1: s.value = in.i64("setting"); break;
-      case 2: s.value = in.boolean("setting"); break;
-      case 3: s.value = in.str("setting"); break;
-      default: in.fail("setting kind", "unknown");
-    }
-    all.push_back(std::move(s));
-  }
-  try {
-    return apply_settings(SessionSettings{}, all);
-  } catch (const Error& e) {
-    in.fail("settings", e.what());
-  }
-}
-
-void put_merge(SnapshotWriter& out, const MergeMemo& m) {
-  out.mat(m.origin_positions);
-  out.mat(m.origin_normals);
-  out.mat(m.crease_positions);
-  out.mat(m.crease_radii);
-  out.vec(m.features);
-  out.vec(m.crease_moved);
-  out.mat(m.crease_from);
-  out.vec(m.crease_copies);
-  out.boolean(m.open_region);
-}
-
-MergeMemo get_merge(SnapshotReader& in) {
-  MergeMemo m;
-  m.origin_positions = in.mat<Points>("merge origins");
-  m.origin_normals = in.mat<Points>("merge origin normals");
-  m.crease_positions = in.mat<Points>("crease positions");
-  m.crease_radii = in.mat<Values>("crease radii");
-  m.features = in.vec<SurfelId>("features");
-  m.crease_moved = in.vec<SurfelId>("crease moved");
-  m.crease_from = in.mat<Points>("crease from");
-  m.crease_copies = in.vec<SurfelId>("crease copies");
-  m.open_region = in.boolean("open region");
-  if (static_cast<std::size_t>(m.crease_from.rows()) != m.crease_moved.size()) in.fail("crease from", "one row per moved id");
-  return m;
-}
 
 // The objects the tables index, on load.
 struct Loaded {
