@@ -5,6 +5,7 @@ Not a benchmark itself; the drivers put bench/ on sys.path and import it.
 
 from __future__ import annotations
 
+import json
 import os
 import platform
 import statistics
@@ -67,6 +68,26 @@ def latency_stats(values: Sequence[float]) -> Dict[str, float]:
     """Count, p50, p90, p99 and max of latencies (any unit; the benches' JSON and tables)."""
     return {"n": len(values), "p50": median(values), "p90": percentile(values, 0.9),
             "p99": percentile(values, 0.99), "max": max(values)}
+
+
+def report_paired(samples: Dict[str, List[float]], on: str, off: str, title: str, context: str,
+                  json_out: Optional[str] = None) -> Dict[str, Dict[str, float]]:
+    """Prints the latency table of every sample list, the `on` / `off` ratio at p50 and the median of their
+    paired differences (same index: the two were measured alternately), then the machine line; writes the
+    statistics as JSON to `json_out` when given. Returns them."""
+    results = {k: latency_stats(v) for k, v in samples.items()}
+    print()
+    print(table([title, "n", "p50 ms", "p90 ms", "p99 ms", "max ms"],
+                [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
+                 for k, st in results.items()]))
+    diffs = [a - b for a, b in zip(samples[on], samples[off])]
+    results["paired difference"] = latency_stats(diffs)
+    print(f"{on} / {off} at p50: {results[on]['p50'] / results[off]['p50']:.2f}x; median of the paired differences "
+          f"({on} - {off}, same step index): {median(diffs):+.3f} ms; {context}")
+    print(machine_line())
+    if json_out:
+        Path(json_out).write_text(json.dumps(results, indent=2))
+    return results
 
 
 def table(header: Sequence[str], rows: List[Sequence[object]]) -> str:

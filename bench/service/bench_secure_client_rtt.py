@@ -132,19 +132,9 @@ def main() -> int:
             for s in servers:
                 s.terminate()
                 s.wait(timeout=20)
-    results = {k: benchlib.latency_stats(v) for k, v in samples.items()}
-    print()
-    print(benchlib.table(["step round trip (Python client)", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"],
-                         [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
-                          for k, st in results.items()]))
-    diffs = [a - b for a, b in zip(samples[ON], samples[OFF])]
-    results["paired difference"] = benchlib.latency_stats(diffs)
-    print(f"secured / plain (same binding) at p50: {results[ON]['p50'] / results[OFF]['p50']:.2f}x; median of the "
-          f"paired differences (on - off, same step index): {benchlib.median(diffs):+.3f} ms; {n_surfels:,} surfels, "
-          f"{args.rounds} rounds x {args.steps} step pairs (after {args.warmup} warm-up pairs)")
-    print(benchlib.machine_line())
-    if args.json_out:
-        Path(args.json_out).write_text(json.dumps(results, indent=2))
+    benchlib.report_paired(samples, ON, OFF, "step round trip (Python client)",
+                           f"{n_surfels:,} surfels, {args.rounds} rounds x {args.steps} step pairs (after "
+                           f"{args.warmup} warm-up pairs)", args.json_out)
     return 0
 
 

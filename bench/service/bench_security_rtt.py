@@ -22,7 +22,6 @@ same probe, so the difference is the security (encryption and signing of every s
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -102,20 +101,9 @@ def main() -> int:
             for s in servers.values():
                 s.terminate()
                 s.wait(timeout=20)
-    results = {k: benchlib.latency_stats(v) for k, v in samples.items()}
-    rows = [[k, st["n"], f"{st['p50']:.3f}", f"{st['p90']:.3f}", f"{st['p99']:.3f}", f"{st['max']:.3f}"]
-            for k, st in results.items()]
-    print()
-    print(benchlib.table(["step round trip", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"], rows))
-    on, off = results["security on"]["p50"], results["security off"]["p50"]
-    diffs = [a - b for a, b in zip(samples["security on"], samples["security off"])]
-    results["paired difference"] = benchlib.latency_stats(diffs)
-    print(f"security on / off at p50: {on / off:.2f}x; median of the paired differences (on - off, same step "
-          f"index): {benchlib.median(diffs):+.3f} ms; {args.surfels_actual:,} surfels (half deformable), {args.rounds} rounds x "
-          f"{args.steps} step pairs (after {args.warmup} warm-up pairs)")
-    print(benchlib.machine_line())
-    if args.json_out:
-        Path(args.json_out).write_text(json.dumps(results, indent=2))
+    benchlib.report_paired(samples, "security on", "security off", "step round trip",
+                           f"{args.surfels_actual:,} surfels (half deformable), {args.rounds} rounds x {args.steps} "
+                           f"step pairs (after {args.warmup} warm-up pairs)", args.json_out)
     return 0
 
 
