@@ -30,29 +30,18 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import benchlib  # noqa: E402
+from common import start_server  # noqa: E402
 
 import surfeledit  # noqa: E402
 from surfeledit.demo import default_scene  # noqa: E402
 
 ON, OFF, WHEEL = "secured (0.10.2 binding)", "plain (0.10.2 binding)", "plain (11.0.1 wheel)"
-
-
-def start_server(exe: Path, domain: int, security: Optional[Path], log: Path) -> subprocess.Popen:
-    args = [str(exe), "--domain", str(domain)] + (["--security", str(security)] if security else [])
-    with log.open("w") as f:
-        srv = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 60
-    while "ready on domain" not in log.read_text():
-        if srv.poll() is not None or time.monotonic() > deadline:
-            raise RuntimeError(f"surfeledit-server did not start:\n{log.read_text()[-2000:]}")
-        time.sleep(0.05)
-    return srv
 
 
 def prepare(client: "surfeledit.Client", name: str, spacing: float) -> "surfeledit.Session":

@@ -26,24 +26,12 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import benchlib  # noqa: E402
-
-
-def start_server(exe: Path, domain: int, security: Optional[Path], log: Path) -> subprocess.Popen:
-    args = [str(exe), "--domain", str(domain)] + (["--security", str(security)] if security else [])
-    with log.open("w") as f:
-        srv = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 60
-    while "ready on domain" not in log.read_text():
-        if srv.poll() is not None or time.monotonic() > deadline:
-            raise RuntimeError(f"surfeledit-server did not start:\n{log.read_text()[-2000:]}")
-        time.sleep(0.05)
-    return srv
+from common import start_server  # noqa: E402
 
 
 def run_probe(probe: Path, domains: Dict[str, int], alice: Path, args: argparse.Namespace, tag: str) -> Dict[str, List[float]]:
