@@ -416,7 +416,8 @@ void bind_edit_session(pyb::module_& m) {
         d["history_kinds"] = kinds;
         return d;
       }, "What the session holds: surfels, structures {name: bytes}, total_bytes, bytes_per_surfel, "
-         "hierarchy_status, history_kinds {rows|tool|whole: {entries, bytes}}");
+         "hierarchy_status, history_kinds {rows|tool|whole|detectors: {entries, bytes}} (detectors: objects only the "
+         "history keeps alive; entries counts them)");
 }
 
 }  // namespace surfeledit::py

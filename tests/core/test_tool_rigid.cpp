@@ -191,5 +191,54 @@ TEST(ToolRigid, AnOwnPartUndoFallsBackToTheReinitialisation) {
   EXPECT_GT(expect_exact(s, "a", r.colliding, "after the undo"), 5u);
 }
 
+// A stale tool's detector follows the other tool's moves on a clone while history images still refer to
+// the old object (EditSession::sync_tool); the history's bound counts those objects once no tool holds
+// them, so alternating steps cannot grow the history past history_mb (before, each step of the swing
+// left one more whole detector in it, uncounted).
+TEST(ToolRigid, TheHistoryBoundCountsTheDetectorsItKeepsAlive) {
+  Swing s({{"algorithm", std::string("robust")}}, true);
+  const auto report_of = [&] {
+    struct {
+      std::size_t history = 0, detector = 0, held_objects = 0, held_bytes = 0, kinds = 0;
+    } r;
+    const SessionReport rep = s.session.report();
+    for (const auto& st : rep.structures) {
+      if (st.name == "history") r.history = st.bytes;
+      if (st.name == "collision_robust") r.detector = std::max(r.detector, st.bytes);  // one per tool
+    }
+    for (const auto& k : rep.history_kinds) {
+      r.kinds += k.bytes;
+      if (k.kind == "detectors") r.held_objects = k.entries, r.held_bytes = k.bytes;
+    }
+    return r;
+  };
+  for (int k = 0; k < 4; ++k) {
+    s.move("a", 0.01);
+    s.move("b", -0.01);
+  }
+  const auto unbounded = report_of();
+  // Each alternating step after the first left the object its tool followed from.
+  ASSERT_GE(unbounded.held_objects, 5u);
+  EXPECT_GE(unbounded.held_bytes, unbounded.held_objects * unbounded.detector * 9 / 10);
+  EXPECT_EQ(unbounded.kinds, unbounded.history);
+
+  // A bound of about three detectors: it holds after every step, and the newest steps still undo.
+  const double mb = 3.0 * static_cast<double>(unbounded.detector) / (1024.0 * 1024.0);
+  s.session.configure({{"history_mb", mb}}, "a");
+  const std::size_t limit = static_cast<std::size_t>(mb * 1024.0 * 1024.0);
+  for (int k = 0; k < 6; ++k) {
+    s.move("a", 0.01);
+    s.move("b", -0.01);
+    const auto r = report_of();
+    EXPECT_LE(r.history, limit) << "round " << k;
+    EXPECT_LE(r.held_objects, 3u) << "round " << k;
+  }
+  const std::uint64_t hash = s.session.state_hash();
+  s.session.undo("b");
+  EXPECT_NE(s.session.state_hash(), hash);
+  s.session.redo("b");
+  EXPECT_EQ(s.session.state_hash(), hash);
+}
+
 }  // namespace
 }  // namespace surfeledit

@@ -488,6 +488,9 @@ SessionReport EditSession::report() const {
       k.bytes += e.bytes;
     }
   }
+  // Detector objects only the history keeps alive (history.hpp): "entries" counts the objects.
+  const History::Held held = history_.held_detectors();
+  rep.history_kinds.push_back({"detectors", held.objects, held.bytes});
   for (const auto& s : rep.structures) rep.total_bytes += s.bytes;
   rep.bytes_per_surfel = rep.surfels ? static_cast<double>(rep.total_bytes) / rep.surfels : 0.0;
   return rep;

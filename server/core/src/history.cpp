@@ -43,15 +43,14 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
   entry.item.undone = false;
   entry.stamp = entry.applied_at = entry.item.version;
   entries_.push_back(std::move(entry));
-  recount();  // the dropped redo tail
   HistoryEntry& e = entries_.back();
   e.bytes = e.image.bytes();
-  bytes_ += e.bytes;
+  recount();  // the dropped redo tail, and the new entry
   trim(limit_bytes);
 }
 
 void History::trim(std::size_t limit_bytes) {
-  while (!entries_.empty() && bytes_ > limit_bytes) {
+  while (!entries_.empty() && bytes() > limit_bytes) {
     HistoryEntry& front = entries_.front();
     if (front.item.undone) {
       // Its author's later undone entries are redone after it: they cannot be redone without it.
@@ -66,6 +65,7 @@ void History::trim(std::size_t limit_bytes) {
       continue;
     }
     bytes_ -= front.bytes;
+    count_object(front.image, -1);
     keep_spare(front);
     entries_.pop_front();
   }
@@ -116,6 +116,7 @@ RowsImage History::take_spare() {
 void History::clear() {
   entries_.clear();
   bytes_ = 0;
+  refs_.clear();
 }
 
 std::vector<HistoryItem> History::items() const {
@@ -133,14 +134,40 @@ void History::restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> s
 
 void History::recount() {
   bytes_ = 0;
-  for (const HistoryEntry& e : entries_) bytes_ += e.bytes;
+  refs_.clear();
+  for (const HistoryEntry& e : entries_) {
+    bytes_ += e.bytes;
+    count_object(e.image, +1);
+  }
+}
+
+void History::count_object(const SessionImage& image, int sign) {
+  const CollisionDetector* key = image.detector_object.get();
+  if (!key) return;
+  Ref& r = refs_[key];
+  if (sign > 0 && r.refs == 0) r.object = image.detector_object;
+  r.refs += sign;
+  if (r.refs <= 0) refs_.erase(key);
+}
+
+History::Held History::held_detectors() const {
+  // An object whose owners are exactly the images that refer to it: no tool and no tool image holds it.
+  Held h;
+  for (const auto& [key, r] : refs_) {
+    if (r.object.use_count() != r.refs) continue;
+    ++h.objects;
+    h.bytes += key->memory_bytes();
+  }
+  return h;
 }
 
 void History::replace_image(HistoryEntry& entry, SessionImage image) {
   bytes_ -= entry.bytes;
+  count_object(entry.image, -1);
   entry.image = std::move(image);
   entry.bytes = entry.image.bytes();
   bytes_ += entry.bytes;
+  count_object(entry.image, +1);
 }
 
 }  // namespace surfeledit

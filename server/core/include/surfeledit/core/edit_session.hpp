@@ -59,7 +59,8 @@ struct SessionReport {
     std::size_t entries = 0;
     std::size_t bytes = 0;
   };
-  std::vector<HistoryKind> history_kinds;
+  std::vector<HistoryKind> history_kinds;  // rows, tool, whole (entries by image kind), detectors (objects
+                                           // only the history keeps alive: entries = objects)
 };
 
 // What a back-off response did (§7 c).

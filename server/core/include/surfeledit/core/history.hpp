@@ -15,6 +15,10 @@
 //    every tool (tool.hpp: regions and fields, settings, and the detector object itself: the live one
 //    after a change that replaced it, else an independent clone() of the acting tool's; another tool's
 //    detector is never changed in place by an op that is not its own).
+// The bound counts what the entries keep alive: their images' own bytes, and every detector object a
+// rows image refers to (SessionImage::detector_object) once no tool holds it any more -- the object a
+// stale tool's detector was cloned from before it followed another tool's moved rows
+// (EditSession::sync_tool) lives on only for the images that refer to it.
 // Undo and redo are last-in first-out per author (issue 11 §3): an author undoes its own last applied
 // entry and redoes its own last undone one. While no other author's entry changed state after it, the
 // whole image is swapped (exactly as a single author's history); otherwise only the entry's own part is
@@ -26,6 +30,7 @@
 #include <deque>
 #include <map>
 #include <memory>
+#include <unordered_map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -126,7 +131,14 @@ class History {
   void clear();
 
   std::vector<HistoryItem> items() const;
-  std::size_t bytes() const { return bytes_; }
+  // Bytes held: the entries' images plus the detector objects only they keep alive (held_detectors()).
+  std::size_t bytes() const { return bytes_ + held_detectors().bytes; }
+  // The detector objects that rows images refer to and nothing else holds (no tool, no tool image).
+  struct Held {
+    std::size_t objects = 0;
+    std::size_t bytes = 0;  // their memory_bytes()
+  };
+  Held held_detectors() const;
   // Replaces an entry's image (undo / redo swap), keeping the byte count.
   void replace_image(HistoryEntry& entry, SessionImage image);
   // Snapshots (session_snapshot.cpp): the entries and spare buffers as saved (each entry's `bytes` kept).
@@ -140,11 +152,19 @@ class History {
   // Keeps the rows image of an entry about to be dropped (at most two are kept).
   void keep_spare(HistoryEntry& entry);
 
-  // Sums the entries' bytes (after entries were dropped).
+  // Sums the entries' bytes and counts their detector objects again (after entries were dropped).
   void recount();
+  // Counts an image's detector object in (+1) or out (-1) of refs_.
+  void count_object(const SessionImage& image, int sign);
 
   std::deque<HistoryEntry> entries_;
-  std::size_t bytes_ = 0;
+  std::size_t bytes_ = 0;  // the entries' own bytes (HistoryEntry::bytes)
+  // Per detector object that images refer to: the object (not owned) and how many images do.
+  struct Ref {
+    std::weak_ptr<CollisionDetector> object;
+    long refs = 0;
+  };
+  std::unordered_map<const CollisionDetector*, Ref> refs_;
   std::vector<RowsImage> spare_;  // buffers of dropped entries
 };
 
