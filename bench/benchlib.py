@@ -5,12 +5,16 @@ Not a benchmark itself; the drivers put bench/ on sys.path and import it.
 
 from __future__ import annotations
 
+import argparse
+import importlib
 import json
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
+from types import ModuleType
 from typing import Dict, List, Optional, Sequence
 
 REPO = Path(__file__).resolve().parents[1]
@@ -44,6 +48,19 @@ def wait_for_low_load(max_load: float, timeout_s: float) -> None:
     while os.getloadavg()[0] >= max_load and time.monotonic() < deadline:
         time.sleep(5)
     print(f"load before start: {load_average()} (waited for 1-min load < {max_load} up to {timeout_s:.0f} s)")
+
+
+def add_package_arg(ap: argparse.ArgumentParser) -> None:
+    """--package DIR: import surfeledit from DIR (a copy of another build's package) for an A/B."""
+    ap.add_argument("--package", default="", help="directory to import surfeledit from (A/B)")
+
+
+def import_surfeledit(package: str) -> ModuleType:
+    """Imports surfeledit, from `package` first when given (add_package_arg); interleave runs of two
+    packages in one period for a fair comparison."""
+    if package:
+        sys.path.insert(0, str(Path(package).resolve()))
+    return importlib.import_module("surfeledit")
 
 
 def build_dir(explicit: Optional[str]) -> Path:

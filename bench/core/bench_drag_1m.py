@@ -18,6 +18,9 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -26,14 +29,10 @@ def main() -> int:
     ap.add_argument("--algorithm", default="temporal")
     ap.add_argument("--knn-eps", type=float, default=2.0)
     ap.add_argument("--rounds", type=int, default=1, help="runs of the scenario per thread count")
-    ap.add_argument("--package", default="", help="directory to import surfeledit from (A/B)")
+    benchlib.add_package_arg(ap)
     args = ap.parse_args()
-    if args.package:
-        sys.path.insert(0, str(Path(args.package).resolve()))
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    import benchlib  # noqa: E402
-    import surfeledit  # noqa: E402
-    from surfeledit import scenario as S  # noqa: E402
+    surfeledit = benchlib.import_surfeledit(args.package)
+    from surfeledit import scenario as S
 
     print(f"# surfeledit from {Path(surfeledit.__file__).parent}; {benchlib.load_average()}", flush=True)
     sc = S.make_scenario("piercing", scale=args.scale, seed=1)

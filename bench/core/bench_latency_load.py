@@ -28,6 +28,9 @@ from typing import Dict, List, Tuple
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
 
 def spin(stop: "mp.synchronize.Event") -> None:
     """A busy loop until `stop` is set (one process of the concurrent load)."""
@@ -68,14 +71,10 @@ def main() -> int:
     ap.add_argument("--load", type=int, default=os.cpu_count() or 2, help="busy processes of the loaded runs")
     ap.add_argument("--idle-steps", type=int, default=200)
     ap.add_argument("--threads", default="1,2", help="comma-separated thread counts")
-    ap.add_argument("--package", default="", help="directory to import surfeledit from (A/B)")
+    benchlib.add_package_arg(ap)
     args = ap.parse_args()
-    if args.package:
-        sys.path.insert(0, str(Path(args.package).resolve()))
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    import benchlib  # noqa: E402
-    import surfeledit  # noqa: E402
-    from surfeledit import scenario as S  # noqa: E402
+    surfeledit = benchlib.import_surfeledit(args.package)
+    from surfeledit import scenario as S
 
     print(f"# surfeledit from {Path(surfeledit.__file__).parent}; {benchlib.machine_line()}", flush=True)
     sc = S.make_scenario("piercing", scale=1.0, seed=1)

@@ -106,17 +106,19 @@ ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) 
   return im;
 }
 
+// A rows image (an entry's or a spare buffer); get_rows_image reads it.
+void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r) {
+  out.u32(t.row_lists.at(r.rows.get()));
+  out.mat(r.positions);
+  out.mat(r.normals);
+  out.mat(r.tangent_u);
+  out.mat(r.tangent_v);
+  put_pairs_of(out, r.version_runs);
+}
+
 void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
   out.boolean(im.rows.has_value());
-  if (im.rows) {
-    const RowsImage& r = *im.rows;
-    out.u32(t.row_lists.at(r.rows.get()));
-    out.mat(r.positions);
-    out.mat(r.normals);
-    out.mat(r.tangent_u);
-    out.mat(r.tangent_v);
-    put_pairs_of(out, r.version_runs);
-  }
+  if (im.rows) put_rows_image(out, t, *im.rows);
   out.boolean(im.tool_only.has_value());
   if (im.tool_only) {
     put_tool_image(out, t, im.tool_only->tool);
@@ -287,14 +289,7 @@ void EditSession::save(SnapshotWriter& out) const {
     out.u64(e.applied_at);
   }
   out.u64(history_.spare().size());
-  for (const RowsImage& r : history_.spare()) {
-    out.u32(t.row_lists.at(r.rows.get()));
-    out.mat(r.positions);
-    out.mat(r.normals);
-    out.mat(r.tangent_u);
-    out.mat(r.tangent_v);
-    put_pairs_of(out, r.version_runs);
-  }
+  for (const RowsImage& r : history_.spare()) put_rows_image(out, t, r);
 }
 
 void EditSession::restore(SnapshotReader& in) {

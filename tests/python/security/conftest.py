@@ -14,7 +14,7 @@ import pytest
 
 from surfeledit.security import security_available
 
-from service.conftest import REPO, SecuredServer, free_domain  # noqa: F401
+from service.conftest import REPO, SecuredServer
 
 def pytest_report_header(config: pytest.Config) -> str:
     return ("secured client tests: on (this binding's libddsc has the DDS Security plugins)" if security_available()
@@ -38,7 +38,4 @@ def security_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture
 def secured_server(request: pytest.FixtureRequest, tmp_path: Path, security_dir: Path) -> SecuredServer:
     """A surfeledit-server with --security (the demo's server identity) on a fresh domain."""
-    srv = SecuredServer(free_domain(), tmp_path / "server.log", security_dir / "server" / "security.conf")
-    request.addfinalizer(srv.stop)
-    srv.wait_ready()
-    return srv
+    return SecuredServer.started(request, tmp_path, security_dir / "server" / "security.conf")

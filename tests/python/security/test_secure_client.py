@@ -150,14 +150,10 @@ def test_roles_granted_to_authenticated_users(request, tmp_path: Path, security_
     which only his identity may write in) joins alice's private session "shared" without a token and
     edits it; carol joins and reads but her deform is refused; dave, authenticated but granted
     nothing, gets the same NotFound as for a session that does not exist; bob's grant names one session."""
-    from service.conftest import free_domain
-
     from service.conftest import SecuredServer
 
-    srv = SecuredServer(free_domain(), tmp_path / "server.log", security_dir / "server" / "security.conf",
-                        ["--grant", "bob=editor:shared", "--grant", "carol=viewer"])
-    request.addfinalizer(srv.stop)
-    srv.wait_ready()
+    srv = SecuredServer.started(request, tmp_path, security_dir / "server" / "security.conf",
+                                ["--grant", "bob=editor:shared", "--grant", "carol=viewer"])
 
     def peer(user: str, session: str) -> dict:
         r = subprocess.run([sys.executable, str(Path(__file__).with_name("grant_peer.py")), str(conf(security_dir, user)),

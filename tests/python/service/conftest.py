@@ -149,6 +149,15 @@ class SecuredServer(ManagedProcess):
         flags = ["--security", str(security)] if security else []
         super().__init__([server_executable()] + server_args(domain, None) + flags + list(extra), log)
 
+    @classmethod
+    def started(cls, request: pytest.FixtureRequest, tmp_path: Path, security: Optional[Path],
+                extra: Sequence[str] = ()) -> "SecuredServer":
+        """One on a fresh domain, stopped at the test's teardown whatever happens, ready to answer."""
+        srv = cls(free_domain(), tmp_path / "server.log", security, extra)
+        request.addfinalizer(srv.stop)
+        srv.wait_ready()
+        return srv
+
 
 class ServerProcess(ManagedProcess):
     def __init__(self, exe: str, domain: int, log: Path, data_root: Optional[Path] = None,

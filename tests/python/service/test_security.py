@@ -20,7 +20,7 @@ from typing import Dict, List, Optional
 
 import pytest
 
-from .conftest import REPO, ManagedProcess, SecuredServer, find_executable, free_domain, server_executable
+from .conftest import REPO, ManagedProcess, SecuredServer, find_executable, server_executable
 
 def probe_executable() -> str:
     exe = find_executable("SURFELEDIT_SECURE_PROBE", "build/tests/surfeledit-secure-probe",
@@ -49,13 +49,6 @@ def stranger_dir(tmp_path_factory: pytest.TempPathFactory, security_dir: Path) -
                     "--clients", "alice", "--denied", "", "--rogue", ""],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
-
-
-def start_server(request: pytest.FixtureRequest, tmp_path: Path, security: Optional[Path]) -> SecuredServer:
-    srv = SecuredServer(free_domain(), tmp_path / "server.log", security)
-    request.addfinalizer(srv.stop)
-    srv.wait_ready()
-    return srv
 
 
 def parse(out: str) -> Dict[str, List[str]]:
@@ -92,7 +85,7 @@ def intruder_args(domain: int, conf: Optional[Path], victim: str, session: str, 
 
 def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_path: Path,
                                            security_dir: Path) -> None:
-    srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
+    srv = SecuredServer.started(request, tmp_path, security_dir / "server" / "security.conf")
     p = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", "alice.1", "secured"),
                     tmp_path / "alice.log")
     out = finish(p, 60)
@@ -107,7 +100,7 @@ def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_p
 
 def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pytest.FixtureRequest, tmp_path: Path,
                                                                    security_dir: Path, stranger_dir: Path) -> None:
-    srv = start_server(request, tmp_path, security_dir / "server" / "security.conf")
+    srv = SecuredServer.started(request, tmp_path, security_dir / "server" / "security.conf")
     victim, session = "alice.victim", "taken"  # a client id of alice's (her reply partitions)
     intruders = {
         "outsider": None,  # no security at all
@@ -145,7 +138,7 @@ def test_unauthenticated_and_unpermitted_participants_are_shut_out(request: pyte
 def test_control_without_security_the_outsider_gets_in(request: pytest.FixtureRequest, tmp_path: Path) -> None:
     """The same outsider against a server without --security: it binds the victim's id and reads
     replies, so the shut-out test above measures what security prevents."""
-    srv = start_server(request, tmp_path, None)
+    srv = SecuredServer.started(request, tmp_path, None)
     victim, session = "alice.victim", "taken"  # a client id of alice's (her reply partitions)
     outsider = start_probe(intruder_args(srv.domain, None, victim, session, 6.0), tmp_path / "outsider.log")
     request.addfinalizer(outsider.stop)
