@@ -1,4 +1,4 @@
-"""Topic names, QoS and the generated topic types (``proto``) of the surfeledit protocol.
+"""Topic names, partitions, QoS and the generated topic types (``proto``) of the surfeledit protocol.
 
 ``proto`` is the module ``surfeledit._proto`` generated from ``proto/surfeledit.idl`` by
 ``proto/idl2py.py`` (the CMake build writes it). When it is missing (a source checkout that was not
@@ -17,7 +17,8 @@ from cyclonedds.qos import Policy, Qos
 from cyclonedds.util import duration
 
 __all__ = ["proto", "TOPIC_REQUEST", "TOPIC_REPLY", "TOPIC_UPDATE", "request_qos", "reply_qos", "update_qos",
-           "REPO_ROOT"]
+           "request_writer_qos", "reply_reader_qos", "request_partition", "reply_partition",
+           "COMPACT_UPDATE_PARTITION", "CLIENT_LIVELINESS_S", "REPO_ROOT"]
 
 _log = logging.getLogger("surfeledit")
 
@@ -46,6 +47,38 @@ def reply_qos() -> Qos:
 
 def update_qos() -> Qos:
     return _qos()
+
+
+# Liveliness lease the request writer offers (automatic: Cyclone asserts it while the process
+# lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
+CLIENT_LIVELINESS_S = 1.0
+
+
+def request_partition(user: str) -> str:
+    """The partition a secured client of ``user`` writes its requests in (PROTOCOL.md, "Security"):
+    only that identity may write there, so the server reads it as the authenticated user."""
+    return "surfeledit.req." + user
+
+
+def reply_partition(client_id: str) -> str:
+    """The partition the server writes a client's replies in (PROTOCOL.md, "Identity and access")."""
+    return "surfeledit.reply." + client_id
+
+
+# The partition the server writes the compact encoding of updates in (PROTOCOL.md, "Updates, compact").
+COMPACT_UPDATE_PARTITION = "surfeledit.update.compact"
+
+
+def reply_reader_qos() -> Qos:
+    """The protocol's reply QoS, transient-local: the server's per-client reply writer is made at the
+    first reply, and the reply written before this reader matched it still arrives."""
+    return Qos(*[p for p in reply_qos().policies if not isinstance(p, type(Policy.Durability.Volatile))],
+               Policy.Durability.TransientLocal)
+
+
+def request_writer_qos() -> Qos:
+    """The protocol's request QoS plus automatic liveliness (PROTOCOL.md, "Leases")."""
+    return Qos(*request_qos().policies, Policy.Liveliness.Automatic(duration(seconds=CLIENT_LIVELINESS_S)))
 
 
 def _generate_in_memory() -> types.ModuleType:

@@ -23,10 +23,10 @@ from cyclonedds.pub import DataWriter, Publisher
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import Subscriber
 from cyclonedds.topic import Topic
-from cyclonedds.util import duration
 
 from . import errors
-from ._protocol import TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_qos, request_qos, update_qos
+from ._protocol import (COMPACT_UPDATE_PARTITION, TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_partition,
+                        reply_reader_qos, request_partition, request_writer_qos, update_qos)
 from .dds_status import alive_writers, publication_matched
 from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
@@ -41,38 +41,8 @@ _log = logging.getLogger("surfeledit")
 
 _PROBE_S = 1.5  # how long connect() looks for an already running server before spawning one
 _WATCH_MATCH_S = 2.0  # how long a new update reader waits for the server's update writer
-# Liveliness lease the request writer offers (automatic: Cyclone asserts it while the process
-# lives); the server detaches a client whose writer is gone for its --client-lease-ms after that.
-CLIENT_LIVELINESS_S = 1.0
 _GONE_POLL_S = 0.1  # how often a waiting request checks that the server's reply writer is alive
 _GONE_GRACE_S = 0.3  # how long it may be not alive before the server counts as gone
-
-
-def request_partition(user: str) -> str:
-    """The partition a secured client of ``user`` writes its requests in (PROTOCOL.md, "Security"):
-    only that identity may write there, so the server reads it as the authenticated user."""
-    return "surfeledit.req." + user
-
-
-def reply_partition(client_id: str) -> str:
-    """The partition the server writes a client's replies in (PROTOCOL.md, "Identity and access")."""
-    return "surfeledit.reply." + client_id
-
-
-# The partition the server writes the compact encoding of updates in (PROTOCOL.md, "Updates, compact").
-COMPACT_UPDATE_PARTITION = "surfeledit.update.compact"
-
-
-def _reply_reader_qos() -> Qos:
-    """The protocol's reply QoS, transient-local: the server's per-client reply writer is made at the
-    first reply, and the reply written before this reader matched it still arrives."""
-    return Qos(*[p for p in reply_qos().policies if not isinstance(p, type(Policy.Durability.Volatile))],
-               Policy.Durability.TransientLocal)
-
-
-def _request_writer_qos() -> Qos:
-    """The protocol's request QoS plus automatic liveliness (PROTOCOL.md, "Leases")."""
-    return Qos(*request_qos().policies, Policy.Liveliness.Automatic(duration(seconds=CLIENT_LIVELINESS_S)))
 
 
 def _op_label(op: int) -> str:
@@ -138,12 +108,12 @@ class Client:
             if self.security is not None and self.security.user:
                 self._req_pub = Publisher(self._participant, qos=Qos(Policy.Partition(
                     partitions=[request_partition(self.security.user)])))
-            self._writer = DataWriter(self._req_pub or self._participant, self._req_topic, qos=_request_writer_qos())
+            self._writer = DataWriter(self._req_pub or self._participant, self._req_topic, qos=request_writer_qos())
         # Replies come in this client's own partition, from a writer the server makes at the first reply.
         with access_checked(self.security, "reply reader"):
             self._rep_sub = Subscriber(self._participant,
                                        qos=Qos(Policy.Partition(partitions=[reply_partition(self.client_id)])))
-            self._replies = Inbox(self._participant, self._rep_topic, _reply_reader_qos(), parent=self._rep_sub)
+            self._replies = Inbox(self._participant, self._rep_topic, reply_reader_qos(), parent=self._rep_sub)
 
     # -- lifecycle -------------------------------------------------------------------------------
     def __enter__(self) -> "Client":

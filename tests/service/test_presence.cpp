@@ -128,48 +128,44 @@ TEST_F(Collaboration, PeersAndPresenceNameTheClientsTheirRolesLastOpsAndTools) {
 
 TEST(CollaborationGrace, ASessionLeftByALeaseIsKeptForTheGracePeriodThenDropped) {
   LeasedHandler lh(1ms, 200ms);
-  Handler& h = lh.handler;
-  RequestBuilder& rb = lh.rb;
-  std::vector<UpdateEvent>& updates = lh.updates;
-  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) { return lh.send_from(op, sender); };
-  ASSERT_EQ(send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
-  h.writer_lost(100);
+  ASSERT_EQ(lh.send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
+  lh.handler.writer_lost(100);
   std::this_thread::sleep_for(5ms);
-  updates.clear();
-  ASSERT_EQ(h.expire_leases(updates), std::vector<std::string>{"client-a"});
-  ASSERT_EQ(updates.size(), 1u);
-  EXPECT_EQ(updates[0].presence, "expired");
-  ASSERT_EQ(updates[0].peers.size(), 1u);
-  EXPECT_EQ(updates[0].peers[0].state, "away");
+  lh.updates.clear();
+  ASSERT_EQ(lh.handler.expire_leases(lh.updates), std::vector<std::string>{"client-a"});
+  ASSERT_EQ(lh.updates.size(), 1u);
+  EXPECT_EQ(lh.updates[0].presence, "expired");
+  ASSERT_EQ(lh.updates[0].peers.size(), 1u);
+  EXPECT_EQ(lh.updates[0].peers[0].state, "away");
   // The loop wakes for the grace deadline.
-  ASSERT_TRUE(h.next_lease_check());
-  EXPECT_LE(*h.next_lease_check(), 200ms);
-  EXPECT_GT(*h.next_lease_check(), 100ms);
+  ASSERT_TRUE(lh.handler.next_lease_check());
+  EXPECT_LE(*lh.handler.next_lease_check(), 200ms);
+  EXPECT_GT(*lh.handler.next_lease_check(), 100ms);
   // A restarted client (another writer, same id) joins as a member, without a token: its role survived.
-  updates.clear();
-  const auto back = send_from(surfeledit_proto_OP_JOIN_SESSION, 200);
+  lh.updates.clear();
+  const auto back = lh.send_from(surfeledit_proto_OP_JOIN_SESSION, 200);
   ASSERT_EQ(back->status, Status::Ok) << back->message;
-  ASSERT_EQ(updates.size(), 1u);
-  EXPECT_EQ(updates[0].presence, "join");
-  EXPECT_EQ(updates[0].peers[0].role, "owner");
-  EXPECT_EQ(updates[0].peers[0].state, "attached");
-  EXPECT_FALSE(h.next_lease_check());  // nothing runs: the session has a client again
+  ASSERT_EQ(lh.updates.size(), 1u);
+  EXPECT_EQ(lh.updates[0].presence, "join");
+  EXPECT_EQ(lh.updates[0].peers[0].role, "owner");
+  EXPECT_EQ(lh.updates[0].peers[0].state, "attached");
+  EXPECT_FALSE(lh.handler.next_lease_check());  // nothing runs: the session has a client again
   // Gone again, and nobody comes back: dropped after the grace period with a "close" update.
-  h.writer_lost(200);
+  lh.handler.writer_lost(200);
   std::this_thread::sleep_for(5ms);
-  updates.clear();
-  h.expire_leases(updates);
-  ASSERT_EQ(updates.size(), 1u);
+  lh.updates.clear();
+  lh.handler.expire_leases(lh.updates);
+  ASSERT_EQ(lh.updates.size(), 1u);
   std::this_thread::sleep_for(100ms);
-  EXPECT_TRUE(h.expire_leases(updates).empty());
-  EXPECT_EQ(updates.size(), 1u);  // still within the grace period
-  std::this_thread::sleep_for(*h.next_lease_check() + 2ms);
-  h.expire_leases(updates);
-  ASSERT_EQ(updates.size(), 2u);
-  EXPECT_EQ(updates[1].cause, "close");
-  EXPECT_EQ(updates[1].author, "");
-  EXPECT_EQ(send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::NotFound);
-  EXPECT_FALSE(h.next_lease_check());
+  EXPECT_TRUE(lh.handler.expire_leases(lh.updates).empty());
+  EXPECT_EQ(lh.updates.size(), 1u);  // still within the grace period
+  std::this_thread::sleep_for(*lh.handler.next_lease_check() + 2ms);
+  lh.handler.expire_leases(lh.updates);
+  ASSERT_EQ(lh.updates.size(), 2u);
+  EXPECT_EQ(lh.updates[1].cause, "close");
+  EXPECT_EQ(lh.updates[1].author, "");
+  EXPECT_EQ(lh.send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::NotFound);
+  EXPECT_FALSE(lh.handler.next_lease_check());
 }
 
 TEST(CollaborationWire, PeersAndAuthorsReachTheSamples) {
@@ -213,25 +209,21 @@ TEST(CollaborationWire, PeersAndAuthorsReachTheSamples) {
 
 TEST(CollaborationGrace, TheLastCloseKeepsASessionWhileAMemberIsAway) {
   LeasedHandler lh(1ms, 10s);
-  Handler& h = lh.handler;
-  RequestBuilder& rb = lh.rb;
-  std::vector<UpdateEvent>& updates = lh.updates;
-  auto send_from = [&](surfeledit_proto_Op op, std::uint64_t sender) { return lh.send_from(op, sender); };
-  ASSERT_EQ(send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
-  rb.token = send_from(surfeledit_proto_OP_INVITE, 100)->token;
-  rb.client = "client-b";
-  ASSERT_EQ(send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::Ok);
-  rb.token.clear();
-  h.writer_lost(300);
+  ASSERT_EQ(lh.send_from(surfeledit_proto_OP_OPEN_SESSION, 100)->status, Status::Ok);
+  lh.rb.token = lh.send_from(surfeledit_proto_OP_INVITE, 100)->token;
+  lh.rb.client = "client-b";
+  ASSERT_EQ(lh.send_from(surfeledit_proto_OP_JOIN_SESSION, 300)->status, Status::Ok);
+  lh.rb.token.clear();
+  lh.handler.writer_lost(300);
   std::this_thread::sleep_for(5ms);
-  ASSERT_EQ(h.expire_leases(updates), std::vector<std::string>{"client-b"});
-  rb.client = "client-a";
-  updates.clear();
-  ASSERT_EQ(send_from(surfeledit_proto_OP_CLOSE_SESSION, 100)->status, Status::Ok);
-  ASSERT_EQ(updates.size(), 1u);  // no "close": client-b may come back
-  EXPECT_EQ(updates[0].presence, "leave");
-  rb.client = "client-b";
-  const auto back = send_from(surfeledit_proto_OP_JOIN_SESSION, 400);
+  ASSERT_EQ(lh.handler.expire_leases(lh.updates), std::vector<std::string>{"client-b"});
+  lh.rb.client = "client-a";
+  lh.updates.clear();
+  ASSERT_EQ(lh.send_from(surfeledit_proto_OP_CLOSE_SESSION, 100)->status, Status::Ok);
+  ASSERT_EQ(lh.updates.size(), 1u);  // no "close": client-b may come back
+  EXPECT_EQ(lh.updates[0].presence, "leave");
+  lh.rb.client = "client-b";
+  const auto back = lh.send_from(surfeledit_proto_OP_JOIN_SESSION, 400);
   ASSERT_EQ(back->status, Status::Ok) << back->message;
   EXPECT_EQ(back->session_info->clients, 1u);
 }

@@ -21,7 +21,8 @@ from cyclonedds.topic import Topic
 
 import surfeledit
 from surfeledit._protocol import TOPIC_REPLY, proto, reply_qos
-from surfeledit.connection import Client, reply_partition
+from surfeledit._protocol import reply_partition
+from surfeledit.connection import Client
 from surfeledit.security import SecurityConfig, participant_qos
 
 

@@ -32,7 +32,8 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from surfeledit._protocol import TOPIC_REPLY, TOPIC_REQUEST, proto, reply_qos, request_qos
-from surfeledit.connection import _reply_reader_qos, reply_partition, wait_matched
+from surfeledit._protocol import reply_partition, reply_reader_qos
+from surfeledit.connection import wait_matched
 
 
 def _in_partition(name: str) -> Qos:
@@ -69,7 +70,7 @@ def _spoof(domain: int, requests: List[Dict[str, Any]], listen_s: float = 1.0) -
 def _forge(domain: int, args: Dict[str, Any]) -> Dict[str, int]:
     dp = DomainParticipant(domain)
     writer = DataWriter(Publisher(dp, qos=_in_partition(reply_partition(args["client_id"]))),
-                        Topic(dp, TOPIC_REPLY, proto.Reply), qos=_reply_reader_qos())  # what the victim reads
+                        Topic(dp, TOPIC_REPLY, proto.Reply), qos=reply_reader_qos())  # what the victim reads
     if not wait_matched(dp, (writer,), 10.0):
         raise SystemExit("no reply reader matched")
     time.sleep(0.3)  # let every reader of the topic match, not only the first

@@ -15,7 +15,7 @@ import surfeledit
 from .conftest import ServerProcess, connect_to, uploading_peer
 
 LEASE_MS = 1000
-CLIENT_LIVELINESS_S = surfeledit.connection.CLIENT_LIVELINESS_S
+CLIENT_LIVELINESS_S = surfeledit._protocol.CLIENT_LIVELINESS_S
 STALL_S = 0.6  # well below the 1 s linger, well above a round trip on a loaded 2-core machine
 
 

@@ -74,7 +74,7 @@ def test_a_killed_client_expires_with_a_presence_update_and_its_upload_dropped(
         killed = time.monotonic()
         ev = presence_until(watcher, "expired", victim, timeout=10.0)
         waited = time.monotonic() - killed
-        assert waited < surfeledit.connection.CLIENT_LIVELINESS_S + LEASE_MS / 1000 + 3.0
+        assert waited < surfeledit._protocol.CLIENT_LIVELINESS_S + LEASE_MS / 1000 + 3.0
         states = {q.client_id: q.state for q in ev.peers}
         assert states == {owner_client.client_id: "attached", victim: "away"}
         assert owner_client.info().upload_bytes == 0

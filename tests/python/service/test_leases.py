@@ -21,7 +21,7 @@ from .conftest import ServerProcess, connect_to, uploading_peer
 
 ROW_BYTES = 7 * 8  # one surfel with a radius: positions, normals, radius as doubles
 LEASE_MS = 1000
-CLIENT_LIVELINESS_S = surfeledit.connection.CLIENT_LIVELINESS_S
+CLIENT_LIVELINESS_S = surfeledit._protocol.CLIENT_LIVELINESS_S
 
 
 def chunk(offset: int, n: int) -> "proto.LoadChunk":
