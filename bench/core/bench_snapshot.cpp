@@ -2,7 +2,8 @@
 // (core/two_arms.hpp) at spacing 0.004 (~215k surfels), two tools (arm A, arm B), Robust, one thread;
 // each session has taken `steps` deformation steps (both tools alternating, +-0.002 in x, no collision).
 //   BM_Save:      EditSession::save of the session after `steps` steps (the time a snapshot would block
-//                 the request loop, serialisation only; the file write comes on top). Counter: bytes.
+//                 the request loop, serialisation only; the file write comes on top). Counters: bytes,
+//                 history_entries (the entries the history bound kept).
 //   BM_Restore:   EditSession::restore of that snapshot into a fresh session (recovery with a snapshot).
 //   BM_Replay:    load, set_regions of both tools and the `steps` steps from scratch (what recovery by log
 //                 replay re-computes in the core for the same state).
@@ -51,6 +52,7 @@ void BM_Save(benchmark::State& state) {
     benchmark::DoNotOptimize(w.bytes().data());
   }
   state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["history_entries"] = static_cast<double>(s->history().size());  // what undo can reach
 }
 
 void BM_Restore(benchmark::State& state) {
