@@ -83,17 +83,22 @@ struct ParallelSweep {
     return threads > 1 && static_cast<double>(n) * kRowNs + static_cast<double>(last_queries) * kQueryNs >= min_ns;
   }
 
-  // `journal` (may be null): notes each row's state before its update.
+  // `journal` (may be null): notes each row's state before its update. `by_slot`: `rows` are exactly the
+  // rows with a state, in order (the deformable list), so rows[q]'s state is the q-th stored one and the
+  // sweep walks the states in storage order without the row -> slot map (RESULTS §39).
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) {
+            int threads, std::vector<std::uint8_t>& hit, bool by_slot,
+            Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());
+    if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
+    typename Kernel::State* const stored = states.stored_data();
     Index tested = 0, queries = 0;
     auto one = [&](Index q) -> Index {
       const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
-      auto& s = states[r];
+      auto& s = by_slot ? stored[q] : states[r];
       if (journal) {
         const typename Kernel::State before = s;
         const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
@@ -194,7 +199,7 @@ class RowDetector final : public NarrowDetector {
     result.stats.queries = tally.queries;
     collect_result(
         result, rows_.deformable, [&](std::size_t q, Index) { return hit_[q] != 0; },
-        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+        [&](std::size_t q, Index r) { return rows_.kernel.depth(rows_.states.stored_data()[q], row3(scene.positions, r)); },
         preprocess_ms_, start);
     return result;
   }
@@ -394,11 +399,13 @@ class RowDetector final : public NarrowDetector {
               const std::vector<std::uint8_t>* candidate) {
     const int threads = resolve_threads(params_.threads);
     if constexpr (std::is_same_v<Sweep, ParallelSweep>) {
-      if (journal_.on && journal_.tested.size() == rows_.states.size()) {
-        return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, &journal_);
-      }
+      const bool by_slot = &rows == &rows_.deformable;
+      const bool journal = journal_.on && journal_.tested.size() == rows_.states.size();
+      return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, by_slot,
+                        journal ? &journal_ : nullptr);
+    } else {
+      return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
     }
-    return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
   }
 
   KernelRows<Kernel> rows_;
