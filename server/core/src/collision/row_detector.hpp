@@ -93,39 +93,62 @@ struct ParallelSweep {
             Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());
     if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
+    // One loop per combination of the three options, each compiled without their branches.
+    auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
+      auto range = [&](Index begin, Index end, Index& tested, Index& queries) {
+        rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
+            kernel, rows, states, scene, previous, candidate, hit, journal, begin, end, tested, queries);
+      };
+      Index tested = 0, queries = 0;
+      if (!parallel(n, threads)) {
+        range(0, n, tested, queries);
+      } else {
+        const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
+        for (Index c = 0; c < chunks; ++c) range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), tested, queries);
+      }
+      return Tally{tested, queries};
+    };
+    auto with_candidate = [&](auto by_slot_c, auto journal_c) {
+      return candidate ? pick(by_slot_c, journal_c, std::true_type{}) : pick(by_slot_c, journal_c, std::false_type{});
+    };
+    auto with_journal = [&](auto by_slot_c) {
+      return journal ? with_candidate(by_slot_c, std::true_type{}) : with_candidate(by_slot_c, std::false_type{});
+    };
+    const Tally tally = by_slot ? with_journal(std::true_type{}) : with_journal(std::false_type{});
+    last_queries = tally.queries;
+    return tally;
+  }
+
+ private:
+  // Rows rows[begin..end) of a sweep (run()), the options fixed at compile time.
+  template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
+  static void rows_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
+                         const CollisionScene& scene, const Points& previous,
+                         const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
+                         Journal<typename Kernel::State>* journal, Index begin, Index end, Index& tested,
+                         Index& queries) {
     typename Kernel::State* const stored = states.stored_data();
-    Index tested = 0, queries = 0;
-    auto one = [&](Index q) -> Index {
+    Index t = 0, m_sum = 0;
+    for (Index q = begin; q < end; ++q) {
       const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
-      auto& s = by_slot ? stored[q] : states[r];
-      if (journal) {
-        const typename Kernel::State before = s;
-        const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
-        journal->note(r, before, s, made);
-        hit[q] = s.colliding();
-        return made;
+      auto& s = kBySlot ? stored[q] : states[r];
+      typename Kernel::State before;
+      if constexpr (kJournal) before = s;
+      Index made;
+      if (kCandidate && !(*candidate)[r]) {
+        made = kernel.not_candidate(s, pt);
+      } else {
+        made = kernel.update(s, pt);
       }
-      const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
+      if constexpr (kJournal) journal->note(r, before, s, made);
       hit[q] = s.colliding();  // read while the state is in cache
-      return made;
-    };
-    if (!parallel(n, threads)) {
-      for (Index q = 0; q < n; ++q) {
-        const Index m = one(q);
-        queries += m;
-        tested += m > 0;
-      }
-    } else {
-#pragma omp parallel for schedule(dynamic, Kernel::kChunk) num_threads(threads) reduction(+ : tested, queries)
-      for (Index q = 0; q < n; ++q) {
-        const Index m = one(q);
-        queries += m;
-        tested += m > 0;
-      }
+      m_sum += made;
+      t += made > 0;
     }
-    last_queries = queries;
-    return {tested, queries};
+    tested += t;
+    queries += m_sum;
   }
 };
 
