@@ -220,8 +220,8 @@ class RowDetector final : public NarrowDetector {
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
-    collect_result(
-        result, rows_.deformable, [&](std::size_t q, Index) { return hit_[q] != 0; },
+    collect_hits(
+        result, rows_.deformable, hit_,
         [&](std::size_t q, Index r) { return rows_.kernel.depth(rows_.states.stored_data()[q], row3(scene.positions, r)); },
         preprocess_ms_, start);
     return result;
@@ -291,9 +291,8 @@ class RowDetector final : public NarrowDetector {
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
-    collect_result(
-        result, rows, [&](std::size_t q, Index) { return hit_[q] != 0; },
-        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+    collect_hits(
+        result, rows, hit_, [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
         preprocess_ms_, start);
     return result;
   }
