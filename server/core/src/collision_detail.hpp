@@ -2,8 +2,11 @@
 // the detector that drives them over rows live in collision/ (kernel.hpp, row_detector.hpp).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -94,6 +97,15 @@ struct ZeroSet {
   std::size_t memory_bytes() const;
 };
 
+// The stats of collect_result / collect_hits.
+inline void finish_result(CollisionResult& result, const IndexList& deformable, double preprocess_ms,
+                          std::chrono::steady_clock::time_point start) {
+  result.stats.deformable = static_cast<Index>(deformable.size());
+  result.stats.colliding = static_cast<Index>(result.colliding.size());
+  result.stats.preprocess_ms = preprocess_ms;
+  result.stats.detect_ms = ms_since(start);
+}
+
 // The end of every detector's detect(): appends the colliding deformable rows (ascending, as
 // `deformable` is) with their depth estimates and fills the stats all detectors report alike.
 // `colliding(q, r)` and `depth(q, r)` receive the position q in `deformable` and the row r.
@@ -106,10 +118,28 @@ void collect_result(CollisionResult& result, const IndexList& deformable, Collid
     result.colliding.push_back(r);
     result.depths.push_back(depth(q, r));
   }
-  result.stats.deformable = static_cast<Index>(deformable.size());
-  result.stats.colliding = static_cast<Index>(result.colliding.size());
-  result.stats.preprocess_ms = preprocess_ms;
-  result.stats.detect_ms = ms_since(start);
+  finish_result(result, deformable, preprocess_ms, start);
+}
+// The same from one flag per position of `deformable` (`hit`, 0 / 1), skipping 8 clear flags at a time:
+// most steps find few colliding rows (RESULTS §39: the byte loop was a fifth of an idle step).
+template <typename Depth>
+void collect_hits(CollisionResult& result, const IndexList& deformable, const std::vector<std::uint8_t>& hit,
+                  Depth depth, double preprocess_ms, std::chrono::steady_clock::time_point start) {
+  const std::size_t n = deformable.size();
+  const std::uint8_t* h = hit.data();
+  for (std::size_t w = 0; w < n; w += 8) {
+    if (w + 8 <= n) {
+      std::uint64_t word;
+      std::memcpy(&word, h + w, sizeof(word));
+      if (word == 0) continue;
+    }
+    for (std::size_t q = w; q < std::min(n, w + 8); ++q) {
+      if (!h[q]) continue;
+      result.colliding.push_back(deformable[q]);
+      result.depths.push_back(depth(q, deformable[q]));
+    }
+  }
+  finish_result(result, deformable, preprocess_ms, start);
 }
 
 // Squared radius of a temporal-coherence sphere around a point at squared distance `dist2` from its

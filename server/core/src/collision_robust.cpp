@@ -14,7 +14,7 @@ void RobustKernel::reset(const CollisionScene& scene, const IndexList&, const In
   orig.zero.resize(static_cast<std::size_t>(rows));
   for (Index r = 0; r < rows; ++r) orig.zero[r] = scene.regions[r] == Region::Zero;
   orig.alive.assign(static_cast<std::size_t>(rows), 1);
-  orig.tree = std::make_unique<KdTree>(orig.positions, nearest_tree_params(params_.knn_eps));
+  orig.tree = original_tree(orig.positions, orig.alive, params_.knn_eps);
   orig_ = std::move(orig);
   orig_of_row_ = IndexList();  // the identity
   build_inside();
@@ -60,10 +60,7 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
     }
   }
   if (zero_removed) {
-    IndexList alive;
-    for (std::size_t o = 0; o < orig_.alive.size(); ++o)
-      if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
-    orig_.tree = std::make_unique<KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
+    orig_.tree = original_tree(orig_.positions, orig_.alive, params_.knn_eps);
     build_inside();
   }
   spell_out_rows();
@@ -92,8 +89,6 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
     s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
     set_inside(s, (s.old_position - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < params_.threshold);
   }
-  bool all_alive = true;
-  for (std::uint8_t a : orig_.alive) all_alive = all_alive && a;
   for (Index r : rows) {
     const Index o = orig_of(r);
     orig_.positions.row(o) = scene.positions.row(r);
@@ -101,16 +96,22 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
     orig_.radii[o] = scene.radii[r];
   }
   // A new tree (clones in history images share the old one with their own, older snapshot).
-  if (all_alive) {
-    orig_.tree = std::make_shared<const KdTree>(orig_.positions, nearest_tree_params(params_.knn_eps));
-  } else {
-    IndexList alive;
-    for (std::size_t o = 0; o < orig_.alive.size(); ++o)
-      if (orig_.alive[o]) alive.push_back(static_cast<Index>(o));
-    orig_.tree = std::make_shared<const KdTree>(orig_.positions, alive, nearest_tree_params(params_.knn_eps));
-  }
+  orig_.tree = original_tree(orig_.positions, orig_.alive, params_.knn_eps);
   for (Index r : hit) states[r].sphere.rho2 = 0.0;
   return true;
+}
+
+std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions, const std::vector<std::uint8_t>& alive,
+                                                          double eps) {
+  KdTreeParams params = nearest_tree_params(eps);
+  params.leaf_size = kOriginalLeafSize;
+  if (std::all_of(alive.begin(), alive.end(), [](std::uint8_t a) { return a != 0; })) {
+    return std::make_shared<const KdTree>(positions, params);
+  }
+  IndexList rows;
+  for (std::size_t o = 0; o < alive.size(); ++o)
+    if (alive[o]) rows.push_back(static_cast<Index>(o));
+  return std::make_shared<const KdTree>(positions, rows, params);
 }
 
 std::size_t RobustKernel::memory_bytes() const {

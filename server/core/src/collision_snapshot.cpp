@@ -175,20 +175,14 @@ void RobustKernel::load(SnapshotReader& in, Index rows) {
   }
   for (Index o : orig_of_row)
     if (o < -1 || o >= static_cast<Index>(n)) in.fail("original rows", "row " + std::to_string(o) + " out of range");
-  // The tree as reset / on_removed / on_rigid_moved build it: over every row while every zero surfel is
-  // alive, else over the alive rows (a removal never comes back).
-  IndexList alive;
-  bool all_alive = true, any_zero = false;
+  bool any_zero = false;
   for (std::size_t o = 0; o < n; ++o) {
     if (orig.alive[o] > 1 || orig.zero[o] > 1) in.fail("original flags", "not 0 or 1");
-    if (orig.alive[o]) alive.push_back(static_cast<Index>(o));
-    all_alive = all_alive && orig.alive[o];
     any_zero = any_zero || (orig.zero[o] && orig.alive[o]);
   }
   if (!any_zero) in.fail("original model", "no zero surfel");
-  try {
-    orig.tree = all_alive ? std::make_shared<const KdTree>(orig.positions, nearest_tree_params(params_.knn_eps))
-                          : std::make_shared<const KdTree>(orig.positions, alive, nearest_tree_params(params_.knn_eps));
+  try {  // the tree as reset / on_removed / on_rigid_moved build it (a removal never comes back)
+    orig.tree = original_tree(orig.positions, orig.alive, params_.knn_eps);
   } catch (const Error& e) {
     in.fail("original positions", e.what());
   }

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace surfeledit::kd {
@@ -118,6 +119,23 @@ struct Tree {
     if (nd.leaf()) {
       const double qx = q[0], qy = q[1], qz = q[2];
       const double* p = &xyz[3 * static_cast<std::size_t>(nd.a)];
+      if constexpr (std::is_same_v<Set, NearestSet>) {
+        // k = 1: the leaf's (dist2, slot)-smallest point first, without a data-dependent branch per point
+        // (slots ascend within a leaf, so the first strict minimum is the smallest slot among equals),
+        // then one add(): the same lexicographic minimum as adding every point (RESULTS §39).
+        if (nd.a == nd.b) return;
+        double bd = dist2(q, nd.a);  // the first point seeds the minimum (even an overflowing +inf one)
+        std::uint32_t bs = nd.a;
+        p += 3;
+        for (std::uint32_t s = nd.a + 1; s < nd.b; ++s, p += 3) {
+          const double dx = qx - p[0], dy = qy - p[1], dz = qz - p[2];
+          const double d2 = dx * dx + dy * dy + dz * dz;
+          bs = d2 < bd ? s : bs;
+          bd = d2 < bd ? d2 : bd;
+        }
+        set.add(bd, bs);
+        return;
+      }
       for (std::uint32_t s = nd.a; s < nd.b; ++s, p += 3) {
         const double dx = qx - p[0], dy = qy - p[1], dz = qz - p[2];
         set.add(dx * dx + dy * dy + dz * dz, s);

@@ -143,6 +143,10 @@ class RowStates {
   }
   std::size_t memory_bytes() const { return slot_.capacity() * sizeof(Index) + dense_.capacity() * sizeof(State); }
 
+  // The states in storage order (ascending row): stored_data()[q] is the q-th row with a state.
+  std::size_t stored() const { return dense_.size(); }
+  State* stored_data() { return dense_.data(); }
+  const State* stored_data() const { return dense_.data(); }
   // The storage itself, for snapshots (row_detector.hpp put_states / get_states).
   const std::vector<Index>& slots() const { return slot_; }
   const std::vector<State>& dense() const { return dense_; }

@@ -83,44 +83,72 @@ struct ParallelSweep {
     return threads > 1 && static_cast<double>(n) * kRowNs + static_cast<double>(last_queries) * kQueryNs >= min_ns;
   }
 
-  // `journal` (may be null): notes each row's state before its update.
+  // `journal` (may be null): notes each row's state before its update. `by_slot`: `rows` are exactly the
+  // rows with a state, in order (the deformable list), so rows[q]'s state is the q-th stored one and the
+  // sweep walks the states in storage order without the row -> slot map (RESULTS §39).
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
-            int threads, std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal = nullptr) {
+            int threads, std::vector<std::uint8_t>& hit, bool by_slot,
+            Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());
-    Index tested = 0, queries = 0;
-    auto one = [&](Index q) -> Index {
+    if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
+    // One loop per combination of the three options, each compiled without their branches.
+    auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
+      auto range = [&](Index begin, Index end, Index& tested, Index& queries) {
+        rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
+            kernel, rows, states, scene, previous, candidate, hit, journal, begin, end, tested, queries);
+      };
+      Index tested = 0, queries = 0;
+      if (!parallel(n, threads)) {
+        range(0, n, tested, queries);
+      } else {
+        const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
+        for (Index c = 0; c < chunks; ++c) range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), tested, queries);
+      }
+      return Tally{tested, queries};
+    };
+    auto with_candidate = [&](auto by_slot_c, auto journal_c) {
+      return candidate ? pick(by_slot_c, journal_c, std::true_type{}) : pick(by_slot_c, journal_c, std::false_type{});
+    };
+    auto with_journal = [&](auto by_slot_c) {
+      return journal ? with_candidate(by_slot_c, std::true_type{}) : with_candidate(by_slot_c, std::false_type{});
+    };
+    const Tally tally = by_slot ? with_journal(std::true_type{}) : with_journal(std::false_type{});
+    last_queries = tally.queries;
+    return tally;
+  }
+
+ private:
+  // Rows rows[begin..end) of a sweep (run()), the options fixed at compile time.
+  template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
+  static void rows_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
+                         const CollisionScene& scene, const Points& previous,
+                         const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
+                         Journal<typename Kernel::State>* journal, Index begin, Index end, Index& tested,
+                         Index& queries) {
+    typename Kernel::State* const stored = states.stored_data();
+    Index t = 0, m_sum = 0;
+    for (Index q = begin; q < end; ++q) {
       const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
-      auto& s = states[r];
-      if (journal) {
-        const typename Kernel::State before = s;
-        const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
-        journal->note(r, before, s, made);
-        hit[q] = s.colliding();
-        return made;
+      auto& s = kBySlot ? stored[q] : states[r];
+      typename Kernel::State before;
+      if constexpr (kJournal) before = s;
+      Index made;
+      if (kCandidate && !(*candidate)[r]) {
+        made = kernel.not_candidate(s, pt);
+      } else {
+        made = kernel.update(s, pt);
       }
-      const Index made = candidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : kernel.update(s, pt);
+      if constexpr (kJournal) journal->note(r, before, s, made);
       hit[q] = s.colliding();  // read while the state is in cache
-      return made;
-    };
-    if (!parallel(n, threads)) {
-      for (Index q = 0; q < n; ++q) {
-        const Index m = one(q);
-        queries += m;
-        tested += m > 0;
-      }
-    } else {
-#pragma omp parallel for schedule(dynamic, Kernel::kChunk) num_threads(threads) reduction(+ : tested, queries)
-      for (Index q = 0; q < n; ++q) {
-        const Index m = one(q);
-        queries += m;
-        tested += m > 0;
-      }
+      m_sum += made;
+      t += made > 0;
     }
-    last_queries = queries;
-    return {tested, queries};
+    tested += t;
+    queries += m_sum;
   }
 };
 
@@ -192,9 +220,9 @@ class RowDetector final : public NarrowDetector {
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
-    collect_result(
-        result, rows_.deformable, [&](std::size_t q, Index) { return hit_[q] != 0; },
-        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+    collect_hits(
+        result, rows_.deformable, hit_,
+        [&](std::size_t q, Index r) { return rows_.kernel.depth(rows_.states.stored_data()[q], row3(scene.positions, r)); },
         preprocess_ms_, start);
     return result;
   }
@@ -263,9 +291,8 @@ class RowDetector final : public NarrowDetector {
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
-    collect_result(
-        result, rows, [&](std::size_t q, Index) { return hit_[q] != 0; },
-        [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
+    collect_hits(
+        result, rows, hit_, [&](std::size_t, Index r) { return rows_.kernel.depth(rows_.states[r], row3(scene.positions, r)); },
         preprocess_ms_, start);
     return result;
   }
@@ -394,11 +421,13 @@ class RowDetector final : public NarrowDetector {
               const std::vector<std::uint8_t>* candidate) {
     const int threads = resolve_threads(params_.threads);
     if constexpr (std::is_same_v<Sweep, ParallelSweep>) {
-      if (journal_.on && journal_.tested.size() == rows_.states.size()) {
-        return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, &journal_);
-      }
+      const bool by_slot = &rows == &rows_.deformable;
+      const bool journal = journal_.on && journal_.tested.size() == rows_.states.size();
+      return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, by_slot,
+                        journal ? &journal_ : nullptr);
+    } else {
+      return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
     }
-    return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
   }
 
   KernelRows<Kernel> rows_;
