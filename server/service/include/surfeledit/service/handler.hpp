@@ -19,6 +19,11 @@
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/update.hpp"
 
+namespace surfeledit {
+class SnapshotWriter;
+class SnapshotReader;
+}  // namespace surfeledit
+
 namespace surfeledit::service {
 
 struct HandlerConfig {
@@ -102,6 +107,18 @@ class Handler {
   void remember(const Reply& reply);
   // The token the next OP_INVITE hands out instead of a fresh random one (replay); once.
   void set_next_token(std::string token);
+
+  // Journal snapshots (handler_snapshot.cpp; docs/journal.md). not_snapshottable(): why the state
+  // kept between requests cannot be saved now ("" when it can): a session that is not snapshottable
+  // (EditSession::not_snapshottable), an unfinished upload, a file load in progress. save(): appends
+  // that state (sessions with their members, roles, invitations, activity and grace, the clients away,
+  // the replies kept for repeats as the CDR of the IDL Reply) to `out`; Internal when not snapshottable.
+  // restore(): replaces it by a saved one, read and checked whole before anything changes (a corrupt
+  // one throws and changes nothing); times are kept as durations before the save. Clients are bound to
+  // no writer afterwards, as after a replay (start_recovered_leases).
+  std::string not_snapshottable() const;
+  void save(SnapshotWriter& out) const;
+  void restore(SnapshotReader& in);
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);
