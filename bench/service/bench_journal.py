@@ -139,6 +139,7 @@ def main() -> None:
     ap.add_argument("--snapshot-records", default="0",
                     help="recovery: comma-separated --journal-snapshot-records values to compare (0: no snapshots)")
     ap.add_argument("--algorithm", default="none", help="collision algorithm of the session (default: none)")
+    ap.add_argument("--history-mb", type=float, help="recovery: the session's history_mb (default: the server's)")
     args = ap.parse_args()
     build = benchlib.build_dir(args.build_dir)
     exe = build / "server" / "app" / "surfeledit-server"
@@ -251,6 +252,8 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             servers.append(srv)
             srv.wait_ready()
             s = open_session_named(srv.domain, scene, "bench", args.algorithm)
+            if args.history_mb is not None:
+                s.configure(history_mb=args.history_mb)
             for i in range(length):
                 s.deform(**deform_args(i))
             srv.kill()
@@ -281,8 +284,8 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             except surfeledit.SurfelEditError:
                 pass
             shutil.rmtree(jdir, ignore_errors=True)
-    print(f"\nrecovery against journal length (steps of the small scene, algorithm {args.algorithm}, plus "
-          "load/configure/regions):")
+    print(f"\nrecovery against journal length (steps of the small scene, algorithm {args.algorithm}, history_mb "
+          f"{args.history_mb if args.history_mb is not None else 'default'}, plus load/configure/regions):")
     print(benchlib.table(["steps", "snapshot every", "records not replayed", "records replayed", "log MB",
                           "recovery ms", "start-to-ready ms", "snapshots taken", "snapshot blocks ms (median)",
                           "(max)", "snapshot MB"], rec_rows))

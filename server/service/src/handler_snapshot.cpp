@@ -117,19 +117,19 @@ std::shared_ptr<const Reply> reply_from_cdr(const std::string& bytes) {
 
 }  // namespace
 
-std::string Handler::not_snapshottable() const {
+Handler::SnapshotBlock Handler::not_snapshottable() const {
   const HandlerState& s = *state_;
+  if (s.uploads.size() > 0) return {std::to_string(s.uploads.size()) + " upload(s) unfinished", true};
+  if (!s.loads.idle()) return {"a file load is in progress", true};
   for (const auto& [name, entry] : s.sessions.all()) {
     const std::string why = entry.session->not_snapshottable();
-    if (!why.empty()) return "session '" + name + "': " + why;
+    if (!why.empty()) return {"session '" + name + "': " + why, false};
   }
-  if (s.uploads.size() > 0) return std::to_string(s.uploads.size()) + " upload(s) unfinished";
-  if (!s.loads.idle()) return "a file load is in progress";
-  return "";
+  return {};
 }
 
 void Handler::save(SnapshotWriter& w) const {
-  const std::string why = not_snapshottable();
+  const std::string why = not_snapshottable().why;
   if (!why.empty()) throw Error(ErrorCode::Internal, "snapshot", "the service state cannot be saved: " + why);
   const HandlerState& s = *state_;
   const Clock::time_point now = Clock::now();

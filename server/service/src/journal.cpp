@@ -278,12 +278,15 @@ void Journal::maybe_snapshot() {
   const bool due = (config_.snapshot_records && since_snapshot_ >= config_.snapshot_records) ||
                    (config_.snapshot_mb && log_->segment_bytes() > (config_.snapshot_mb << 20));
   if (!due || since_snapshot_ < retry_at_) return;
-  const std::string why = handler_.not_snapshottable();
-  if (!why.empty()) {
-    // Tried again a few records later: an upload finishes, a load commits, a session is closed.
-    retry_at_ = since_snapshot_ + kRetryRecords;
-    if (why != deferred_) logger()->info("journal: snapshot deferred ({}); the log keeps every record", why);
-    deferred_ = why;
+  const Handler::SnapshotBlock block = handler_.not_snapshottable();
+  if (!block.why.empty()) {
+    // Tried again at the next record when an upload or load is what waits (it ends by itself), else a
+    // few records later (a session that is not snapshottable is closed or reconfigured).
+    retry_at_ = since_snapshot_ + (block.soon ? 1 : kRetryRecords);
+    if (block.why != deferred_) {
+      logger()->info("journal: snapshot deferred ({}); the log keeps every record", block.why);
+    }
+    deferred_ = block.why;
     return;
   }
   deferred_.clear();

@@ -233,3 +233,37 @@ def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -
         c.close()
         for x in servers:
             x.stop()
+
+
+def test_a_snapshot_is_taken_when_the_log_exceeds_its_byte_bound(tmp_path: Path) -> None:
+    """--journal-snapshot-mb alone: the upload's chunk records pass 1 MiB, so the next request after the
+    commit takes a snapshot (none while the upload is unfinished); recovery restores it and replays the rest."""
+    domain = free_domain()
+    journal = tmp_path / "journal"
+    args = ("--journal", str(journal), "--journal-snapshot-mb", "1")
+    srv = _server(tmp_path, "mb-0", domain, *args)
+    servers = [srv]
+    c = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, reconnect=30.0, client_id="mb")
+    try:
+        rng = np.random.default_rng(5)
+        n = 30_000  # positions and normals: 30k * 48 bytes, about 1.4 MiB of chunk records
+        positions = rng.uniform(-1.0, 1.0, (n, 3))
+        normals = positions / np.linalg.norm(positions, axis=1, keepdims=True)
+        s = c.open_session("mb")
+        s.load_points(positions, normals)
+        log = srv.log_tail(10**7)
+        assert "snapshot deferred (1 upload(s) unfinished)" in log
+        s.remove(np.arange(3))
+        before = _view(s)
+        assert "snapshot 1 taken" in srv.log_tail(10**7) and (journal / "snapshot-1.bin").exists()
+        srv.proc.kill()
+        srv.proc.wait()
+        srv = _server(tmp_path, "mb-1", domain, *args)
+        servers.append(srv)
+        assert _recovery(srv) == (1, _frames(journal / "journal-1.log") - 1)  # all but its own Snapshot record
+        assert _view(s) == before
+    finally:
+        c.reconnect = 0.0
+        c.close()
+        for x in servers:
+            x.stop()

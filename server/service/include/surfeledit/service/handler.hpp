@@ -116,7 +116,11 @@ class Handler {
   // restore(): replaces it by a saved one, read and checked whole before anything changes (a corrupt
   // one throws and changes nothing); times are kept as durations before the save. Clients are bound to
   // no writer afterwards, as after a replay (start_recovered_leases).
-  std::string not_snapshottable() const;
+  struct SnapshotBlock {
+    std::string why;    // empty: the state can be saved
+    bool soon = false;  // an unfinished upload or a running file load: ends by itself, worth trying again soon
+  };
+  SnapshotBlock not_snapshottable() const;
   void save(SnapshotWriter& out) const;
   void restore(SnapshotReader& in);
 
