@@ -246,8 +246,9 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
         for snap in every:
             n += 1
             jdir = root / f"recovery-{length}-{snap}"
-            extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1",
-                     "--journal-snapshot-records", str(snap)]
+            extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
+            if snap:  # only then: a server built before snapshots (an A/B baseline) runs the rest
+                extra += ["--journal-snapshot-records", str(snap)]
             srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-a.log", extra)
             servers.append(srv)
             srv.wait_ready()
@@ -264,12 +265,13 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-b.log", extra)
             servers.append(srv2)
             ready_s = srv2.wait_ready()
-            m = re.search(r"recovered (\d+) request\(s\).* from ([\d.]+) MB in (\d+) ms: (?:snapshot \d+ restored "
-                          r"\((\d+) record\(s\) before it not replayed\)|no snapshot), (\d+) record\(s\) replayed",
-                          srv2.text())
+            m = re.search(r"recovered (\d+) request\(s\), (\d+) refusal\(s\), (\d+) expiries from ([\d.]+) MB in "
+                          r"(\d+) ms(?:: (?:snapshot \d+ restored \((\d+) record\(s\) before it not replayed\)|"
+                          r"no snapshot), (\d+) record\(s\) replayed)?", srv2.text())
             assert m, srv2.text()[-2000:]
-            mb, replay_ms = float(m.group(2)), int(m.group(3))
-            skipped, replayed = int(m.group(4) or 0), int(m.group(5))
+            mb, replay_ms = float(m.group(4)), int(m.group(5))
+            skipped = int(m.group(6) or 0)
+            replayed = int(m.group(7)) if m.group(7) else sum(int(m.group(k)) for k in (1, 2, 3))
             block = [ms for _, ms in taken]
             rec_rows.append([length, snap or "-", skipped, replayed, f"{mb:.1f}", replay_ms, f"{ready_s * 1e3:.0f}",
                              len(taken), f"{benchlib.median(block):.1f}" if block else "-",
