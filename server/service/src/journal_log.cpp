@@ -69,6 +69,15 @@ void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::st
   }
 }
 
+// The header of a new segment.
+std::array<std::uint8_t, kHeaderBytes> new_header() {
+  std::array<std::uint8_t, kHeaderBytes> header{};
+  std::memcpy(header.data(), kMagic.data(), kMagic.size());
+  put_u32(header.data() + 8, kFormat);
+  put_u32(header.data() + 12, kRecordFormat);
+  return header;
+}
+
 bool known_kind(std::uint8_t kind) {
   return kind == static_cast<std::uint8_t>(RecordKind::Request) ||
          kind == static_cast<std::uint8_t>(RecordKind::Refusal) ||
@@ -173,10 +182,7 @@ void JournalLog::scan(std::uint64_t segment, bool last) {
     // New, or cut short before its header was complete (nothing can follow then): write the header.
     if (file_size > 0) logger()->warn("journal '{}': {} byte(s) without a complete header; starting it anew", path_, file_size);
     if (::ftruncate(fd_.get(), 0) != 0) fail("cannot truncate journal '" + path_ + "'", errno);
-    std::array<std::uint8_t, kHeaderBytes> header{};
-    std::memcpy(header.data(), kMagic.data(), kMagic.size());
-    put_u32(header.data() + 8, kFormat);
-    put_u32(header.data() + 12, kRecordFormat);
+    const std::array<std::uint8_t, kHeaderBytes> header = new_header();
     if (::lseek(fd_.get(), 0, SEEK_SET) < 0) fail("cannot seek in journal '" + path_ + "'", errno);
     write_all(fd_.get(), header.data(), header.size(), path_);
     if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
@@ -297,10 +303,7 @@ void JournalLog::start_segment(std::uint64_t segment, RecordKind kind, const std
   std::swap(path_, path);
   size_ = 0;
   try {
-    std::array<std::uint8_t, kHeaderBytes> header{};
-    std::memcpy(header.data(), kMagic.data(), kMagic.size());
-    put_u32(header.data() + 8, kFormat);
-    put_u32(header.data() + 12, kRecordFormat);
+    const std::array<std::uint8_t, kHeaderBytes> header = new_header();
     write_all(fd_.get(), header.data(), header.size(), path_);
     size_ = kHeaderBytes;
     append(kind, payload);
