@@ -269,10 +269,6 @@ void Journal::flush(bool force) {
   for (auto& release : ready) release();
 }
 
-}  // namespace surfeledit::service
-
-namespace surfeledit::service {
-
 void Journal::maybe_snapshot() {
   if (failed() || (config_.snapshot_records == 0 && config_.snapshot_mb == 0)) return;
   const bool due = (config_.snapshot_records && since_snapshot_ >= config_.snapshot_records) ||

@@ -2,7 +2,8 @@
 // the requests the server accepted, in the server's order, made durable before their replies are
 // written. On start the service replays it through the same Handler::handle path (the core is
 // deterministic), which restores every session, its history and versions, and the replies kept for
-// repeated request ids.
+// repeated request ids. Periodic snapshots (JournalConfig::snapshot_records / snapshot_mb) bound that
+// replay: recovery restores the newest one and replays only the records after it.
 //
 // This header holds the settings, the typed error and the log file's framing (JournalLog); what a
 // record holds and how it is replayed is private to the service (src/journal_*.hpp).
