@@ -258,9 +258,9 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             for i in range(length):
                 s.deform(**deform_args(i))
             srv.kill()
-            taken = [(float(mb), float(ms)) for mb, ms in re.findall(
-                r"snapshot \d+ taken after \d+ record\(s\): ([\d.]+) MB, the request loop waited ([\d.]+) ms",
-                srv.text())]
+            taken = [(float(mb), float(ms), float(save)) for mb, ms, save in re.findall(
+                r"snapshot \d+ taken after \d+ record\(s\): ([\d.]+) MB, the request loop waited ([\d.]+) ms, of "
+                r"which ([\d.]+) ms saving", srv.text())]
             s.client.reconnect = 0.0
             srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-b.log", extra)
             servers.append(srv2)
@@ -272,14 +272,16 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             mb, replay_ms = float(m.group(4)), int(m.group(5))
             skipped = int(m.group(6) or 0)
             replayed = int(m.group(7)) if m.group(7) else sum(int(m.group(k)) for k in (1, 2, 3))
-            block = [ms for _, ms in taken]
+            block = [ms for _, ms, _ in taken]
+            save = [ms for _, _, ms in taken]
             rec_rows.append([length, snap or "-", skipped, replayed, f"{mb:.1f}", replay_ms, f"{ready_s * 1e3:.0f}",
                              len(taken), f"{benchlib.median(block):.1f}" if block else "-",
-                             f"{max(block):.1f}" if block else "-", f"{taken[-1][0]:.2f}" if taken else "-"])
+                             f"{max(block):.1f}" if block else "-", f"{benchlib.median(save):.1f}" if save else "-",
+                             f"{taken[-1][0]:.2f}" if taken else "-"])
             results["recovery"].append({"steps": length, "snapshot_records": snap, "skipped": skipped,
                                         "replayed": replayed, "mb": mb, "replay_ms": replay_ms,
                                         "ready_ms": ready_s * 1e3, "snapshots": len(taken), "snapshot_ms": block,
-                                        "snapshot_mb": [mb_ for mb_, _ in taken]})
+                                        "save_ms": save, "snapshot_mb": [t[0] for t in taken]})
             srv2.stop()
             try:
                 s.client.close()
@@ -290,7 +292,7 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
           f"{args.history_mb if args.history_mb is not None else 'default'}, plus load/configure/regions):")
     print(benchlib.table(["steps", "snapshot every", "records not replayed", "records replayed", "log MB",
                           "recovery ms", "start-to-ready ms", "snapshots taken", "snapshot blocks ms (median)",
-                          "(max)", "snapshot MB"], rec_rows))
+                          "(max)", "of which save (median)", "snapshot MB"], rec_rows))
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ struct SnapshotStats {
   std::uint64_t seq = 0;        // the last one's number
   std::uint64_t bytes = 0;      // its file's size
   double ms = 0.0;              // how long it blocked the request loop (save, write, fsyncs, new segment)
+  double save_ms = 0.0;         // of which Handler::save
 };
 
 class Journal {
