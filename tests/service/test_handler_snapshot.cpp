@@ -35,9 +35,10 @@ TEST_F(HandlerTest, SnapshotRestoresSessionsRolesAndStoredRepliesAndACorruptOneC
   ASSERT_TRUE(info->session_info);
   ASSERT_TRUE(handler.not_snapshottable().why.empty()) << handler.not_snapshottable().why;
 
-  SnapshotWriter out;
-  handler.save(out);
-  const std::string bytes = out.bytes();
+  std::vector<std::string> parts;
+  handler.save(parts);
+  std::string bytes;
+  for (const std::string& part : parts) bytes += part;
 
   // Truncated or corrupt: refused, and a handler that had nothing still has nothing.
   Handler other{HandlerConfig{4, 1000, 1}};
@@ -85,6 +86,6 @@ TEST_F(HandlerTest, SnapshotRestoresSessionsRolesAndStoredRepliesAndACorruptOneC
   rb.load_begin.total = 4;
   ASSERT_EQ(send(surfeledit_proto_OP_LOAD_BEGIN)->status, Status::Ok);
   EXPECT_TRUE(handler.not_snapshottable().soon);
-  SnapshotWriter refused_out;
-  EXPECT_THROW(handler.save(refused_out), Error);
+  std::vector<std::string> refused_parts;
+  EXPECT_THROW(handler.save(refused_parts), Error);
 }

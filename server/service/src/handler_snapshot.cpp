@@ -31,6 +31,7 @@ Role read_role(SnapshotReader& in, const char* what) {
   return static_cast<Role>(r);
 }
 
+// The service's fields of a session; its EditSession follows (save_session).
 void save_entry(SnapshotWriter& w, const std::string& name, const SessionEntry& e, Clock::time_point now) {
   w.str(name);
   w.str(e.owner);
@@ -56,9 +57,6 @@ void save_entry(SnapshotWriter& w, const std::string& name, const SessionEntry& 
   }
   w.boolean(e.orphaned_since.has_value());
   w.i64(e.orphaned_since ? age_of(*e.orphaned_since, now) : 0);
-  SnapshotWriter session;  // nested: the core's reader checks it reads its own bytes to the end
-  e.session->save(session);
-  w.str(session.take());
 }
 
 void restore_entry(SnapshotReader& in, SessionRegistry& sessions, Clock::time_point now) {
@@ -128,15 +126,26 @@ Handler::SnapshotBlock Handler::not_snapshottable() const {
   return {};
 }
 
-void Handler::save(SnapshotWriter& w) const {
+void Handler::save(std::vector<std::string>& parts) const {
   const std::string why = not_snapshottable().why;
   if (!why.empty()) throw Error(ErrorCode::Internal, "snapshot", "the service state cannot be saved: " + why);
   const HandlerState& s = *state_;
   const Clock::time_point now = Clock::now();
+  SnapshotWriter w;
   w.u32(kMagic);
   w.u32(kFormat);
   w.u64(s.sessions.size());
-  for (const auto& [name, entry] : s.sessions.all()) save_entry(w, name, entry, now);
+  for (const auto& [name, entry] : s.sessions.all()) {
+    save_entry(w, name, entry, now);
+    // The session's bytes as a string of the stream (u64 size, bytes: the core's reader checks it reads
+    // them to the end), handed over as a part of their own rather than copied into this one.
+    SnapshotWriter session;
+    entry.session->save(session);
+    w.u64(session.bytes().size());
+    parts.push_back(w.take());
+    w = SnapshotWriter();
+    parts.push_back(session.take());
+  }
   w.u64(s.away.size());
   for (const auto& [client, since] : s.away) {
     w.str(client);
@@ -149,6 +158,7 @@ void Handler::save(SnapshotWriter& w) const {
     w.u64(bytes);
     w.str(cdr);
   }
+  parts.push_back(w.take());
 }
 
 void Handler::restore(SnapshotReader& in) {

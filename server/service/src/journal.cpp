@@ -110,7 +110,7 @@ std::size_t Journal::restore_newest_snapshot(Handler& handler) {
     const journal::SnapshotRecord record = journal::decode_snapshot(log_->payload(i));
     try {
       const std::string bytes = journal::read_snapshot_file(config_.dir, record);
-      SnapshotReader in(bytes);
+      SnapshotReader in(bytes.data() + journal::kSnapshotHeaderBytes, bytes.size() - journal::kSnapshotHeaderBytes);
       handler.restore(in);  // reads and checks everything before it changes anything
     } catch (const std::exception& e) {
       logger()->warn("journal: snapshot {} (record {}) not restored: {}; falling back to an older snapshot or the "
@@ -298,11 +298,11 @@ void Journal::take_snapshot() {
   journal::SnapshotRecord record;
   double save_ms = 0.0;
   try {
-    SnapshotWriter out;
+    std::vector<std::string> parts;
     const auto s0 = Clock::now();
-    handler_.save(out);
+    handler_.save(parts);
     save_ms = std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
-    record = journal::write_snapshot_file(*log_, seq, out.bytes());
+    record = journal::write_snapshot_file(*log_, seq, parts);
     record.records = total_records_;
     log_->start_segment(seq, RecordKind::Snapshot, journal::encode(record));
   } catch (const std::exception& e) {

@@ -18,7 +18,7 @@ namespace {
 
 constexpr std::array<char, 8> kMagic = {'S', 'E', 'S', 'N', 'A', 'P', 'S', 'H'};
 constexpr std::uint32_t kFileFormat = 1;
-constexpr std::size_t kHeaderBytes = 32;
+constexpr std::size_t kHeaderBytes = kSnapshotHeaderBytes;
 
 [[noreturn]] void fail(const std::string& what, int err) { throw JournalError(what + ": " + std::strerror(err)); }
 
@@ -60,25 +60,31 @@ std::string snapshot_path(const std::string& dir, std::uint64_t seq) {
   return dir + "/snapshot-" + std::to_string(seq) + ".bin";
 }
 
-SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::string& payload) {
+SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::vector<std::string>& parts) {
   const std::string path = snapshot_path(log.dir(), seq);
   const std::string tmp = path + ".tmp";
+  std::uint64_t payload = 0;
+  for (const std::string& part : parts) payload += part.size();
   std::array<std::uint8_t, kHeaderBytes> header{};
   std::memcpy(header.data(), kMagic.data(), kMagic.size());
   put(header.data() + 8, kFileFormat, 4);
   put(header.data() + 12, kRecordFormat, 4);
   put(header.data() + 16, seq, 8);
-  put(header.data() + 24, payload.size(), 8);
-  const auto* body = reinterpret_cast<const std::uint8_t*>(payload.data());
+  put(header.data() + 24, payload, 8);
   SnapshotRecord record;
   record.seq = seq;
-  record.file_bytes = kHeaderBytes + payload.size();
-  record.file_crc = crc32_of(body, payload.size(), crc32_of(header.data(), header.size()));
+  record.file_bytes = kHeaderBytes + payload;
+  record.file_crc = crc32_of(header.data(), header.size());
+  for (const std::string& part : parts) {
+    record.file_crc = crc32_of(reinterpret_cast<const std::uint8_t*>(part.data()), part.size(), record.file_crc);
+  }
   try {
     UniqueFd fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600));
     if (fd.get() < 0) fail("cannot create snapshot '" + tmp + "'", errno);
     write_all(fd.get(), header.data(), header.size(), tmp);
-    write_all(fd.get(), body, payload.size(), tmp);
+    for (const std::string& part : parts) {
+      write_all(fd.get(), reinterpret_cast<const std::uint8_t*>(part.data()), part.size(), tmp);
+    }
     if (::fdatasync(fd.get()) != 0) fail("cannot fdatasync snapshot '" + tmp + "'", errno);
     if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename snapshot '" + tmp + "'", errno);
     log.sync_dir();
@@ -119,7 +125,7 @@ std::string read_snapshot_file(const std::string& dir, const SnapshotRecord& rec
       get(p + 24, 8) != record.file_bytes - kHeaderBytes) {
     throw JournalError("snapshot '" + path + "' has another header (format, record format or number)");
   }
-  return bytes.substr(kHeaderBytes);
+  return bytes;
 }
 
 void remove_snapshots_before(JournalLog& log, std::uint64_t seq) {

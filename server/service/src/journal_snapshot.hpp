@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "journal_records.hpp"
 #include "surfeledit/service/journal.hpp"
@@ -20,13 +21,15 @@ std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t
 
 std::string snapshot_path(const std::string& dir, std::uint64_t seq);
 
-// Writes snapshot `seq` holding `payload` durably (its directory entry too, through `log`); returns its
-// Snapshot record (records = 0, for the caller). Removes what it wrote on failure. Throws JournalError.
-SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::string& payload);
+// Writes snapshot `seq` holding the concatenation of `parts` durably (its directory entry too, through
+// `log`); returns its Snapshot record (records = 0, for the caller). Removes what it wrote on failure.
+// Throws JournalError.
+SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::vector<std::string>& parts);
 
-// The payload of the file `record` names, checked against the record and its header. Throws
-// JournalError saying what is wrong (missing, size, checksum, header).
+// The file `record` names, checked against the record and its header; its payload starts at
+// kSnapshotHeaderBytes. Throws JournalError saying what is wrong (missing, size, checksum, header).
 std::string read_snapshot_file(const std::string& dir, const SnapshotRecord& record);
+constexpr std::size_t kSnapshotHeaderBytes = 32;
 
 // Removes the snapshot files numbered below `seq` (and temporary files left by a crash). Throws JournalError.
 void remove_snapshots_before(JournalLog& log, std::uint64_t seq);

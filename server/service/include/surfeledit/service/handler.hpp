@@ -20,7 +20,6 @@
 #include "surfeledit/service/update.hpp"
 
 namespace surfeledit {
-class SnapshotWriter;
 class SnapshotReader;
 }  // namespace surfeledit
 
@@ -112,7 +111,8 @@ class Handler {
   // kept between requests cannot be saved now ("" when it can): a session that is not snapshottable
   // (EditSession::not_snapshottable), an unfinished upload, a file load in progress. save(): appends
   // that state (sessions with their members, roles, invitations, activity and grace, the clients away,
-  // the replies kept for repeats as the CDR of the IDL Reply) to `out`; Internal when not snapshottable.
+  // the replies kept for repeats as the CDR of the IDL Reply) to `parts`, whose concatenation is the
+  // snapshot (the sessions' core snapshots are parts of their own: not copied); Internal when not snapshottable.
   // restore(): replaces it by a saved one, read and checked whole before anything changes (a corrupt
   // one throws and changes nothing); times are kept as durations before the save. Clients are bound to
   // no writer afterwards, as after a replay (start_recovered_leases).
@@ -121,7 +121,7 @@ class Handler {
     bool soon = false;  // an unfinished upload or a running file load: ends by itself, worth trying again soon
   };
   SnapshotBlock not_snapshottable() const;
-  void save(SnapshotWriter& out) const;
+  void save(std::vector<std::string>& parts) const;
   void restore(SnapshotReader& in);
 
   // The model an update event refers to (nullptr when its session is gone or has none).
