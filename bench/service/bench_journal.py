@@ -112,11 +112,12 @@ def open_session(domain: int, scene: Dict[str, np.ndarray]) -> "surfeledit.Sessi
     return open_session_named(domain, scene, "bench")
 
 
-def open_session_named(domain: int, scene: Dict[str, np.ndarray], name: str) -> "surfeledit.Session":
+def open_session_named(domain: int, scene: Dict[str, np.ndarray], name: str,
+                       algorithm: str = "none") -> "surfeledit.Session":
     client = surfeledit.connect(domain=domain, spawn=False, timeout=30.0)
     s = client.open_session(name)
     s.load_points(scene["positions"], scene["normals"])
-    s.configure(algorithm="none")
+    s.configure(algorithm=algorithm)
     s.set_regions(zero=scene["zero"], one=scene["one"])
     return s
 
@@ -134,6 +135,11 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=5.0)
     ap.add_argument("--baseline-exe", help="another surfeledit-server build, run with the group commit settings")
     ap.add_argument("--json-out")
+    ap.add_argument("--recovery-only", action="store_true", help="skip the round trip and throughput parts")
+    ap.add_argument("--snapshot-records", default="0",
+                    help="recovery: comma-separated --journal-snapshot-records values to compare (0: no snapshots)")
+    ap.add_argument("--algorithm", default="none", help="collision algorithm of the session (default: none)")
+    ap.add_argument("--history-mb", type=float, help="recovery: the session's history_mb (default: the server's)")
     args = ap.parse_args()
     build = benchlib.build_dir(args.build_dir)
     exe = build / "server" / "app" / "surfeledit-server"
@@ -154,94 +160,9 @@ def main() -> None:
     servers: List[Server] = []
     results: Dict[str, object] = {"machine": benchlib.machine_line()}
     try:
-        sessions = {}
-        for k, (name, (server_exe, extra)) in enumerate(configs.items()):
-            srv = Server(server_exe, args.domain + k, root / f"rtt-{k}.log", extra)
-            servers.append(srv)
-            srv.wait_ready()
-            sessions[name] = open_session(srv.domain, scene)
-        rtt: Dict[str, List[float]] = {name: [] for name in configs}
-        for name, s in sessions.items():  # warm-up
-            for i in range(20):
-                s.deform(**deform_args(i))
-        for _ in range(args.blocks):
-            for name, s in sessions.items():
-                for i in range(args.steps):
-                    rtt[name].append(s.deform(**deform_args(i)).round_trip_ms)
-        rows = [[name, len(v), f"{benchlib.median(v):.2f}", f"{benchlib.percentile(v, 0.9):.2f}"]
-                for name, v in rtt.items()]
-        print("\nstep round trip (ms), interleaved blocks of", args.steps, "steps,", args.blocks, "rounds:")
-        print(benchlib.table(["journal", "steps", "median", "p90"], rows))
-        results["rtt"] = {name: {"median": benchlib.median(v), "p90": benchlib.percentile(v, 0.9)}
-                          for name, v in rtt.items()}
-        for s in sessions.values():
-            s.client.close()
-
-        # Throughput: --clients clients, each on its own session of the same server, steps back to back.
-        tput_rows = []
-        results["throughput"] = {}
-        for k, name in enumerate(configs):
-            many = [open_session_named(args.domain + k, scene, f"tput-{c}") for c in range(args.clients)]
-            counts = [0] * len(many)
-            stop_at = time.monotonic() + args.seconds
-
-            def run(c: int) -> None:
-                i = 0
-                while time.monotonic() < stop_at:
-                    many[c].deform(**deform_args(i))
-                    i += 1
-                counts[c] = i
-
-            threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
-            cpu0 = servers[k].cpu_s()
-            for t in threads:
-                t.start()
-            for t in threads:
-                t.join()
-            cpu_ms = (servers[k].cpu_s() - cpu0) * 1e3 / max(sum(counts), 1)
-            rate = sum(counts) / args.seconds
-            tput_rows.append([name, args.clients, f"{rate:.0f}", f"{cpu_ms:.3f}"])
-            results["throughput"][name] = rate
-            results.setdefault("server_cpu_ms_per_step", {})[name] = cpu_ms
-            for s in many:
-                s.client.close()
-        print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
-        print(benchlib.table(["journal", "clients", "steps/s (all clients)", "server CPU ms / step"], tput_rows))
-        for srv in servers:
-            srv.stop()
-        servers.clear()
-
-        rec_rows = []
-        results["recovery"] = []
-        for n, length in enumerate(int(x) for x in args.lengths.split(",") if x.strip()):
-            jdir = root / f"recovery-{length}"
-            extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
-            srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-a.log", extra)
-            servers.append(srv)
-            srv.wait_ready()
-            s = open_session(srv.domain, scene)
-            for i in range(length):
-                s.deform(**deform_args(i))
-            srv.kill()
-            s.client.reconnect = 0.0
-            srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-b.log", extra)
-            servers.append(srv2)
-            ready_s = srv2.wait_ready()
-            m = re.search(r"recovered (\d+) request\(s\).* from ([\d.]+) MB in (\d+) ms", srv2.text())
-            assert m, srv2.text()[-2000:]
-            requests, mb, replay_ms = int(m.group(1)), float(m.group(2)), int(m.group(3))
-            rec_rows.append([length, requests, f"{mb:.1f}", replay_ms, f"{ready_s * 1e3:.0f}",
-                             f"{replay_ms / max(requests, 1):.2f}"])
-            results["recovery"].append({"steps": length, "requests": requests, "mb": mb, "replay_ms": replay_ms,
-                                        "ready_ms": ready_s * 1e3})
-            srv2.stop()
-            try:
-                s.client.close()
-            except surfeledit.SurfelEditError:
-                pass
-        print("\nrecovery against journal length (steps of the small scene, plus load/configure/regions):")
-        print(benchlib.table(["steps", "records replayed", "journal MB", "replay ms", "start-to-ready ms",
-                              "ms / record"], rec_rows))
+        if not args.recovery_only:
+            round_trip_and_throughput(args, configs, root, scene, servers, results)
+        recovery(args, exe, root, scene, servers, results)
         print(benchlib.machine_line())
     finally:
         for srv in servers:
@@ -250,6 +171,128 @@ def main() -> None:
             shutil.rmtree(root, ignore_errors=True)
     if args.json_out:
         Path(args.json_out).write_text(json.dumps(results, indent=2))
+
+
+def round_trip_and_throughput(args: argparse.Namespace, configs: dict, root: Path, scene: Dict[str, np.ndarray],
+                              servers: List[Server], results: Dict[str, object]) -> None:
+    sessions = {}
+    for k, (name, (server_exe, extra)) in enumerate(configs.items()):
+        srv = Server(server_exe, args.domain + k, root / f"rtt-{k}.log", extra)
+        servers.append(srv)
+        srv.wait_ready()
+        sessions[name] = open_session(srv.domain, scene)
+    rtt: Dict[str, List[float]] = {name: [] for name in configs}
+    for name, s in sessions.items():  # warm-up
+        for i in range(20):
+            s.deform(**deform_args(i))
+    for _ in range(args.blocks):
+        for name, s in sessions.items():
+            for i in range(args.steps):
+                rtt[name].append(s.deform(**deform_args(i)).round_trip_ms)
+    rows = [[name, len(v), f"{benchlib.median(v):.2f}", f"{benchlib.percentile(v, 0.9):.2f}"]
+            for name, v in rtt.items()]
+    print("\nstep round trip (ms), interleaved blocks of", args.steps, "steps,", args.blocks, "rounds:")
+    print(benchlib.table(["journal", "steps", "median", "p90"], rows))
+    results["rtt"] = {name: {"median": benchlib.median(v), "p90": benchlib.percentile(v, 0.9)}
+                      for name, v in rtt.items()}
+    for s in sessions.values():
+        s.client.close()
+
+    # Throughput: --clients clients, each on its own session of the same server, steps back to back.
+    tput_rows = []
+    results["throughput"] = {}
+    for k, name in enumerate(configs):
+        many = [open_session_named(args.domain + k, scene, f"tput-{c}") for c in range(args.clients)]
+        counts = [0] * len(many)
+        stop_at = time.monotonic() + args.seconds
+
+        def run(c: int) -> None:
+            i = 0
+            while time.monotonic() < stop_at:
+                many[c].deform(**deform_args(i))
+                i += 1
+            counts[c] = i
+
+        threads = [threading.Thread(target=run, args=(c,)) for c in range(len(many))]
+        cpu0 = servers[k].cpu_s()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        cpu_ms = (servers[k].cpu_s() - cpu0) * 1e3 / max(sum(counts), 1)
+        rate = sum(counts) / args.seconds
+        tput_rows.append([name, args.clients, f"{rate:.0f}", f"{cpu_ms:.3f}"])
+        results["throughput"][name] = rate
+        results.setdefault("server_cpu_ms_per_step", {})[name] = cpu_ms
+        for s in many:
+            s.client.close()
+    print(f"\nthroughput: {args.clients} clients (one session each) stepping back to back for {args.seconds} s:")
+    print(benchlib.table(["journal", "clients", "steps/s (all clients)", "server CPU ms / step"], tput_rows))
+    for srv in servers:
+        srv.stop()
+    servers.clear()
+
+
+def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, np.ndarray], servers: List[Server],
+             results: Dict[str, object]) -> None:
+    """For each length and --snapshot-records value: a fresh journal, SIGKILL, recovery; with snapshots also
+    how long each snapshot blocked the request loop and the size of its file."""
+    rec_rows = []
+    results["recovery"] = []
+    every = [int(x) for x in args.snapshot_records.split(",") if x.strip()]
+    lengths = [int(x) for x in args.lengths.split(",") if x.strip()]
+    n = 0
+    for length in lengths:
+        for snap in every:
+            n += 1
+            jdir = root / f"recovery-{length}-{snap}"
+            extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
+            if snap:  # only then: a server built before snapshots (an A/B baseline) runs the rest
+                extra += ["--journal-snapshot-records", str(snap)]
+            srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-a.log", extra)
+            servers.append(srv)
+            srv.wait_ready()
+            s = open_session_named(srv.domain, scene, "bench", args.algorithm)
+            if args.history_mb is not None:
+                s.configure(history_mb=args.history_mb)
+            for i in range(length):
+                s.deform(**deform_args(i))
+            srv.kill()
+            taken = [(float(mb), float(ms), float(save)) for mb, ms, save in re.findall(
+                r"snapshot \d+ taken after \d+ record\(s\): ([\d.]+) MB, the request loop waited ([\d.]+) ms, of "
+                r"which ([\d.]+) ms saving", srv.text())]
+            s.client.reconnect = 0.0
+            srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-b.log", extra)
+            servers.append(srv2)
+            ready_s = srv2.wait_ready()
+            m = re.search(r"recovered (\d+) request\(s\), (\d+) refusal\(s\), (\d+) expiries from ([\d.]+) MB in "
+                          r"(\d+) ms(?:: (?:snapshot \d+ restored \((\d+) record\(s\) before it not replayed\)|"
+                          r"no snapshot), (\d+) record\(s\) replayed)?", srv2.text())
+            assert m, srv2.text()[-2000:]
+            mb, replay_ms = float(m.group(4)), int(m.group(5))
+            skipped = int(m.group(6) or 0)
+            replayed = int(m.group(7)) if m.group(7) else sum(int(m.group(k)) for k in (1, 2, 3))
+            block = [ms for _, ms, _ in taken]
+            save = [ms for _, _, ms in taken]
+            rec_rows.append([length, snap or "-", skipped, replayed, f"{mb:.1f}", replay_ms, f"{ready_s * 1e3:.0f}",
+                             len(taken), f"{benchlib.median(block):.1f}" if block else "-",
+                             f"{max(block):.1f}" if block else "-", f"{benchlib.median(save):.1f}" if save else "-",
+                             f"{taken[-1][0]:.2f}" if taken else "-"])
+            results["recovery"].append({"steps": length, "snapshot_records": snap, "skipped": skipped,
+                                        "replayed": replayed, "mb": mb, "replay_ms": replay_ms,
+                                        "ready_ms": ready_s * 1e3, "snapshots": len(taken), "snapshot_ms": block,
+                                        "save_ms": save, "snapshot_mb": [t[0] for t in taken]})
+            srv2.stop()
+            try:
+                s.client.close()
+            except surfeledit.SurfelEditError:
+                pass
+            shutil.rmtree(jdir, ignore_errors=True)
+    print(f"\nrecovery against journal length (steps of the small scene, algorithm {args.algorithm}, history_mb "
+          f"{args.history_mb if args.history_mb is not None else 'default'}, plus load/configure/regions):")
+    print(benchlib.table(["steps", "snapshot every", "records not replayed", "records replayed", "log MB",
+                          "recovery ms", "start-to-ready ms", "snapshots taken", "snapshot blocks ms (median)",
+                          "(max)", "of which save (median)", "snapshot MB"], rec_rows))
 
 
 if __name__ == "__main__":

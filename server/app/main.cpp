@@ -132,6 +132,18 @@ int main(int argc, char** argv) {
                  "After recovery, how long a recovered client may take to send a request before it is detached")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(3'600'000)));
+  app.add_option("--journal-snapshot-records", config.journal.snapshot_records,
+                 "Take a snapshot of every session and the service state after this many journal records, start a "
+                 "new log segment and delete the segments and snapshots before the previous snapshot, so recovery "
+                 "restores the newest snapshot and replays only the records after it (0: never by count). Deferred "
+                 "while an upload is unfinished, a file load runs or a session is not snapshottable")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(0), std::uint64_t(1) << 40));
+  app.add_option("--journal-snapshot-mb", config.journal.snapshot_mb,
+                 "Take a snapshot (as --journal-snapshot-records) once the log since the last one exceeds this many "
+                 "MiB (0: never by size)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(0), std::uint64_t(1) << 20));
   CLI11_PARSE(app, argc, argv);
   for (const std::string& g : grants) config.grants.push_back(surfeledit::service::parse_grant(g));
   config.journal.sync = journal_sync == "group" ? surfeledit::service::JournalSync::Group

@@ -250,3 +250,58 @@ TEST(JournalRecords, RefusalAndExpiryRoundTrip) {
   payload.pop_back();
   EXPECT_THROW(j::decode_refusal(payload), JournalError);
 }
+
+// Segments (docs/journal.md "Snapshots"): a new segment starts with one record; the log reads the kept
+// segments in order as one sequence; older ones are deleted on request; a gap between segments, a newest
+// segment cut before its first record, and a corrupt segment that is not the last are handled as documented.
+TEST(JournalLog, SegmentsReadInOrderAndOldOnesAreDropped) {
+  TempDir dir;
+  const auto payloads = sample_payloads();
+  {
+    JournalLog log(dir.path.string());
+    log.append(RecordKind::Request, payloads[0]);
+    log.start_segment(1, RecordKind::Snapshot, payloads[1]);
+    log.append(RecordKind::Request, payloads[2]);
+    log.start_segment(2, RecordKind::Snapshot, payloads[3]);
+    log.append(RecordKind::Refusal, payloads[4]);
+    log.sync();
+    EXPECT_EQ(log.segment(), 2u);
+    EXPECT_EQ(log.bytes(), fs::file_size(dir.path / "journal.log") + fs::file_size(dir.path / "journal-1.log") +
+                               fs::file_size(dir.path / "journal-2.log"));
+  }
+  auto got = read_all(dir.path);
+  ASSERT_EQ(got.size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(got[i].second, payloads[i]) << i;
+  EXPECT_EQ(got[1].first, RecordKind::Snapshot);
+  {
+    JournalLog log(dir.path.string());
+    EXPECT_EQ(log.index().size(), 5u);
+    EXPECT_EQ(log.index()[3].segment, 2u);
+    EXPECT_EQ(log.payload(2), payloads[2]);
+    log.drop_segments_before(1);
+    EXPECT_EQ(log.first_segment(), 1u);
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "journal.log"));
+  got = read_all(dir.path);
+  ASSERT_EQ(got.size(), 4u);
+  EXPECT_EQ(got[0].second, payloads[1]);
+  // A newest segment without its first record (cut while it was started) is removed; appends go before it.
+  {
+    std::vector<std::uint8_t> header = file_bytes(dir.path / "journal-2.log");
+    header.resize(16);
+    write_bytes(dir.path / "journal-3.log", header);
+    JournalLog log(dir.path.string());
+    EXPECT_EQ(log.segment(), 2u);
+    EXPECT_EQ(log.index().size(), 4u);
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "journal-3.log"));
+  // A corrupt segment before the last one is an error, never skipped.
+  std::vector<std::uint8_t> middle = file_bytes(dir.path / "journal-1.log");
+  middle.back() ^= 1;
+  write_bytes(dir.path / "journal-1.log", middle);
+  EXPECT_THROW(read_all(dir.path), JournalError);
+  // A gap between segments (2, then 4) is an error too.
+  fs::remove(dir.path / "journal-1.log");
+  fs::copy_file(dir.path / "journal-2.log", dir.path / "journal-4.log");
+  EXPECT_THROW(read_all(dir.path), JournalError);
+}

@@ -31,6 +31,11 @@ bool FileLoads::busy(const std::string& session) const {
   return std::any_of(jobs_.begin(), jobs_.end(), [&](const Job& j) { return j.load.session == session; });
 }
 
+bool FileLoads::idle() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return jobs_.empty();
+}
+
 std::size_t FileLoads::running() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return static_cast<std::size_t>(std::count_if(jobs_.begin(), jobs_.end(), [](const Job& j) { return !j.done; }));

@@ -47,6 +47,8 @@ class FileLoads {
   // Whether a load into `session` is running or waits to be collected.
   bool busy(const std::string& session) const;
   std::size_t running() const;
+  // Whether no load is running or waits to be collected.
+  bool idle() const;
 
   // Runs `work` on a new thread for `load` (the caller checked busy() and running()).
   void start(FileLoad load, std::function<SurfelArrays()> work);

@@ -1,9 +1,12 @@
 #include "journal.hpp"
 
+#include <algorithm>
 #include <condition_variable>
 #include <mutex>
 
 #include "journal_records.hpp"
+#include "journal_snapshot.hpp"
+#include "surfeledit/core/snapshot_io.hpp"
 #include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/log.hpp"
 
@@ -12,6 +15,7 @@ namespace surfeledit::service {
 namespace {
 
 constexpr std::size_t kMaxKeptForLater = 64;  // deferred requests whose CDR waits for their reply
+constexpr std::uint64_t kRetryRecords = 8;     // a deferred snapshot is tried again after this many records
 
 std::string str_of(const char* s) { return s ? std::string(s) : std::string(); }
 
@@ -41,13 +45,14 @@ std::shared_ptr<const Reply> finish_deferred(Handler& handler, LoadSignal& signa
 
 }  // namespace
 
-Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config) {
+Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config), handler_(handler) {
   if (config_.sync == JournalSync::Group && (config_.group_ms == 0 || config_.group_ms > 10'000)) {
     throw JournalError("journal group commit interval must be in 1..10000 ms");
   }
   if (config_.rejoin_ms == 0 || config_.rejoin_ms > 3'600'000) {
     throw JournalError("journal rejoin time must be in 1..3600000 ms");
   }
+  if (config_.snapshot_mb > (std::uint64_t(1) << 20)) throw JournalError("journal snapshot size must be at most 1 TiB");
   const auto t0 = Clock::now();
   LoadSignal signal;
   handler.set_on_load_done([&signal] {
@@ -56,14 +61,16 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
     signal.cv.notify_all();
   });
   try {
-    log_ = std::make_unique<JournalLog>(config_.dir, [&](RecordKind kind, const std::vector<std::uint8_t>& payload) {
+    log_ = std::make_unique<JournalLog>(config_.dir);
+    const std::size_t from = restore_newest_snapshot(handler);
+    log_->read(from, [&](RecordKind kind, const std::vector<std::uint8_t>& payload) {
       try {
         replay(kind, payload, handler, [&](const Command& c) { return finish_deferred(handler, signal, c); });
+        ++recovery_.replayed;
       } catch (const JournalError&) {
         throw;
       } catch (const std::exception& e) {
-        throw JournalError("journal record " + std::to_string(recovery_.requests + recovery_.refusals +
-                                                              recovery_.expiries + 1) +
+        throw JournalError("journal record " + std::to_string(from + recovery_.replayed + 1) +
                            " could not be replayed: " + e.what());
       }
     });
@@ -73,13 +80,54 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
   }
   handler.set_on_load_done({});
   handler.start_recovered_leases(std::chrono::milliseconds(config_.rejoin_ms));
+  // Snapshots count from the current segment's start (its Snapshot record, or the log's start).
+  const auto& index = log_->index();
+  since_snapshot_ = static_cast<std::uint64_t>(
+      std::count_if(index.begin(), index.end(), [&](const JournalLog::RecordRef& r) { return r.segment == log_->segment(); }));
+  total_records_ = index.size();
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    if (index[i].kind != RecordKind::Snapshot) continue;
+    total_records_ += journal::decode_snapshot(log_->payload(i)).records - i;
+    break;
+  }
   recovery_.bytes = log_->bytes();
   recovery_.cut_bytes = log_->cut_bytes();
   recovery_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  logger()->info("journal '{}': recovered {} request(s), {} refusal(s), {} expiries from {:.1f} MB in {:.0f} ms{}",
+  logger()->info("journal '{}': recovered {} request(s), {} refusal(s), {} expiries from {:.1f} MB in {:.0f} ms: "
+                 "{}, {} record(s) replayed{}",
                  log_->path(), recovery_.requests, recovery_.refusals, recovery_.expiries,
                  static_cast<double>(recovery_.bytes) / 1e6, recovery_.ms,
-                 recovery_.cut_bytes ? " (a torn tail was cut)" : "");
+                 recovery_.snapshot ? "snapshot " + std::to_string(recovery_.snapshot) + " restored (" +
+                                          std::to_string(recovery_.skipped) + " record(s) before it not replayed)"
+                                    : std::string("no snapshot"),
+                 recovery_.replayed, recovery_.cut_bytes ? " (a torn tail was cut)" : "");
+}
+
+std::size_t Journal::restore_newest_snapshot(Handler& handler) {
+  const auto& index = log_->index();
+  for (std::size_t i = index.size(); i-- > 0;) {
+    if (index[i].kind != RecordKind::Snapshot) continue;
+    const journal::SnapshotRecord record = journal::decode_snapshot(log_->payload(i));
+    try {
+      const std::string bytes = journal::read_snapshot_file(config_.dir, record);
+      SnapshotReader in(bytes.data() + journal::kSnapshotHeaderBytes, bytes.size() - journal::kSnapshotHeaderBytes);
+      handler.restore(in);  // reads and checks everything before it changes anything
+    } catch (const std::exception& e) {
+      logger()->warn("journal: snapshot {} (record {}) not restored: {}; falling back to an older snapshot or the "
+                     "log's start",
+                     record.seq, i + 1, e.what());
+      continue;
+    }
+    recovery_.snapshot = record.seq;
+    recovery_.skipped = i + 1;
+    kept_snapshot_ = record.seq;
+    return i + 1;
+  }
+  if (log_->first_segment() != 0) {
+    throw JournalError("journal '" + config_.dir + "': no snapshot in it could be restored and the log before segment " +
+                       std::to_string(log_->first_segment()) + " was deleted: not recovered (see the lines above)");
+  }
+  return 0;
 }
 
 void Journal::replay(RecordKind kind, const std::vector<std::uint8_t>& payload, Handler& handler,
@@ -117,6 +165,8 @@ void Journal::replay(RecordKind kind, const std::vector<std::uint8_t>& payload, 
     case RecordKind::Expiry:
       handler.apply_expiry(journal::decode_expiry(payload).expiry, ignored);
       ++recovery_.expiries;
+      return;
+    case RecordKind::Snapshot:  // a snapshot newer than the one restored: not usable; its state is replayed
       return;
   }
 }
@@ -179,6 +229,8 @@ void Journal::on_expired(const Expiry& expiry) {
 
 void Journal::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
   log_->append(kind, payload);
+  ++since_snapshot_;
+  ++total_records_;
   if (config_.sync == JournalSync::Op) {
     log_->sync();
     return;
@@ -215,6 +267,68 @@ void Journal::flush(bool force) {
   std::vector<std::function<void()>> ready;
   ready.swap(waiting_);
   for (auto& release : ready) release();
+}
+
+void Journal::maybe_snapshot() {
+  if (failed() || (config_.snapshot_records == 0 && config_.snapshot_mb == 0)) return;
+  const bool due = (config_.snapshot_records && since_snapshot_ >= config_.snapshot_records) ||
+                   (config_.snapshot_mb && log_->segment_bytes() > (config_.snapshot_mb << 20));
+  if (!due || since_snapshot_ < retry_at_) return;
+  const Handler::SnapshotBlock block = handler_.not_snapshottable();
+  if (!block.why.empty()) {
+    // Tried again at the next record when an upload or load is what waits (it ends by itself), else a
+    // few records later (a session that is not snapshottable is closed or reconfigured).
+    retry_at_ = since_snapshot_ + (block.soon ? 1 : kRetryRecords);
+    if (block.why != deferred_) {
+      logger()->info("journal: snapshot deferred ({}); the log keeps every record", block.why);
+    }
+    deferred_ = block.why;
+    return;
+  }
+  deferred_.clear();
+  retry_at_ = 0;
+  take_snapshot();
+}
+
+void Journal::take_snapshot() {
+  const auto t0 = Clock::now();
+  flush(true);  // the open group's replies go out: the snapshot follows every record before it
+  if (failed()) return;
+  const std::uint64_t seq = log_->segment() + 1;
+  journal::SnapshotRecord record;
+  double save_ms = 0.0;
+  try {
+    std::vector<std::string> parts;
+    const auto s0 = Clock::now();
+    handler_.save(parts);
+    save_ms = std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
+    record = journal::write_snapshot_file(*log_, seq, parts);
+    record.records = total_records_;
+    log_->start_segment(seq, RecordKind::Snapshot, journal::encode(record));
+  } catch (const std::exception& e) {
+    // Nothing changed: the log goes on in its segment; tried again after as many records.
+    retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);
+    logger()->error("journal: snapshot {} not taken: {}; the log keeps every record", seq, e.what());
+    return;
+  }
+  ++total_records_;
+  since_snapshot_ = 1;  // the Snapshot record
+  try {
+    // The new snapshot is durable: keep the one before it as its fallback, drop what is older.
+    log_->drop_segments_before(kept_snapshot_);
+    journal::remove_snapshots_before(*log_, kept_snapshot_);
+  } catch (const std::exception& e) {
+    logger()->warn("journal: old segments or snapshots not removed: {}", e.what());
+  }
+  kept_snapshot_ = seq;
+  snapshots_.taken += 1;
+  snapshots_.seq = seq;
+  snapshots_.bytes = record.file_bytes;
+  snapshots_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  snapshots_.save_ms = save_ms;
+  logger()->info("journal: snapshot {} taken after {} record(s): {:.2f} MB, the request loop waited {:.1f} ms, of "
+                 "which {:.1f} ms saving the state (the rest: writing, fsyncs, the new segment)",
+                 seq, record.records, static_cast<double>(record.file_bytes) / 1e6, snapshots_.ms, save_ms);
 }
 
 }  // namespace surfeledit::service

@@ -27,7 +27,19 @@ struct RecoveryStats {
   std::uint64_t expiries = 0;   // lease and grace expiries re-applied
   std::uint64_t bytes = 0;      // log size after recovery
   std::uint64_t cut_bytes = 0;  // torn / corrupt tail cut
-  double ms = 0.0;              // wall time of the replay
+  std::uint64_t snapshot = 0;   // the snapshot restored (its number); 0: replayed from the log's start
+  std::uint64_t skipped = 0;    // records before that snapshot, not replayed
+  std::uint64_t replayed = 0;   // records after it, replayed (requests, refusals, expiries, snapshots)
+  double ms = 0.0;              // wall time of the recovery (restore and replay)
+};
+
+// The last snapshot taken.
+struct SnapshotStats {
+  std::uint64_t taken = 0;      // snapshots taken since start
+  std::uint64_t seq = 0;        // the last one's number
+  std::uint64_t bytes = 0;      // its file's size
+  double ms = 0.0;              // how long it blocked the request loop (save, write, fsyncs, new segment)
+  double save_ms = 0.0;         // of which Handler::save
 };
 
 class Journal {
@@ -64,16 +76,28 @@ class Journal {
   // releases that waited for it.
   void flush(bool force = false);
 
+  // Takes a snapshot when one is due (JournalConfig::snapshot_records / snapshot_mb) and the handler's
+  // state can be saved (else it is deferred, with a log line saying why); call on the request thread
+  // between two requests. Commits the open group first. A snapshot that cannot be written is logged and
+  // retried later (the log goes on); a failure after its record was durable stops the journal (failed()).
+  void maybe_snapshot();
+  const SnapshotStats& snapshots() const { return snapshots_; }
+
   // An append or fsync failed: nothing more is released; the server must stop.
   bool failed() const { return !failure_.empty(); }
   const std::string& failure() const { return failure_; }
 
  private:
   void append(RecordKind kind, const std::vector<std::uint8_t>& payload);
+  // Restores the newest snapshot in the log whose file verifies (older ones, then the log's start, as
+  // fallbacks); returns the index of the first record to replay.
+  std::size_t restore_newest_snapshot(Handler& handler);
+  void take_snapshot();
   void replay(RecordKind kind, const std::vector<std::uint8_t>& payload, Handler& handler,
               const std::function<std::shared_ptr<const Reply>(const Command&)>& wait_deferred);
 
   JournalConfig config_;
+  Handler& handler_;
   std::unique_ptr<JournalLog> log_;
   RecoveryStats recovery_;
   const surfeledit_proto_Request* serving_ = nullptr;
@@ -83,6 +107,12 @@ class Journal {
   std::optional<Clock::time_point> deadline_;      // group commit: when the open group is synced
   std::vector<std::function<void()>> waiting_;     // releases waiting for the group's fsync
   std::string failure_;
+  std::uint64_t since_snapshot_ = 0;  // records appended since the last snapshot (or the current segment's start)
+  std::uint64_t retry_at_ = 0;        // a deferred snapshot is tried again once since_snapshot_ reaches this
+  std::uint64_t kept_snapshot_ = 0;   // the snapshot kept as the fallback of the next one (0: the log's start)
+  std::uint64_t total_records_ = 0;   // records journaled since the journal began (for the Snapshot record)
+  std::string deferred_;              // why the due snapshot waits (logged once per reason)
+  SnapshotStats snapshots_;
 };
 
 }  // namespace surfeledit::service

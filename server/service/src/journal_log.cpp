@@ -3,13 +3,16 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
+#include <set>
 #include <string>
+#include <utility>
 
+#include "journal_snapshot.hpp"
 #include "surfeledit/service/journal.hpp"
 #include "surfeledit/service/log.hpp"
 
@@ -36,16 +39,7 @@ std::uint32_t get_u32(const std::uint8_t* p) {
 
 // CRC-32 of the kind byte and the payload.
 std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size_t size) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  crc = crc32(crc, &kind, 1);
-  // zlib takes uInt lengths: feed large payloads in pieces.
-  while (size > 0) {
-    const std::size_t n = std::min<std::size_t>(size, 1u << 30);
-    crc = crc32(crc, payload, static_cast<uInt>(n));
-    payload += n;
-    size -= n;
-  }
-  return static_cast<std::uint32_t>(crc);
+  return journal::crc32_of(payload, size, journal::crc32_of(&kind, 1));
 }
 
 // Reads exactly `size` bytes at `offset`; false at end of file first.
@@ -75,10 +69,19 @@ void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::st
   }
 }
 
+// The header of a new segment.
+std::array<std::uint8_t, kHeaderBytes> new_header() {
+  std::array<std::uint8_t, kHeaderBytes> header{};
+  std::memcpy(header.data(), kMagic.data(), kMagic.size());
+  put_u32(header.data() + 8, kFormat);
+  put_u32(header.data() + 12, kRecordFormat);
+  return header;
+}
+
 bool known_kind(std::uint8_t kind) {
   return kind == static_cast<std::uint8_t>(RecordKind::Request) ||
          kind == static_cast<std::uint8_t>(RecordKind::Refusal) ||
-         kind == static_cast<std::uint8_t>(RecordKind::Expiry);
+         kind == static_cast<std::uint8_t>(RecordKind::Expiry) || kind == static_cast<std::uint8_t>(RecordKind::Snapshot);
 }
 
 }  // namespace
@@ -96,9 +99,17 @@ UniqueFd& UniqueFd::operator=(UniqueFd&& other) noexcept {
   return *this;
 }
 
+std::string JournalLog::segment_path(const std::string& dir, std::uint64_t segment) {
+  return segment == 0 ? dir + "/journal.log" : dir + "/journal-" + std::to_string(segment) + ".log";
+}
+
 JournalLog::JournalLog(const std::string& dir,
                        const std::function<void(RecordKind, const std::vector<std::uint8_t>&)>& on_record)
-    : path_(dir + "/journal.log") {
+    : JournalLog(dir) {
+  read(0, on_record);
+}
+
+JournalLog::JournalLog(const std::string& dir) : dir_(dir) {
   if (dir.empty()) throw JournalError("journal directory is empty");
   if (::mkdir(dir.c_str(), 0700) == 0) {
     // A new directory: its entry in the parent must reach the disk too.
@@ -114,9 +125,50 @@ JournalLog::JournalLog(const std::string& dir,
     if (errno == EWOULDBLOCK) throw JournalError("journal directory '" + dir + "' is in use by another server");
     fail("cannot lock journal directory '" + dir + "'", errno);
   }
+  // The segments, by number: journal.log is 0, journal-<k>.log is k.
+  std::set<std::uint64_t> segments;
+  std::error_code ec;
+  for (const auto& item : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = item.path().filename().string();
+    if (name == "journal.log") {
+      segments.insert(0);
+    } else if (name.rfind("journal-", 0) == 0 && name.size() > 12 && name.compare(name.size() - 4, 4, ".log") == 0) {
+      const std::string digits = name.substr(8, name.size() - 12);
+      if (digits.find_first_not_of("0123456789") == std::string::npos && digits.size() < 19 && digits[0] != '0') {
+        segments.insert(std::stoull(digits));
+      }
+    }
+  }
+  if (ec) fail("cannot list journal directory '" + dir + "'", ec.value());
+  if (segments.empty()) segments.insert(0);
+  if (*segments.rbegin() - *segments.begin() + 1 != segments.size()) {
+    throw JournalError("journal '" + dir + "': segments " + std::to_string(*segments.begin()) + " to " +
+                       std::to_string(*segments.rbegin()) + " have gaps (a segment file was removed)");
+  }
+  first_ = *segments.begin();
+  for (std::uint64_t k : segments) scan(k, k == *segments.rbegin());
+  // A newest segment k > 0 without its snapshot record (cut while it was started): appends go to the
+  // one before.
+  if (segment_ > first_ && (index_.empty() || index_.back().segment != segment_)) {
+    fd_ = UniqueFd();
+    if (::unlink(path_.c_str()) != 0) fail("cannot remove the empty journal segment '" + path_ + "'", errno);
+    sync_dir();
+    --segment_;
+    path_ = segment_path(dir_, segment_);
+    size_ = older_.at(segment_);
+    older_.erase(segment_);
+    fd_ = UniqueFd(::open(path_.c_str(), O_RDWR | O_CLOEXEC));
+    if (fd_.get() < 0) fail("cannot open journal '" + path_ + "'", errno);
+  }
+}
+
+void JournalLog::scan(std::uint64_t segment, bool last) {
+  if (fd_.get() >= 0) older_[segment_] = size_;
+  segment_ = segment;
+  path_ = segment_path(dir_, segment);
   bool created = false;
   fd_ = UniqueFd(::open(path_.c_str(), O_RDWR | O_CLOEXEC));
-  if (fd_.get() < 0 && errno == ENOENT) {
+  if (fd_.get() < 0 && errno == ENOENT && segment == 0) {
     fd_ = UniqueFd(::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
     created = true;
   }
@@ -126,19 +178,17 @@ JournalLog::JournalLog(const std::string& dir,
   const auto file_size = static_cast<std::uint64_t>(st.st_size);
 
   if (file_size < kHeaderBytes) {
+    if (!last) throw JournalError("journal segment '" + path_ + "' has no complete header but later segments exist");
     // New, or cut short before its header was complete (nothing can follow then): write the header.
     if (file_size > 0) logger()->warn("journal '{}': {} byte(s) without a complete header; starting it anew", path_, file_size);
     if (::ftruncate(fd_.get(), 0) != 0) fail("cannot truncate journal '" + path_ + "'", errno);
-    std::array<std::uint8_t, kHeaderBytes> header{};
-    std::memcpy(header.data(), kMagic.data(), kMagic.size());
-    put_u32(header.data() + 8, kFormat);
-    put_u32(header.data() + 12, kRecordFormat);
+    const std::array<std::uint8_t, kHeaderBytes> header = new_header();
     if (::lseek(fd_.get(), 0, SEEK_SET) < 0) fail("cannot seek in journal '" + path_ + "'", errno);
     write_all(fd_.get(), header.data(), header.size(), path_);
     if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
-    if (created && ::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir + "'", errno);
+    if (created && ::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir_ + "'", errno);
     size_ = kHeaderBytes;
-    cut_bytes_ = file_size;
+    cut_bytes_ += file_size;
     return;
   }
   std::array<std::uint8_t, kHeaderBytes> header{};
@@ -190,14 +240,18 @@ JournalLog::JournalLog(const std::string& dir,
       bad = "an unknown record kind " + std::to_string(kind);
       break;
     }
-    on_record(static_cast<RecordKind>(kind), payload);
+    index_.push_back(RecordRef{segment, at, length, static_cast<RecordKind>(kind)});
     ++records_;
     at += kFrameBytes + length;
   }
   if (at < file_size) {
-    cut_bytes_ = file_size - at;
+    if (!last) {
+      throw JournalError("journal segment '" + path_ + "' is corrupt at offset " + std::to_string(at) + " (" + bad +
+                         ") but later segments exist: not recovered (move the directory away to start anew)");
+    }
+    cut_bytes_ += file_size - at;
     logger()->warn("journal '{}': cut {} byte(s) after record {} at offset {} ({}): a torn or corrupt tail, not applied",
-                   path_, cut_bytes_, records_, at, bad);
+                   path_, file_size - at, records_, at, bad);
     if (::ftruncate(fd_.get(), static_cast<off_t>(at)) != 0) fail("cannot cut journal '" + path_ + "'", errno);
     if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
   }
@@ -205,6 +259,82 @@ JournalLog::JournalLog(const std::string& dir,
 }
 
 JournalLog::~JournalLog() = default;
+
+std::uint64_t JournalLog::bytes() const {
+  std::uint64_t n = size_;
+  for (const auto& [k, size] : older_) n += size;
+  return n;
+}
+
+std::vector<std::uint8_t> JournalLog::payload(std::size_t i) const {
+  const RecordRef& r = index_.at(i);
+  const std::string path = segment_path(dir_, r.segment);
+  UniqueFd own;
+  int fd = fd_.get();
+  if (r.segment != segment_) {
+    own = UniqueFd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+    if (own.get() < 0) fail("cannot open journal '" + path + "'", errno);
+    fd = own.get();
+  }
+  std::vector<std::uint8_t> out(r.length);
+  if (!read_at(fd, r.offset + kFrameBytes, out.data(), out.size(), path)) {
+    throw JournalError("journal '" + path + "' is shorter than when it was opened");
+  }
+  return out;
+}
+
+void JournalLog::read(std::size_t from,
+                      const std::function<void(RecordKind, const std::vector<std::uint8_t>&)>& on_record) const {
+  for (std::size_t i = from; i < index_.size(); ++i) on_record(index_[i].kind, payload(i));
+}
+
+void JournalLog::sync_dir() {
+  if (::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir_ + "'", errno);
+}
+
+void JournalLog::start_segment(std::uint64_t segment, RecordKind kind, const std::vector<std::uint8_t>& payload) {
+  if (segment <= segment_) throw JournalError("journal segment " + std::to_string(segment) + " is not new");
+  std::string path = segment_path(dir_, segment);
+  UniqueFd fd(::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
+  if (fd.get() < 0) fail("cannot create journal segment '" + path + "'", errno);
+  // append() writes to the new segment; on failure everything goes back to the current one.
+  const std::uint64_t old_size = size_, old_records = records_;
+  std::swap(fd_, fd);
+  std::swap(path_, path);
+  size_ = 0;
+  try {
+    const std::array<std::uint8_t, kHeaderBytes> header = new_header();
+    write_all(fd_.get(), header.data(), header.size(), path_);
+    size_ = kHeaderBytes;
+    append(kind, payload);
+    if (::fdatasync(fd_.get()) != 0) fail("cannot fdatasync journal '" + path_ + "'", errno);
+    sync_dir();
+  } catch (...) {
+    ::unlink(path_.c_str());
+    std::swap(fd_, fd);
+    std::swap(path_, path);
+    size_ = old_size;
+    records_ = old_records;
+    throw;
+  }
+  older_[segment_] = old_size;
+  segment_ = segment;
+}
+
+void JournalLog::drop_segments_before(std::uint64_t segment) {
+  segment = std::min(segment, segment_);
+  bool dropped = false;
+  for (auto it = older_.begin(); it != older_.end() && it->first < segment;) {
+    const std::string path = segment_path(dir_, it->first);
+    if (::unlink(path.c_str()) != 0 && errno != ENOENT) fail("cannot remove journal segment '" + path + "'", errno);
+    it = older_.erase(it);
+    dropped = true;
+  }
+  if (dropped) {
+    first_ = older_.empty() ? segment_ : older_.begin()->first;
+    sync_dir();
+  }
+}
 
 void JournalLog::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
   if (payload.size() > kMaxRecordBytes) {

@@ -169,37 +169,62 @@ Reply reply_of(const RefusalRecord& r) {
   return reply;
 }
 
-std::vector<std::uint8_t> request_cdr(const surfeledit_proto_Request& request) {
+std::vector<std::uint8_t> sample_cdr(const void* sample, const dds_topic_descriptor_t& type) {
   dds_ostream_t os;
   dds_ostream_init(&os, 0, kXcdr2);
-  const bool ok = dds_stream_write(&os, reinterpret_cast<const char*>(&request), surfeledit_proto_Request_desc.m_ops) != nullptr;
+  const bool ok = dds_stream_write(&os, static_cast<const char*>(sample), type.m_ops) != nullptr;
   std::vector<std::uint8_t> out;
   if (ok) out.assign(os.m_buffer, os.m_buffer + os.m_index);
   dds_ostream_fini(&os);
-  if (!ok) throw JournalError("the request could not be serialized for the journal");
+  if (!ok) throw JournalError(std::string("a ") + type.m_typename + " sample could not be serialized for the journal");
   return out;
 }
 
-RequestSample::RequestSample(std::vector<std::uint8_t> cdr) {
-  if (cdr.empty()) throw JournalError("journal request record holds no Request sample");
-  if (cdr.size() > std::numeric_limits<std::uint32_t>::max()) throw JournalError("journal request too large");
+std::vector<std::uint8_t> request_cdr(const surfeledit_proto_Request& request) {
+  return sample_cdr(&request, surfeledit_proto_Request_desc);
+}
+
+CdrSample::CdrSample(std::vector<std::uint8_t> cdr, const dds_topic_descriptor_t& type) : type_(type) {
+  const std::string name = type.m_typename;
+  if (cdr.empty()) throw JournalError("journal record holds no " + name + " sample");
+  if (cdr.size() > std::numeric_limits<std::uint32_t>::max()) throw JournalError("journal " + name + " too large");
   const auto size = static_cast<std::uint32_t>(cdr.size());
   std::uint32_t offset = 0;
-  if (dds_stream_normalize_data(reinterpret_cast<char*>(cdr.data()), &offset, size, false, kXcdr2,
-                                surfeledit_proto_Request_desc.m_ops) == nullptr ||
+  if (dds_stream_normalize_data(reinterpret_cast<char*>(cdr.data()), &offset, size, false, kXcdr2, type.m_ops) ==
+          nullptr ||
       offset != size) {
-    throw JournalError("journal request record does not hold a valid Request sample");
+    throw JournalError("journal record does not hold a valid " + name + " sample");
   }
-  sample_ = static_cast<surfeledit_proto_Request*>(dds_alloc(sizeof(surfeledit_proto_Request)));
+  sample_ = dds_alloc(type.m_size);
   if (!sample_) throw std::bad_alloc();
   dds_istream_t is;
   dds_istream_init(&is, size, cdr.data(), kXcdr2);
-  dds_stream_read(&is, reinterpret_cast<char*>(sample_), surfeledit_proto_Request_desc.m_ops);
+  dds_stream_read(&is, static_cast<char*>(sample_), type.m_ops);
   dds_istream_fini(&is);
 }
 
-RequestSample::~RequestSample() {
-  if (sample_) dds_sample_free(sample_, &surfeledit_proto_Request_desc, DDS_FREE_ALL);
+CdrSample::~CdrSample() {
+  if (sample_) dds_sample_free(sample_, &type_, DDS_FREE_ALL);
+}
+
+std::vector<std::uint8_t> encode(const SnapshotRecord& r) {
+  Writer w;
+  w.u64(r.seq);
+  w.u64(r.file_bytes);
+  w.u32(r.file_crc);
+  w.u64(r.records);
+  return w.take();
+}
+
+SnapshotRecord decode_snapshot(const std::vector<std::uint8_t>& payload) {
+  Reader in(payload, "snapshot");
+  SnapshotRecord r;
+  r.seq = in.u64();
+  r.file_bytes = in.u64();
+  r.file_crc = in.u32();
+  r.records = in.u64();
+  in.end();
+  return r;
 }
 
 }  // namespace surfeledit::service::journal

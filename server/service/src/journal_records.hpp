@@ -52,21 +52,57 @@ ExpiryRecord decode_expiry(const std::vector<std::uint8_t>& payload);
 RefusalRecord refusal_of(const Reply& reply);
 Reply reply_of(const RefusalRecord& r);
 
-// The request sample's CDR (XCDR2, native byte order).
+// A snapshot taken (journal_snapshot.hpp): the file snapshot-<seq>.bin beside the log, written and
+// made durable before this record, which is the first record of log segment `seq`.
+struct SnapshotRecord {
+  std::uint64_t seq = 0;         // the snapshot's number (= the segment it starts)
+  std::uint64_t file_bytes = 0;  // size of the file
+  std::uint32_t file_crc = 0;    // CRC-32 (zlib) of the whole file
+  std::uint64_t records = 0;     // records journaled before it since the journal began (for logs)
+};
+
+std::vector<std::uint8_t> encode(const SnapshotRecord& r);
+SnapshotRecord decode_snapshot(const std::vector<std::uint8_t>& payload);
+
+// A sample's CDR (XCDR2, native byte order) from its IDL type's descriptor: generic over topic types.
+std::vector<std::uint8_t> sample_cdr(const void* sample, const dds_topic_descriptor_t& type);
+// The request sample's CDR.
 std::vector<std::uint8_t> request_cdr(const surfeledit_proto_Request& request);
 
-// A request sample read back from CDR; owns its memory (freed with the type's descriptor).
-class RequestSample {
+// A sample of an IDL type read back from CDR; owns its memory (freed with the type's descriptor).
+class CdrSample {
  public:
-  // Validates (dds_stream_normalize_data) and reads the CDR; throws JournalError when it is not a Request.
-  explicit RequestSample(std::vector<std::uint8_t> cdr);
-  ~RequestSample();
-  RequestSample(const RequestSample&) = delete;
-  RequestSample& operator=(const RequestSample&) = delete;
-  const surfeledit_proto_Request& get() const { return *sample_; }
+  // Validates (dds_stream_normalize_data) and reads the CDR; throws JournalError when it is not a
+  // sample of `type`. `type` must outlive the object (the generated descriptors are static).
+  CdrSample(std::vector<std::uint8_t> cdr, const dds_topic_descriptor_t& type);
+  ~CdrSample();
+  CdrSample(const CdrSample&) = delete;
+  CdrSample& operator=(const CdrSample&) = delete;
+  const void* get() const { return sample_; }
 
  private:
-  surfeledit_proto_Request* sample_ = nullptr;
+  const dds_topic_descriptor_t& type_;
+  void* sample_ = nullptr;
+};
+
+// A request sample read back from CDR.
+class RequestSample {
+ public:
+  explicit RequestSample(std::vector<std::uint8_t> cdr) : sample_(std::move(cdr), surfeledit_proto_Request_desc) {}
+  const surfeledit_proto_Request& get() const { return *static_cast<const surfeledit_proto_Request*>(sample_.get()); }
+
+ private:
+  CdrSample sample_;
+};
+
+// A reply sample read back from CDR (a reply restored from a snapshot: Reply::wire).
+class ReplySample {
+ public:
+  explicit ReplySample(std::vector<std::uint8_t> cdr) : sample_(std::move(cdr), surfeledit_proto_Reply_desc) {}
+  const surfeledit_proto_Reply& get() const { return *static_cast<const surfeledit_proto_Reply*>(sample_.get()); }
+
+ private:
+  CdrSample sample_;
 };
 
 }  // namespace surfeledit::service::journal

@@ -94,11 +94,11 @@ std::shared_ptr<const Reply> RequestCache::find(const std::string& client_id, st
   return rit->second.reply;
 }
 
-void RequestCache::put(std::shared_ptr<const Reply> reply) {
+void RequestCache::put(std::shared_ptr<const Reply> reply, std::optional<std::size_t> bytes) {
   if (!reply) throw std::invalid_argument("RequestCache::put: null reply");
   const std::string client_id = reply->client_id;
   const std::uint64_t id = reply->request_id;
-  const std::size_t size = reply_bytes(*reply);
+  const std::size_t size = bytes ? *bytes : reply_bytes(*reply);
   {
     ClientReplies& c = touch(client_id);
     auto rit = c.by_id.find(id);
@@ -119,6 +119,13 @@ void RequestCache::put(std::shared_ptr<const Reply> reply) {
     ClientReplies& c = clients_.at(oldest.first);
     erase(c, c.by_id.find(oldest.second));
     if (c.by_id.empty() && oldest.first != client_id) drop_client(oldest.first);
+  }
+}
+
+void RequestCache::for_each_oldest_first(const std::function<void(const Reply&, std::size_t)>& fn) const {
+  for (auto it = lru_.rbegin(); it != lru_.rend(); ++it) {
+    const Slot& slot = clients_.at(it->first).by_id.at(it->second);
+    fn(*slot.reply, slot.bytes);
   }
 }
 

@@ -47,6 +47,14 @@ SessionEntry& SessionRegistry::open(const std::string& name, const std::string& 
   return it->second;
 }
 
+SessionEntry& SessionRegistry::restored(const std::string& name) {
+  validate_name(name);
+  if (sessions_.count(name)) throw Error(ErrorCode::InvalidArgument, "snapshot", "session '" + name + "' saved twice");
+  SessionEntry entry;
+  entry.session = std::make_unique<EditSession>(name, params_);
+  return sessions_.emplace(name, std::move(entry)).first->second;
+}
+
 SessionEntry& SessionRegistry::join(const std::string& name, const std::string& client, const std::string& token,
                                     std::optional<Role> granted) {
   validate_name(name);

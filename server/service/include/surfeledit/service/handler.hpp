@@ -19,6 +19,10 @@
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/update.hpp"
 
+namespace surfeledit {
+class SnapshotReader;
+}  // namespace surfeledit
+
 namespace surfeledit::service {
 
 struct HandlerConfig {
@@ -102,6 +106,23 @@ class Handler {
   void remember(const Reply& reply);
   // The token the next OP_INVITE hands out instead of a fresh random one (replay); once.
   void set_next_token(std::string token);
+
+  // Journal snapshots (handler_snapshot.cpp; docs/journal.md). not_snapshottable(): why the state
+  // kept between requests cannot be saved now ("" when it can): a session that is not snapshottable
+  // (EditSession::not_snapshottable), an unfinished upload, a file load in progress. save(): appends
+  // that state (sessions with their members, roles, invitations, activity and grace, the clients away,
+  // the replies kept for repeats as the CDR of the IDL Reply) to `parts`, whose concatenation is the
+  // snapshot (the sessions' core snapshots are parts of their own: not copied); Internal when not snapshottable.
+  // restore(): replaces it by a saved one, read and checked whole before anything changes (a corrupt
+  // one throws and changes nothing); times are kept as durations before the save. Clients are bound to
+  // no writer afterwards, as after a replay (start_recovered_leases).
+  struct SnapshotBlock {
+    std::string why;    // empty: the state can be saved
+    bool soon = false;  // an unfinished upload or a running file load: ends by itself, worth trying again soon
+  };
+  SnapshotBlock not_snapshottable() const;
+  void save(std::vector<std::string>& parts) const;
+  void restore(SnapshotReader& in);
 
   // The model an update event refers to (nullptr when its session is gone or has none).
   const SurfelModel* model_of(const std::string& session);

@@ -184,6 +184,10 @@ struct Reply {
   std::optional<BlendInfo> blend;    // OP_BLEND
   std::optional<FillInfo> fill;      // OP_FILL_HOLES
   std::vector<PeerInfo> peers;       // OP_PEERS
+  // A reply restored from a journal snapshot (docs/journal.md): the whole reply as the CDR of the IDL
+  // Reply, written as it is; the members above then hold only what the cache and journal read (ids, op,
+  // status, field, message, version, token). Empty for a reply built here.
+  std::vector<std::uint8_t> wire;
 };
 
 }  // namespace surfeledit::service

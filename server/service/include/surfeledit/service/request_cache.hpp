@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <list>
 #include <memory>
 #include <string>
@@ -35,7 +37,11 @@ class RequestCache {
   std::shared_ptr<const Reply> find(const std::string& client_id, std::uint64_t request_id);
   // Stores (or replaces) the reply of `reply.client_id`, `reply.request_id`. A reply larger than
   // the byte bound is not stored.
-  void put(std::shared_ptr<const Reply> reply);
+  // `bytes`: its reply_bytes() when it was first stored (a reply restored from a snapshot).
+  void put(std::shared_ptr<const Reply> reply, std::optional<std::size_t> bytes = std::nullopt);
+  // Every stored reply with its counted bytes, least recently used first (putting them in this order
+  // rebuilds the same order).
+  void for_each_oldest_first(const std::function<void(const Reply&, std::size_t bytes)>& fn) const;
   // Forgets everything about a client.
   void forget(const std::string& client_id);
 

@@ -63,6 +63,9 @@ class SessionRegistry {
   // Detaches the client without dropping the session (Conflict if not attached); returns true when
   // no client is attached any more (the caller keeps it for the grace period, then drop()s it).
   bool leave(const std::string& name, const std::string& client);
+  // A session restored from a journal snapshot: a new entry `name` with an empty EditSession of this
+  // registry's params, for the caller to fill (InvalidArgument when the name is taken).
+  SessionEntry& restored(const std::string& name);
   // Drops the session (nothing when there is none).
   void drop(const std::string& name);
   // A token granting `role` in the session (the caller checked the inviter's role): `token` when

@@ -1,0 +1,91 @@
+// Handler::save / restore (the service state of a journal snapshot): a restored handler answers repeated
+// request ids with the replies first sent (their CDR), serves the same session state and roles, and a
+// truncated or corrupt snapshot changes nothing; an unfinished upload defers the save.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "../../server/service/src/journal_records.hpp"
+#include "handler_fixture.hpp"
+#include "surfeledit/core/snapshot_io.hpp"
+
+using namespace surfeledit;
+using namespace surfeledit::service;
+using namespace surfeledit::service::test;
+
+namespace {
+
+std::shared_ptr<const Reply> send_to(Handler& h, RequestBuilder& rb, surfeledit_proto_Op op, std::uint64_t id,
+                                     std::vector<UpdateEvent>& updates) {
+  return h.handle(decode(rb.make(op, id)), updates);
+}
+
+}  // namespace
+
+TEST_F(HandlerTest, SnapshotRestoresSessionsRolesAndStoredRepliesAndACorruptOneChangesNothing) {
+  load(8);
+  const std::uint64_t invite_id = next_id;
+  rb.role = "viewer";
+  const auto invited = send(surfeledit_proto_OP_INVITE);
+  ASSERT_EQ(invited->status, Status::Ok);
+  const std::uint64_t refused_id = next_id;
+  const auto refused = send(surfeledit_proto_OP_LOAD_COMMIT);  // no upload: Conflict, stored for repeats
+  ASSERT_EQ(refused->status, Status::Conflict);
+  const auto info = send(surfeledit_proto_OP_INFO);
+  ASSERT_TRUE(info->session_info);
+  ASSERT_TRUE(handler.not_snapshottable().why.empty()) << handler.not_snapshottable().why;
+
+  std::vector<std::string> parts;
+  handler.save(parts);
+  std::string bytes;
+  for (const std::string& part : parts) bytes += part;
+
+  // Truncated or corrupt: refused, and a handler that had nothing still has nothing.
+  Handler other{HandlerConfig{4, 1000, 1}};
+  for (std::size_t cut : {std::size_t(0), std::size_t(7), bytes.size() / 3, bytes.size() - 1}) {
+    SnapshotReader in(bytes.data(), cut);
+    EXPECT_THROW(other.restore(in), Error) << cut;
+  }
+  std::string flipped = bytes;
+  flipped[4] ^= 0x40;  // the service format
+  SnapshotReader bad(flipped);
+  EXPECT_THROW(other.restore(bad), Error);
+  EXPECT_EQ(send_to(other, rb, surfeledit_proto_OP_INFO, 9000, updates)->session_info, std::nullopt);
+
+  SnapshotReader in(bytes);
+  Handler restored{HandlerConfig{4, 1000, 1}};
+  restored.restore(in);
+  // Repeats get the stored replies, as first sent (the CDR of the IDL Reply), and change nothing.
+  const auto invited_again = send_to(restored, rb, surfeledit_proto_OP_INVITE, invite_id, updates);
+  EXPECT_FALSE(invited_again->wire.empty());
+  EXPECT_EQ(invited_again->token, invited->token);
+  const journal::ReplySample sample(invited_again->wire);
+  EXPECT_STREQ(sample.get().token, invited->token.c_str());
+  EXPECT_EQ(sample.get().request_id, invite_id);
+  const auto refused_again = send_to(restored, rb, surfeledit_proto_OP_LOAD_COMMIT, refused_id, updates);
+  EXPECT_EQ(refused_again->status, Status::Conflict);
+  EXPECT_EQ(refused_again->message, refused->message);
+  EXPECT_EQ(refused_again->version, refused->version);
+  // The same session: version and state hash; the invitation admits another client as a viewer.
+  const auto info_after = send_to(restored, rb, surfeledit_proto_OP_INFO, 9001, updates);
+  ASSERT_TRUE(info_after->session_info);
+  EXPECT_EQ(info_after->version, info->version);
+  EXPECT_EQ(info_after->session_info->state_hash, info->session_info->state_hash);
+  RequestBuilder guest;
+  guest.client = "client-b";
+  guest.token = invited->token;
+  EXPECT_EQ(send_to(restored, guest, surfeledit_proto_OP_JOIN_SESSION, 1, updates)->status, Status::Ok);
+  EXPECT_EQ(send_to(restored, guest, surfeledit_proto_OP_LOAD_BEGIN, 2, updates)->status, Status::PermissionDenied);
+  // A corrupt snapshot leaves a restored handler as it was too.
+  SnapshotReader bad_again(flipped);
+  EXPECT_THROW(restored.restore(bad_again), Error);
+  EXPECT_EQ(send_to(restored, rb, surfeledit_proto_OP_INFO, 9002, updates)->session_info->state_hash,
+            info->session_info->state_hash);
+
+  // An unfinished upload defers the save (it ends by itself: `soon`).
+  rb.load_begin.total = 4;
+  ASSERT_EQ(send(surfeledit_proto_OP_LOAD_BEGIN)->status, Status::Ok);
+  EXPECT_TRUE(handler.not_snapshottable().soon);
+  std::vector<std::string> refused_parts;
+  EXPECT_THROW(handler.save(refused_parts), Error);
+}
