@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
 #include "deformation_kernel.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -289,6 +290,52 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
   }
 }
 
+// The usual step (no `only`): one branch-free pass that checks every deformable row as scan_rows does and
+// sums F1's centroid the same way (a row that is not F1 adds +0, which changes no sum that starts at +0).
+// True when every row is valid and moves (s > 0): `moved` is then fields.deformable itself. False: nothing
+// is known, scan_rows runs (and throws the error, naming the row).
+template <Blend B>
+bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, bool need_centroid, const double* Pc,
+                     Vec3& f1_ref, Vec3& f1_sum, std::size_t& f1_count) {
+  const std::size_t count = fields.deformable.size();
+  const Index* rows = fields.deformable.data();
+  const Region* regions = fields.regions.data();
+  const double* F = fields.blend.data();
+  if (need_centroid) {  // the reference: the first F1 row
+    std::size_t k = 0;
+    while (k < count && !(rows[k] >= 0 && rows[k] < n && regions[rows[k]] == Region::One)) ++k;
+    if (k == count) return false;  // no F1 row: scan_rows finds the count 0
+    const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(rows[k]);
+    f1_ref = Vec3(Pc[o], Pc[o + 1], Pc[o + 2]);
+  }
+  const double rx = f1_ref.x(), ry = f1_ref.y(), rz = f1_ref.z();
+  double sx = 0.0, sy = 0.0, sz = 0.0;
+  std::size_t ones = 0;
+  bool ok = true;
+  Index prev = -1;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Index i = rows[k];
+    const bool in = (i > prev) & (i < n);
+    prev = i;
+    const Index j = in ? i : 0;  // a row that may be read
+    const Region region = regions[j];
+    const double l = F[4 * k];
+    ok &= in & (region != Region::Zero) & (l >= 0.0) & (l <= 1.0) & (beta<B>(l) > 0.0);
+    if (need_centroid) {
+      const bool one = region == Region::One;
+      const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);
+      sx += one ? Pc[o] - rx : 0.0;
+      sy += one ? Pc[o + 1] - ry : 0.0;
+      sz += one ? Pc[o + 2] - rz : 0.0;
+      ones += one;
+    }
+  }
+  if (!ok) return false;
+  f1_sum = Vec3(sx, sy, sz);
+  f1_count = ones;
+  return true;
+}
+
 }  // namespace
 
 bool step_kernel_available(StepKernel kernel) {
@@ -362,25 +409,30 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   // validated where they entered (compute_fields, the model), and a non-finite F1 position still shows up
   // as a non-finite centroid below.
   DeformResult result;
-  const std::size_t listed = only ? only_ks.size() : fields.deformable.size();
-  result.moved.reserve(listed);
-  IndexList ks;  // positions in fields.deformable of the moved rows
-  ks.reserve(listed);
+  IndexList ks;  // positions in fields.deformable of the moved rows (empty when every deformable row moves)
   Vec3 f1_ref = Vec3::Zero(), f1_sum = Vec3::Zero();
   std::size_t f1_count = 0;
   const bool need_centroid = !params.center;
   const IndexList* ks_in = only ? &only_ks : nullptr;
+  auto scan = [&](auto blend) {
+    constexpr Blend B = decltype(blend)::value;
+    if (!only && scan_all_moving<B>(fields, n, need_centroid, positions.data(), f1_ref, f1_sum, f1_count)) {
+      result.moved = fields.deformable;
+      return true;
+    }
+    f1_ref = f1_sum = Vec3::Zero();
+    f1_count = 0;
+    const std::size_t listed = only ? only_ks.size() : fields.deformable.size();
+    result.moved.reserve(listed);
+    ks.reserve(listed);
+    scan_rows<B>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
+    return false;
+  };
+  bool all_moving = false;
   switch (params.blend) {
-    case Blend::Smooth:
-      scan_rows<Blend::Smooth>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
-      break;
-    case Blend::Quadratic:
-      scan_rows<Blend::Quadratic>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count,
-                                  positions.data());
-      break;
-    case Blend::Linear:
-      scan_rows<Blend::Linear>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
-      break;
+    case Blend::Smooth: all_moving = scan(std::integral_constant<Blend, Blend::Smooth>()); break;
+    case Blend::Quadratic: all_moving = scan(std::integral_constant<Blend, Blend::Quadratic>()); break;
+    case Blend::Linear: all_moving = scan(std::integral_constant<Blend, Blend::Linear>()); break;
   }
   if (params.center) {
     result.center = *params.center;
@@ -413,8 +465,8 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const detail::BlockFn block = avx2 ? detail::avx2_block(params.blend, rotate, has_u)
                                      : detail::pick_block<detail::D2>(params.blend, rotate, has_u);
   // Every listed row moves (the usual case): blocks of consecutive positions, no index list.
-  const bool consecutive = !only && ks.size() == fields.deformable.size();
-  const Eigen::Index n_moved = static_cast<Eigen::Index>(ks.size());
+  const bool consecutive = all_moving || (!only && ks.size() == fields.deformable.size());
+  const Eigen::Index n_moved = static_cast<Eigen::Index>(all_moving ? fields.deformable.size() : ks.size());
   const Eigen::Index n_blocks = (n_moved + detail::kStepBlock - 1) / detail::kStepBlock;
   const Index* rows = fields.deformable.data();
   const double* F = fields.blend.data();
