@@ -142,7 +142,7 @@ template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
 inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const std::ptrdiff_t* f, const double* F,
                       double* P, double* N, double* U, double* V) {
   const T z{};
-  constexpr int L = kLanes<T> > 1 ? kLanes<T> : 1;
+  constexpr int L = kLanes<T>;
   std::ptrdiff_t o1[L], o2[L], f1[L], f2[L], f3[L];
   for (int i = 0; i < L; ++i) o1[i] = o[i] + 1, o2[i] = o[i] + 2, f1[i] = f[i] + 1, f2[i] = f[i] + 2, f3[i] = f[i] + 3;
   const T l = gather(F, f, z);
@@ -250,7 +250,7 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
 template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
 int step_lanes(const StepConstants& sc, const Index* rows, const double* F, const std::ptrdiff_t* ks, int j, int count,
                double* P, double* N, double* U, double* V) {
-  constexpr int L = kLanes<T> > 1 ? kLanes<T> : 1;
+  constexpr int L = kLanes<T>;
   for (; j + L <= count; j += L) {
     std::ptrdiff_t o[L], f[L];
     for (int i = 0; i < L; ++i) o[i] = 3 * static_cast<std::ptrdiff_t>(rows[ks[j + i]]), f[i] = 4 * ks[j + i];
