@@ -294,14 +294,14 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
 // sums F1's centroid the same way (a row that is not F1 adds +0, which changes no sum that starts at +0).
 // True when every row is valid and moves (s > 0): `moved` is then fields.deformable itself. False: nothing
 // is known, scan_rows runs (and throws the error, naming the row).
-template <Blend B>
-bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, bool need_centroid, const double* Pc,
-                     Vec3& f1_ref, Vec3& f1_sum, std::size_t& f1_count) {
+template <Blend B, bool need_centroid>
+bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, const double* Pc, Vec3& f1_ref, Vec3& f1_sum,
+                     std::size_t& f1_count) {
   const std::size_t count = fields.deformable.size();
   const Index* rows = fields.deformable.data();
   const Region* regions = fields.regions.data();
   const double* F = fields.blend.data();
-  if (need_centroid) {  // the reference: the first F1 row
+  if constexpr (need_centroid) {  // the reference: the first F1 row
     std::size_t k = 0;
     while (k < count && !(rows[k] >= 0 && rows[k] < n && regions[rows[k]] == Region::One)) ++k;
     if (k == count) return false;  // no F1 row: scan_rows finds the count 0
@@ -321,7 +321,7 @@ bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, bool need_
     const Region region = regions[j];
     const double l = F[4 * k];
     ok &= in & (region != Region::Zero) & (l >= 0.0) & (l <= 1.0) & (beta<B>(l) > 0.0);
-    if (need_centroid) {
+    if constexpr (need_centroid) {
       const bool one = region == Region::One;
       const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);
       sx += one ? Pc[o] - rx : 0.0;
@@ -416,7 +416,9 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const IndexList* ks_in = only ? &only_ks : nullptr;
   auto scan = [&](auto blend) {
     constexpr Blend B = decltype(blend)::value;
-    if (!only && scan_all_moving<B>(fields, n, need_centroid, positions.data(), f1_ref, f1_sum, f1_count)) {
+    const bool all = !only && (need_centroid ? scan_all_moving<B, true>(fields, n, positions.data(), f1_ref, f1_sum, f1_count)
+                                             : scan_all_moving<B, false>(fields, n, positions.data(), f1_ref, f1_sum, f1_count));
+    if (all) {
       result.moved = fields.deformable;
       return true;
     }
