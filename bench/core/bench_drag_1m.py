@@ -4,7 +4,11 @@ at 1 and 2 threads. Per step: the whole call, the deformation share (the session
 step's apply_step and its bookkeeping) and the detector's share; medians over the scenario's steps.
 
     .venv/bin/python bench/core/bench_drag_1m.py [--scale 4.8] [--threads 1,2] [--rounds 1]
-        [--package <dir holding another build's surfeledit package, for an A/B>]
+        [--package <dir holding another build's surfeledit package, for an A/B>] [--breakdown]
+
+--breakdown calls the core session directly (no Python result objects) and adds the history's share (the
+before-image and the entry, StepResult::history_ms) and the rest (whole call - apply - detect - history: the
+step's bookkeeping, the response, the binding).
 
 With --package, that directory goes first on sys.path, so an older build's package (e.g. a copy of main's
 client_py in /tmp) runs the same script; interleave the two in one period for a fair comparison.
@@ -30,6 +34,7 @@ def main() -> int:
     ap.add_argument("--knn-eps", type=float, default=2.0)
     ap.add_argument("--rounds", type=int, default=1, help="runs of the scenario per thread count")
     benchlib.add_package_arg(ap)
+    ap.add_argument("--breakdown", action="store_true", help="also the history's share and the rest")
     args = ap.parse_args()
     surfeledit = benchlib.import_surfeledit(args.package)
     from surfeledit import scenario as S
@@ -40,19 +45,31 @@ def main() -> int:
           f"{args.algorithm} knn_eps {args.knn_eps}", flush=True)
     params = sc.step_params()
     for threads in (int(t) for t in args.threads.split(",")):
-        total, apply, detect = [], [], []
+        total, apply, detect, history = [], [], [], []
         for _ in range(args.rounds):
             backend = S.LocalBackend(threads)
             backend.start(sc.scene)
             backend.configure(algorithm=args.algorithm, threads=threads, knn_eps=args.knn_eps)
             for _ in range(sc.steps):
+                if args.breakdown:
+                    t0 = time.perf_counter()
+                    o = backend.session.core.deform(**params)
+                    total.append((time.perf_counter() - t0) * 1e3)
+                    apply.append(float(o.deform_ms))
+                    detect.append(float(o.stats["detect_ms"]) if o.detected else float("nan"))
+                    history.append(float(o.history_ms))
+                    continue
                 r = backend.session.deform(**params)
                 total.append(r.timings["total"])
                 apply.append(r.timings["apply"])
                 detect.append(r.timings.get("detect", float("nan")))
             backend.close()
+        extra = ""
+        if history:
+            rest = [t - a - d - h for t, a, d, h in zip(total, apply, detect, history)]
+            extra = f", history {statistics.median(history):.2f} ms, rest {statistics.median(rest):.2f} ms"
         print(f"threads {threads}: step median {statistics.median(total):.2f} ms "
-              f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms), "
+              f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms{extra}), "
               f"{len(total)} steps; {benchlib.load_average()}", flush=True)
     return 0
 

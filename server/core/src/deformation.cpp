@@ -10,7 +10,9 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
+#include "deformation_kernel.hpp"
 #include "surfeledit/core/kdtree.hpp"
 #include "surfeledit/core/util.hpp"
 
@@ -251,240 +253,6 @@ inline double beta_prime(double l) {
   }
 }
 
-// The step works on two rows at once: D2 is a pair of doubles (one SSE2 register on x86-64; GCC and Clang
-// vector extensions elsewhere), M2 the mask a comparison of two pairs gives. The same templated code runs on
-// plain doubles for an odd last row, with the same operations in the same order, so every row's result is
-// the same whichever lane (or thread) computes it.
-typedef double D2 __attribute__((vector_size(16)));
-
-inline double splat(double x, double) { return x; }
-inline D2 splat(double x, D2) { return D2{x, x}; }
-inline double select(bool m, double a, double b) { return m ? a : b; }
-template <class M>
-inline D2 select(M m, D2 a, D2 b) { return m ? a : b; }
-inline double root(double x) { return std::sqrt(x); }
-inline D2 root(D2 x) {
-#if defined(__SSE2__)
-  return __builtin_ia32_sqrtpd(x);
-#else
-  return D2{std::sqrt(x[0]), std::sqrt(x[1])};
-#endif
-}
-
-// sin and cos of x, |x| <= kMaxStepAngle, branch-free: Cody-Waite reduction by pi/2 in three parts (each
-// part's product with the quadrant number is exact for |k| < 2^20) and minimax polynomials on
-// [-pi/4, pi/4] (fdlibm's kernel coefficients); within about one ulp of the libm values.
-template <class T>
-inline void sin_cos(T x, T& sn, T& cs) {
-  constexpr double kTwoOverPi = 6.36619772367581382433e-01;
-  constexpr double kPio2a = 1.57079632673412561417e+00;  // first 33 bits of pi/2
-  constexpr double kPio2b = 6.07710050630396597660e-11;  // next 33 bits
-  constexpr double kPio2c = 2.02226624871116645580e-21;  // the rest
-  constexpr double kRound = 6755399441055744.0;          // 1.5 * 2^52: adding it rounds to an integer
-  const T k = (x * kTwoOverPi + kRound) - kRound;        // nearest quadrant number
-  const T r = ((x - k * kPio2a) - k * kPio2b) - k * kPio2c;
-  const T z = r * r;
-  const T ps = r + r * z *
-                       (-1.66666666666666324348e-01 +
-                        z * (8.33333333332248946124e-03 +
-                             z * (-1.98412698298579493134e-04 +
-                                  z * (2.75573137070700676789e-06 +
-                                       z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
-  const T pc = 1.0 - 0.5 * z +
-               z * z *
-                   (4.16666666666666019037e-02 +
-                    z * (-1.38888888888741095749e-03 +
-                         z * (2.48015872894767294178e-05 +
-                              z * (-2.75573143513906633035e-07 +
-                                   z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
-  // Quadrant q = k mod 4 (k is an integer; k / 4 - 0.375 rounds to floor(k / 4) without ties).
-  const T q = k - 4.0 * ((k * 0.25 - 0.375 + kRound) - kRound);
-  const auto odd = (q == 1.0) | (q == 3.0);
-  const T s0 = select(odd, pc, ps), c0 = select(odd, ps, pc);
-  sn = select(q >= 2.0, -s0, s0);
-  cs = select((q == 1.0) | (q == 2.0), -c0, c0);
-}
-
-constexpr int kBlock = 64;  // rows per block of the step (the unit of the threads' static schedule)
-
-// The step's constants.
-struct StepConstants {
-  double cx, cy, cz;     // rotation centre c
-  double tx, ty, tz;     // translation t
-  double ax, ay, az;     // unit axis a
-  double alpha;          // angle, radians
-  double axtx, axty, axtz;  // a x t
-  double adt;            // a . t
-  double r1[9];          // the whole step's rotation R(a, alpha), row-major (F1 rows: s = 1, g = 0)
-};
-
-// Lanes of one call: the rows' offsets into the #P by 3 arrays (3 * row) and into the blend rows (4 * k).
-inline double gather(const double* a, const std::ptrdiff_t* o, double) { return a[o[0]]; }
-inline D2 gather(const double* a, const std::ptrdiff_t* o, D2) { return D2{a[o[0]], a[o[1]]}; }
-inline void scatter(double* a, const std::ptrdiff_t* o, double v) { a[o[0]] = v; }
-inline void scatter(double* a, const std::ptrdiff_t* o, D2 v) { a[o[0]] = v[0], a[o[1]] = v[1]; }
-inline bool all(bool m) { return m; }
-inline bool all(int m) { return m != 0; }
-template <class M>
-inline bool all(M m) {
-  return m[0] && m[1];
-}
-
-// One or two rows (T = double or D2). Per row: J = R (I + w g^T) with g = grad s = beta'(lambda) grad lambda
-// and w = R^T dF/ds = alpha (a x (p - c)) + R^T t (R commutes with rotations about a). Hence
-//   J x = R (x + w (g . x)),  cofactor(J) n = R ((1 + g . w) n - (w . n) g),
-// the latter being J u x J v for an orthonormal tangent frame (u, v) of n.
-template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
-inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const std::ptrdiff_t* f, const double* F,
-                      double* P, double* N, double* U, double* V) {
-  const T z{};
-  std::ptrdiff_t o1[2], o2[2], f1[2], f2[2], f3[2];
-  for (int i = 0; i < 2; ++i) o1[i] = o[i] + 1, o2[i] = o[i] + 2, f1[i] = f[i] + 1, f2[i] = f[i] + 2, f3[i] = f[i] + 3;
-  const T l = gather(F, f, z);
-  T s, d;
-  if constexpr (B == Blend::Smooth) {
-    const T q = l * (l - 2.0);
-    s = q * q;
-    d = 4.0 * l * (l - 1.0) * (l - 2.0);
-  } else if constexpr (B == Blend::Quadratic) {
-    s = l * l;
-    d = 2.0 * l;
-  } else {
-    s = l;
-    d = splat(1.0, z);
-  }
-  const T g0 = d * gather(F, f1, z), g1 = d * gather(F, f2, z), g2 = d * gather(F, f3, z);
-  const auto flat = (g0 == 0.0) & (g1 == 0.0) & (g2 == 0.0);  // J = R: a rigid motion, no renormalisation
-  T px = gather(P, o, z), py = gather(P, o1, z), pz = gather(P, o2, z);
-  // Rigid rows take a cheap path: without rotation a flat row's normal and tangents stay as they are (the
-  // general formula leaves them bit-identical: m = n, scale 1); with rotation, F1 rows (Rigid) skip the
-  // sin/cos and the renormalisation. Which path a row takes depends on the row alone, never on its lane mate.
-  if constexpr (!Rotate) {
-    if (all(flat)) {
-      scatter(P, o, px + s * sc.tx), scatter(P, o1, py + s * sc.ty), scatter(P, o2, pz + s * sc.tz);
-      return;
-    }
-  } else if constexpr (Rigid) {
-    // F1 (lambda 1, gradient 0): the step's one rotation, as a rigid motion.
-    const double* r = sc.r1;
-    const T e0 = px - sc.cx, e1 = py - sc.cy, e2 = pz - sc.cz;
-    scatter(P, o, r[0] * e0 + r[1] * e1 + r[2] * e2 + sc.cx + sc.tx);
-    scatter(P, o1, r[3] * e0 + r[4] * e1 + r[5] * e2 + sc.cy + sc.ty);
-    scatter(P, o2, r[6] * e0 + r[7] * e1 + r[8] * e2 + sc.cz + sc.tz);
-    for (double* X : {N, U, V}) {
-      if (!Tangents && X != N) break;
-      const T x0 = gather(X, o, z), x1 = gather(X, o1, z), x2 = gather(X, o2, z);
-      scatter(X, o, r[0] * x0 + r[1] * x1 + r[2] * x2);
-      scatter(X, o1, r[3] * x0 + r[4] * x1 + r[5] * x2);
-      scatter(X, o2, r[6] * x0 + r[7] * x1 + r[8] * x2);
-    }
-    return;
-  }
-  // Rotation R = cs I + sn [a]x + (1 - cs) a a^T (identity without rotation), w, new position.
-  T w0 = splat(sc.tx, z), w1 = splat(sc.ty, z), w2 = splat(sc.tz, z);
-  T r00, r01, r02, r10, r11, r12, r20, r21, r22;
-  if constexpr (Rotate) {
-    T sn, cs;
-    sin_cos(s * sc.alpha, sn, cs);
-    const T kk = 1.0 - cs;
-    const T kxy = kk * (sc.ax * sc.ay), kxz = kk * (sc.ax * sc.az), kyz = kk * (sc.ay * sc.az);
-    r00 = cs + kk * (sc.ax * sc.ax), r01 = kxy - sn * sc.az, r02 = kxz + sn * sc.ay;
-    r10 = kxy + sn * sc.az, r11 = cs + kk * (sc.ay * sc.ay), r12 = kyz - sn * sc.ax;
-    r20 = kxz - sn * sc.ay, r21 = kyz + sn * sc.ax, r22 = cs + kk * (sc.az * sc.az);
-    const T e0 = px - sc.cx, e1 = py - sc.cy, e2 = pz - sc.cz;
-    px = r00 * e0 + r01 * e1 + r02 * e2 + sc.cx + s * sc.tx;
-    py = r10 * e0 + r11 * e1 + r12 * e2 + sc.cy + s * sc.ty;
-    pz = r20 * e0 + r21 * e1 + r22 * e2 + sc.cz + s * sc.tz;
-    // R^T t = cos t - sin (a x t) + (1 - cos)(a . t) a
-    const T ka = kk * sc.adt;
-    w0 = sc.alpha * (sc.ay * e2 - sc.az * e1) + (cs * sc.tx - sn * sc.axtx + ka * sc.ax);
-    w1 = sc.alpha * (sc.az * e0 - sc.ax * e2) + (cs * sc.ty - sn * sc.axty + ka * sc.ay);
-    w2 = sc.alpha * (sc.ax * e1 - sc.ay * e0) + (cs * sc.tz - sn * sc.axtz + ka * sc.az);
-  } else {
-    px += s * sc.tx, py += s * sc.ty, pz += s * sc.tz;
-  }
-  scatter(P, o, px), scatter(P, o1, py), scatter(P, o2, pz);
-  const T n0 = gather(N, o, z), n1 = gather(N, o1, z), n2 = gather(N, o2, z);
-  const T gw = 1.0 + (g0 * w0 + g1 * w1 + g2 * w2), wn = w0 * n0 + w1 * n1 + w2 * n2;
-  T m0 = gw * n0 - wn * g0, m1 = gw * n1 - wn * g1, m2 = gw * n2 - wn * g2;
-  T len2 = m0 * m0 + m1 * m1 + m2 * m2;
-  // Both sides of every select are computed: no branches.
-  const T nn = n0 * n0 + n1 * n1 + n2 * n2;
-  const auto ok = len2 > 0.0;
-  m0 = select(ok, m0, n0), m1 = select(ok, m1, n1), m2 = select(ok, m2, n2);
-  len2 = select(ok, len2, nn);
-  // |R m| = |m|: normalise with m's length; the sign makes the normal agree with R n.
-  const T sign = select((m0 * n0 + m1 * n1 + m2 * n2) < 0.0, splat(-1.0, z), splat(1.0, z));
-  const T scale = select(flat, splat(1.0, z), sign / root(len2));
-  if constexpr (Rotate) {
-    scatter(N, o, scale * (r00 * m0 + r01 * m1 + r02 * m2));
-    scatter(N, o1, scale * (r10 * m0 + r11 * m1 + r12 * m2));
-    scatter(N, o2, scale * (r20 * m0 + r21 * m1 + r22 * m2));
-  } else {
-    scatter(N, o, scale * m0), scatter(N, o1, scale * m1), scatter(N, o2, scale * m2);
-  }
-  if constexpr (Tangents) {
-    for (double* X : {U, V}) {
-      const T x0 = gather(X, o, z), x1 = gather(X, o1, z), x2 = gather(X, o2, z);
-      const T gx = g0 * x0 + g1 * x1 + g2 * x2;
-      const T a0 = x0 + gx * w0, a1 = x1 + gx * w1, a2 = x2 + gx * w2;
-      if constexpr (Rotate) {
-        scatter(X, o, r00 * a0 + r01 * a1 + r02 * a2);
-        scatter(X, o1, r10 * a0 + r11 * a1 + r12 * a2);
-        scatter(X, o2, r20 * a0 + r21 * a1 + r22 * a2);
-      } else {
-        scatter(X, o, a0), scatter(X, o1, a1), scatter(X, o2, a2);
-      }
-    }
-  }
-}
-
-// One block of `count` (<= kBlock) rows, two at a time. `ks` lists the rows' positions in
-// fields.deformable, or is null for the consecutive positions k0, k0 + 1, ...
-template <Blend B, bool Rotate, bool Tangents, bool Rigid>
-void step_list(const StepConstants& sc, const Index* rows, const double* F, const std::ptrdiff_t* ks, int count,
-               double* P, double* N, double* U, double* V) {
-  int j = 0;
-  for (; j + 1 < count; j += 2) {
-    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[ks[j]]), 3 * static_cast<std::ptrdiff_t>(rows[ks[j + 1]])};
-    const std::ptrdiff_t f[2] = {4 * ks[j], 4 * ks[j + 1]};
-    step_rows<D2, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
-  }
-  if (j < count) {
-    const std::ptrdiff_t o[2] = {3 * static_cast<std::ptrdiff_t>(rows[ks[j]]), 0};
-    const std::ptrdiff_t f[2] = {4 * ks[j], 0};
-    step_rows<double, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
-  }
-}
-
-// One block of `count` (<= kBlock) rows, two at a time; with rotation, F1 rows (lambda 1, gradient 0) and
-// the others in separate lists. `ks` lists the rows' positions in fields.deformable, or is null for the
-// consecutive positions k0, k0 + 1, ...
-template <Blend B, bool Rotate, bool Tangents>
-void step_block(const StepConstants& sc, const Index* rows, const double* F, const Index* ks, Eigen::Index k0,
-                int count, double* P, double* N, double* U, double* V) {
-  std::ptrdiff_t general[kBlock], rigid[kBlock];
-  int ng = 0, nr = 0;
-  for (int j = 0; j < count; ++j) {
-    const std::ptrdiff_t k = ks ? ks[j] : k0 + j;
-    const double* f = F + 4 * k;
-    const bool one = Rotate && f[0] == 1.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0;
-    if (one) rigid[nr++] = k;
-    else general[ng++] = k;
-  }
-  step_list<B, Rotate, Tangents, false>(sc, rows, F, general, ng, P, N, U, V);
-  if (nr > 0) step_list<B, Rotate, Tangents, true>(sc, rows, F, rigid, nr, P, N, U, V);
-}
-
-using BlockFn = void (*)(const StepConstants&, const Index*, const double*, const Index*, Eigen::Index, int, double*,
-                         double*, double*, double*);
-
-template <Blend B>
-BlockFn pick_block(bool rotate, bool tangents) {
-  if (rotate) return tangents ? step_block<B, true, true> : step_block<B, true, false>;
-  return tangents ? step_block<B, false, true> : step_block<B, false, false>;
-}
-
 // The validation / `moved` pass for one blend: checks every listed row (ascending, in range, deformable,
 // 0 <= lambda <= 1), collects the moved rows (s > 0) and their positions in `deformable`, and F1's centroid.
 template <Blend B>
@@ -522,12 +290,77 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
   }
 }
 
+// The usual step (no `only`): one branch-free pass that checks every deformable row as scan_rows does and
+// sums F1's centroid the same way (a row that is not F1 adds +0, which changes no sum that starts at +0).
+// True when every row is valid and moves (s > 0): `moved` is then fields.deformable itself. False: nothing
+// is known, scan_rows runs (and throws the error, naming the row).
+template <Blend B, bool need_centroid>
+bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, const double* Pc, Vec3& f1_ref, Vec3& f1_sum,
+                     std::size_t& f1_count) {
+  const std::size_t count = fields.deformable.size();
+  const Index* rows = fields.deformable.data();
+  const Region* regions = fields.regions.data();
+  const double* F = fields.blend.data();
+  if constexpr (need_centroid) {  // the reference: the first F1 row
+    std::size_t k = 0;
+    while (k < count && !(rows[k] >= 0 && rows[k] < n && regions[rows[k]] == Region::One)) ++k;
+    if (k == count) return false;  // no F1 row: scan_rows finds the count 0
+    const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(rows[k]);
+    f1_ref = Vec3(Pc[o], Pc[o + 1], Pc[o + 2]);
+  }
+  const double rx = f1_ref.x(), ry = f1_ref.y(), rz = f1_ref.z();
+  double sx = 0.0, sy = 0.0, sz = 0.0;
+  std::size_t ones = 0;
+  bool ok = true;
+  Index prev = -1;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Index i = rows[k];
+    const bool in = (i > prev) & (i < n);
+    prev = i;
+    const Index j = in ? i : 0;  // a row that may be read
+    const Region region = regions[j];
+    const double l = F[4 * k];
+    ok &= in & (region != Region::Zero) & (l >= 0.0) & (l <= 1.0) & (beta<B>(l) > 0.0);
+    if constexpr (need_centroid) {
+      const bool one = region == Region::One;
+      const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);
+      sx += one ? Pc[o] - rx : 0.0;
+      sy += one ? Pc[o + 1] - ry : 0.0;
+      sz += one ? Pc[o + 2] - rz : 0.0;
+      ones += one;
+    }
+  }
+  if (!ok) return false;
+  f1_sum = Vec3(sx, sy, sz);
+  f1_count = ones;
+  return true;
+}
+
 }  // namespace
 
+bool step_kernel_available(StepKernel kernel) {
+  switch (kernel) {
+    case StepKernel::Auto:
+    case StepKernel::Baseline: return true;
+    case StepKernel::Avx2:
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+      return detail::avx2_block(Blend::Smooth, true, false) != nullptr && __builtin_cpu_supports("avx2");
+#else
+      return false;
+#endif
+  }
+  return false;
+}
+
 DeformResult apply_step(const DeformationFields& fields, const DeformParams& params, Points& positions,
-                        Points& normals, Points* tangent_u, Points* tangent_v, int threads, const IndexList* only) {
+                        Points& normals, Points* tangent_u, Points* tangent_v, int threads, const IndexList* only,
+                        StepKernel kernel) {
   // ---- validation: nothing below this block may throw after an array was written ----
   validate(params, fields);
+  if (kernel != StepKernel::Auto && !step_kernel_available(kernel)) {
+    throw Error(ErrorCode::InvalidArgument, "kernel",
+                "kernel " + std::to_string(static_cast<int>(kernel)) + " is not available on this CPU or build");
+  }
   const int nthreads = checked_threads(threads, "threads");
   const Eigen::Index n = positions.rows();
   auto require_rows = [n](Eigen::Index rows, const char* field) {
@@ -576,25 +409,32 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   // validated where they entered (compute_fields, the model), and a non-finite F1 position still shows up
   // as a non-finite centroid below.
   DeformResult result;
-  const std::size_t listed = only ? only_ks.size() : fields.deformable.size();
-  result.moved.reserve(listed);
-  IndexList ks;  // positions in fields.deformable of the moved rows
-  ks.reserve(listed);
+  IndexList ks;  // positions in fields.deformable of the moved rows (empty when every deformable row moves)
   Vec3 f1_ref = Vec3::Zero(), f1_sum = Vec3::Zero();
   std::size_t f1_count = 0;
   const bool need_centroid = !params.center;
   const IndexList* ks_in = only ? &only_ks : nullptr;
+  auto scan = [&](auto blend) {
+    constexpr Blend B = decltype(blend)::value;
+    const bool all = !only && (need_centroid ? scan_all_moving<B, true>(fields, n, positions.data(), f1_ref, f1_sum, f1_count)
+                                             : scan_all_moving<B, false>(fields, n, positions.data(), f1_ref, f1_sum, f1_count));
+    if (all) {
+      result.moved = fields.deformable;
+      return true;
+    }
+    f1_ref = f1_sum = Vec3::Zero();
+    f1_count = 0;
+    const std::size_t listed = only ? only_ks.size() : fields.deformable.size();
+    result.moved.reserve(listed);
+    ks.reserve(listed);
+    scan_rows<B>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
+    return false;
+  };
+  bool all_moving = false;
   switch (params.blend) {
-    case Blend::Smooth:
-      scan_rows<Blend::Smooth>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
-      break;
-    case Blend::Quadratic:
-      scan_rows<Blend::Quadratic>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count,
-                                  positions.data());
-      break;
-    case Blend::Linear:
-      scan_rows<Blend::Linear>(fields, ks_in, n, need_centroid, result, ks, f1_ref, f1_sum, f1_count, positions.data());
-      break;
+    case Blend::Smooth: all_moving = scan(std::integral_constant<Blend, Blend::Smooth>()); break;
+    case Blend::Quadratic: all_moving = scan(std::integral_constant<Blend, Blend::Quadratic>()); break;
+    case Blend::Linear: all_moving = scan(std::integral_constant<Blend, Blend::Linear>()); break;
   }
   if (params.center) {
     result.center = *params.center;
@@ -613,8 +453,8 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const Vec3 a = rotate ? Vec3(params.axis.normalized()) : Vec3::UnitZ();
   const Vec3 c = result.center, t = params.translation;
   const Vec3 axt = a.cross(t);
-  StepConstants sc{c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), a.x(), a.y(), a.z(), params.angle,
-                   axt.x(), axt.y(), axt.z(), a.dot(t), {}};
+  detail::StepConstants sc{c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), a.x(), a.y(), a.z(), params.angle,
+                           axt.x(), axt.y(), axt.z(), a.dot(t), {}, std::abs(params.angle) <= detail::kNoReduction};
   {  // Rodrigues: R = cs I + sn [a]x + (1 - cs) a a^T
     const double cs = std::cos(params.angle), sn = std::sin(params.angle), k = 1.0 - cs;
     const double kxy = k * a.x() * a.y(), kxz = k * a.x() * a.z(), kyz = k * a.y() * a.z();
@@ -623,16 +463,13 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
                           kxz - sn * a.y(), kyz + sn * a.x(), cs + k * a.z() * a.z()};
     std::copy(r1, r1 + 9, sc.r1);
   }
-  BlockFn block = nullptr;
-  switch (params.blend) {
-    case Blend::Smooth: block = pick_block<Blend::Smooth>(rotate, has_u); break;
-    case Blend::Quadratic: block = pick_block<Blend::Quadratic>(rotate, has_u); break;
-    case Blend::Linear: block = pick_block<Blend::Linear>(rotate, has_u); break;
-  }
+  const bool avx2 = kernel == StepKernel::Avx2 || (kernel == StepKernel::Auto && step_kernel_available(StepKernel::Avx2));
+  const detail::BlockFn block = avx2 ? detail::avx2_block(params.blend, rotate, has_u)
+                                     : detail::pick_block<detail::D2>(params.blend, rotate, has_u);
   // Every listed row moves (the usual case): blocks of consecutive positions, no index list.
-  const bool consecutive = !only && ks.size() == fields.deformable.size();
-  const Eigen::Index n_moved = static_cast<Eigen::Index>(ks.size());
-  const Eigen::Index n_blocks = (n_moved + kBlock - 1) / kBlock;
+  const bool consecutive = all_moving || (!only && ks.size() == fields.deformable.size());
+  const Eigen::Index n_moved = static_cast<Eigen::Index>(all_moving ? fields.deformable.size() : ks.size());
+  const Eigen::Index n_blocks = (n_moved + detail::kStepBlock - 1) / detail::kStepBlock;
   const Index* rows = fields.deformable.data();
   const double* F = fields.blend.data();
   double* P = positions.data();
@@ -640,8 +477,8 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   double* U = has_u ? tangent_u->data() : nullptr;
   double* V = has_v ? tangent_v->data() : nullptr;
   auto run = [&](Eigen::Index b) {
-    const Eigen::Index k0 = b * kBlock;
-    const int count = static_cast<int>(std::min<Eigen::Index>(kBlock, n_moved - k0));
+    const Eigen::Index k0 = b * detail::kStepBlock;
+    const int count = static_cast<int>(std::min<Eigen::Index>(detail::kStepBlock, n_moved - k0));
     block(sc, rows, F, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
   };
   // Several threads only for about a millisecond of one-thread work or more (~20 ns a row with a

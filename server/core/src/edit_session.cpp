@@ -231,6 +231,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   // A step moves the tool's deformable rows only (rigid to every other tool); resampling's splits or a
   // merge change rows otherwise.
   const IndexList* moved = model_.size() == rows_before && out.response != "merged" ? &tool_->fields->deformable : nullptr;
+  if (moved) tool_->previous_at = version_;  // `previous` differs from the model on deformable rows only
   if (version_ != version_before) mark_others_stale(moved);
   const auto t_record = std::chrono::steady_clock::now();
   if (tool_->journaling && before.rows) before.detector = tool_->detector->journal_image();
@@ -267,8 +268,18 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     if (rest_radius_.size() != model_.size()) rest_radius_ = a.radii;
   }
   Points& previous = tool_->previous;  // positions before the step, for each surfel's own displacement
-  if (tool_->detector) previous = a.positions;  // same size as the last step's: no allocation
-  else previous.resize(0, 3);
+  if (!tool_->detector) {
+    previous.resize(0, 3);
+  } else if (tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows()) {
+    // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
+    // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
+    const double* from = a.positions.data();
+    double* to = previous.data();
+    for (const Index r : tool_->fields->deformable) std::copy_n(from + 3 * r, 3, to + 3 * r);
+  } else {
+    previous = a.positions;  // same size as the last step's: no allocation
+  }
+  tool_->previous_at = 0;  // set again when the step completes (deform())
   const bool tangents = model_.has_tangents();
   out = StepResult();
   const auto t_deform = std::chrono::steady_clock::now();

@@ -95,12 +95,21 @@ struct DeformResult {
   Vec3 center;       // the rotation centre used
 };
 
+// The step's kernel: Auto takes AVX2 (four rows at a time) on a CPU that has it, else Baseline (SSE2 pairs on
+// x86-64). Every kernel gives the same bits (no fused multiply-adds anywhere); the choice is for tests and
+// benchmarks.
+enum class StepKernel : std::uint8_t { Auto = 0, Baseline = 1, Avx2 = 2 };
+// Whether `kernel` runs on this CPU and build (Auto and Baseline always).
+bool step_kernel_available(StepKernel kernel);
+
 // Applies one step in place to `positions`, `normals` (#P by 3) and, when non-empty,
 // the tangent axes `tangent_u`, `tangent_v` (#P by 3, lengths = radii along them).
 // `only`, when given, restricts the step to those rows (a subset of fields.deformable, ascending); the
-// others keep their state. Validates everything before touching any array.
+// others keep their state. Validates everything before touching any array (InvalidArgument naming
+// "kernel" for a kernel that is not available).
 DeformResult apply_step(const DeformationFields& fields, const DeformParams& params,
                         Points& positions, Points& normals, Points* tangent_u = nullptr,
-                        Points* tangent_v = nullptr, int threads = 1, const IndexList* only = nullptr);
+                        Points* tangent_v = nullptr, int threads = 1, const IndexList* only = nullptr,
+                        StepKernel kernel = StepKernel::Auto);
 
 }  // namespace surfeledit

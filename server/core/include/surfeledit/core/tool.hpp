@@ -73,6 +73,9 @@ struct Tool {
   // Scratch, not part of the state (never in an image):
   bool journaling = false;  // during deform(): the detector's journal holds the step's before-states
   Points previous;          // #P by 3: positions before the current step (reused between steps)
+  // Nonzero: at this session version `previous` has the model's rows and equals the positions outside
+  // fields->deformable (set by a completed step; any other change makes a new version).
+  std::uint64_t previous_at = 0;
   std::shared_ptr<const IndexList> shared_rows;  // the row list of its last rows image (shared by images)
   // The detector is exactly as a reset from the model made it, and nothing changed since: while the
   // session's version is `fresh_at` (a nonzero version at which it was reset) and the detector object
