@@ -225,8 +225,11 @@ SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end
   const double far = 2.0 * rp.p->weight.radius;  // padding lanes: out of range, so they give zeros
   const Index* indices = nb.indices.data();
   const std::int64_t pad_entry = static_cast<std::int64_t>(nb.indices.size());
+  double* const lower = rp.lower;  // locals: stores through double* would make the compiler reload them
+  double* const shares = rp.shares;
+  const double* const particles = rp.particles;
   for (Index i = begin; i < end; ++i) {
-    const double* xi = rp.particles + 8 * i;
+    const double* xi = particles + 8 * i;
     const Vec3 ni(xi[4], xi[5], xi[6]);
     const V4 zero = {0.0, 0.0, 0.0, 0.0};
     V4 fx = zero, fy = zero, fz = zero, tx = zero, ty = zero, tz = zero, k = zero, e = zero;
@@ -236,7 +239,7 @@ SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end
       b.size = (count + kPad - 1) / kPad * kPad;  // whole vectors: a scalar remainder costs several vectors
       for (int l = 0; l < b.size; l += 4) {
         const double* r[4];
-        for (int q = 0; q < 4; ++q) r[q] = rp.particles + 8 * (l + q < count ? js[l + q] : n);
+        for (int q = 0; q < 4; ++q) r[q] = particles + 8 * (l + q < count ? js[l + q] : n);
         V4 x0 = load4(r[0]), x1 = load4(r[1]), x2 = load4(r[2]), x3 = load4(r[3]);
         V4 n0 = load4(r[0] + 4), n1 = load4(r[1] + 4), n2 = load4(r[2] + 4), n3 = load4(r[3] + 4);
         transpose(x0, x1, x2, x3);
@@ -265,12 +268,12 @@ SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end
         const V4 share_f[4] = {s0, s1, s2, s3}, share_t[4] = {u0, u1, u2, u3};
         for (int q = 0; q < 4; ++q) {
           const bool real = l + q < count;
-          if (rp.lower) {
-            double* acc = rp.lower + 8 * (real ? js[l + q] : n);
+          if (lower) {
+            double* acc = lower + 8 * (real ? js[l + q] : n);
             store4(acc, load4(acc) + share_f[q]);
             store4(acc + 4, load4(acc + 4) + share_t[q]);
           } else {
-            double* out = rp.shares + 8 * (real ? c0 + l + q : pad_entry);
+            double* out = shares + 8 * (real ? c0 + l + q : pad_entry);
             store4(out, share_f[q]);
             store4(out + 4, share_t[q]);
           }
@@ -279,8 +282,8 @@ SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end
     }
     double up[8] = {lane_sum(fx), lane_sum(fy), lane_sum(fz), lane_sum(k),
                     lane_sum(tx), lane_sum(ty), lane_sum(tz), 0.0};
-    if (rp.lower) {  // lower_i is complete: every row below i is done
-      const double* lo = rp.lower + 8 * i;
+    if (lower) {  // lower_i is complete: every row below i is done
+      const double* lo = lower + 8 * i;
       for (int c = 0; c < 8; ++c) up[c] = up[c] + lo[c];
     }
     rp.force[3 * i] = up[0], rp.force[3 * i + 1] = up[1], rp.force[3 * i + 2] = up[2];
@@ -300,13 +303,14 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
   out.stiffness.resize(n);
   out.pair_energy.resize(n);
   std::vector<double>& rec = out.particles;
-  rec.assign(8 * static_cast<std::size_t>(n + 1), 0.0);
+  rec.resize(8 * static_cast<std::size_t>(n + 1));
   for (Index i = 0; i < n; ++i) {
     const Vec3 ni = s.normal(i);
     double* r = rec.data() + 8 * i;
-    r[0] = s.x(i, 0), r[1] = s.x(i, 1), r[2] = s.x(i, 2);
-    r[4] = ni.x(), r[5] = ni.y(), r[6] = ni.z();
+    r[0] = s.x(i, 0), r[1] = s.x(i, 1), r[2] = s.x(i, 2), r[3] = 0.0;
+    r[4] = ni.x(), r[5] = ni.y(), r[6] = ni.z(), r[7] = 0.0;
   }
+  std::fill_n(rec.data() + 8 * n, 8, 0.0);
   rec[8 * n + 6] = 1.0;  // the padding record: a unit normal
   const int threads = resolve_threads(p.threads);
 
