@@ -21,15 +21,13 @@ namespace surfeledit {
 
 namespace {
 
-// On x86-64 the two block loops are also compiled for AVX2 and picked at run time. Without contraction
-// (see above) every lane computes the same IEEE operations at any vector width, so the bits do not change.
-// Not in sanitizer builds: the clones' ifunc resolvers run before the sanitizer runtime is up and crash.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_THREAD__) && \
-    !defined(__SANITIZE_ADDRESS__)
-#define SURFELEDIT_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define SURFELEDIT_SIMD_CLONES
+// The pair loop is compiled once per instruction set (force_rows_* below; each inlines the kernels) and
+// picked at run time. Without contraction (see above) every lane computes the same IEEE operations at any
+// vector width, so every variant gives the same bits (tested).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define SURFELEDIT_FORCE_AVX2 1
 #endif
+#define SURFELEDIT_INLINE [[gnu::always_inline]] inline
 
 constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
 constexpr int kPad = 4;     // lanes evaluated in multiples of this (divides kLanes)
@@ -49,7 +47,7 @@ struct PairBlock {
 };
 
 // phi and the repulsion at |r| for every lane; lanes at or beyond the radius get zeros (they add nothing).
-SURFELEDIT_SIMD_CLONES void radial_terms(const ParticleParams& p, PairBlock& b) {
+SURFELEDIT_INLINE void radial_terms(const ParticleParams& p, PairBlock& b) {
   const int m = b.size;
 #pragma omp simd
   for (int l = 0; l < m; ++l) b.rho[l] = std::sqrt(b.rx[l] * b.rx[l] + b.ry[l] * b.ry[l] + b.rz[l] * b.rz[l]);
@@ -140,7 +138,7 @@ struct PairCoefficients {
 }
 
 // Every lane after radial_terms.
-SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
+SURFELEDIT_INLINE void pair_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
   const PairCoefficients a(p);
   const double nix = ni.x(), niy = ni.y(), niz = ni.z();
   const int m = b.size;
@@ -153,7 +151,7 @@ SURFELEDIT_SIMD_CLONES void pair_kernel(const ParticleParams& p, const Vec3& ni,
 // The common case in one pass: compact weight, weight-based repulsion (or none). The same expressions as
 // radial_terms followed by pair_kernel (up to the rounding of the weight, see below), without storing the
 // radial terms.
-SURFELEDIT_SIMD_CLONES void compact_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
+SURFELEDIT_INLINE void compact_kernel(const ParticleParams& p, const Vec3& ni, PairBlock& b) {
   const PairCoefficients a(p);
   const double nix = ni.x(), niy = ni.y(), niz = ni.z();
   const double d = p.weight.radius, d2 = d * d, inv_d2 = 1.0 / d2, A = p.repulsion.amplitude;
@@ -172,7 +170,9 @@ SURFELEDIT_SIMD_CLONES void compact_kernel(const ParticleParams& p, const Vec3& 
 }
 
 // The helpers below are always inlined, so the ABI of passing vectors does not matter (GCC warns without AVX).
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 // Four doubles as one value (GCC / Clang vector extension): a ymm register in the AVX2 clones, two xmm
 // registers otherwise; the same IEEE operation per element either way. V4u reads and writes unaligned memory.
 using V4 = double __attribute__((vector_size(32)));
@@ -219,7 +219,7 @@ struct RowPass {
 // particle / share records and the block's arrays by 4 x 4 transposes (one vector load or store per record
 // instead of a scalar one per coordinate). upper_i = its four lanes' partial sums in ascending order of
 // blocks, combined by lane_sum; the padding lanes add zeros.
-SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end, PairBlock& b) {
+SURFELEDIT_INLINE void force_rows(const RowPass& rp, Index begin, Index end, PairBlock& b) {
   const Neighbourhood& nb = *rp.nb;
   const Index n = nb.size();
   const double far = 2.0 * rp.p->weight.radius;  // padding lanes: out of range, so they give zeros
@@ -293,9 +293,38 @@ SURFELEDIT_SIMD_CLONES void force_rows(const RowPass& rp, Index begin, Index end
   }
 }
 
+// The compiled variants of force_rows.
+void force_rows_baseline(const RowPass& rp, Index begin, Index end, PairBlock& b) { force_rows(rp, begin, end, b); }
+#ifdef SURFELEDIT_FORCE_AVX2
+__attribute__((target("avx2"))) void force_rows_avx2(const RowPass& rp, Index begin, Index end, PairBlock& b) {
+  force_rows(rp, begin, end, b);
+}
+#endif
+using RowsFn = void (*)(const RowPass&, Index, Index, PairBlock&);
+RowsFn rows_variant(ForcePath path) {
+#ifdef SURFELEDIT_FORCE_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (path == ForcePath::Avx2 && !avx2) throw Error(ErrorCode::Conflict, "path", "this CPU has no AVX2");
+  if (path == ForcePath::Avx2 || (path == ForcePath::Auto && avx2)) return force_rows_avx2;
+#else
+  if (path == ForcePath::Avx2) throw Error(ErrorCode::Conflict, "path", "built without the AVX2 variant");
+#endif
+  return force_rows_baseline;
+}
+
 }  // namespace
 
-void compute_forces(const ParticleState& s, const Neighbourhood& nb, const ParticleParams& p, SystemForces& out) {
+bool force_path_available(ForcePath path) {
+#ifdef SURFELEDIT_FORCE_AVX2
+  return path != ForcePath::Avx2 || __builtin_cpu_supports("avx2");
+#else
+  return path != ForcePath::Avx2;
+#endif
+}
+
+void compute_forces(const ParticleState& s, const Neighbourhood& nb, const ParticleParams& p, SystemForces& out,
+                    ForcePath path) {
+  const RowsFn force_rows_variant = rows_variant(path);
   const Index n = s.size();
   if (nb.size() != n) throw Error(ErrorCode::InvalidArgument, "neighbourhood", "one row per particle expected");
   out.force.resize(n, 3);
@@ -329,7 +358,7 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
     out.lower.assign(8 * static_cast<std::size_t>(n + 1), 0.0);
     rp.lower = out.lower.data();
     PairBlock b;
-    force_rows(rp, 0, n, b);
+    force_rows_variant(rp, 0, n, b);
   } else {
     // mirror[c] of a lower entry (row j, neighbour k < j) is the entry of j in row k.
     const std::size_t entries = nb.indices.size();
@@ -355,7 +384,7 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
       const Index chunk = (n + threads - 1) / threads;
 #pragma omp for schedule(static)
       for (int t = 0; t < threads; ++t)
-        force_rows(rp, std::min<Index>(n, t * chunk), std::min<Index>(n, (t + 1) * chunk), b);
+        force_rows_variant(rp, std::min<Index>(n, t * chunk), std::min<Index>(n, (t + 1) * chunk), b);
 #pragma omp for schedule(static)
       for (Index j = 0; j < n; ++j) {
         // lower_j: the shares of its lower entries, in ascending order, summed from zero as one thread does.

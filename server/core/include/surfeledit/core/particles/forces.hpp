@@ -28,11 +28,19 @@ struct SystemForces {
   std::vector<std::int64_t> mirror;  // #E, threads > 1: entry of j in row i for the entry of i in row j
 };
 
+// The compiled variants of compute_forces' pair loop; all give the same bits (no FMA contraction).
+enum class ForcePath : std::uint8_t {
+  Auto = 0,      // the widest the CPU runs
+  Baseline = 1,  // the build's baseline instruction set (x86-64: SSE2)
+  Avx2 = 2,      // x86-64 with AVX2 (Conflict("path") where the CPU or the build lacks it)
+};
+bool force_path_available(ForcePath path);
+
 // Each unordered pair is evaluated once; `nbrs` must be symmetric (j in N(i) exactly when i in N(j), as
 // both neighbourhood builders give; with threads > 1 InvalidArgument otherwise). The sums run in a fixed
 // order, so the result does not depend on the thread count.
 void compute_forces(const ParticleState& state, const Neighbourhood& nbrs, const ParticleParams& params,
-                    SystemForces& out);
+                    SystemForces& out, ForcePath path = ForcePath::Auto);
 
 // Largest time step the stiffness bound allows (Gershgorin bound on the scaled Hessian, damped symplectic
 // step), times params.dt_safety; +inf when nothing interacts. `scale` #P region scale factors.
