@@ -34,7 +34,7 @@ using namespace fused_pairs;
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
-// Four doubles as one value (GCC / Clang vector extension): a ymm register in the AVX2 clones, two xmm
+// Four doubles as one value (GCC / Clang vector extension): a ymm register in the AVX2 variant, two xmm
 // registers otherwise; the same IEEE operation per element either way. V4u reads and writes unaligned memory.
 using V4 = double __attribute__((vector_size(32)));
 using V4u = double __attribute__((vector_size(32), aligned(8), may_alias));
