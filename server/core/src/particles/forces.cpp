@@ -66,8 +66,8 @@ struct RowPass {
   const double* particles;  // #P + 1 particle records; record #P is the padding lanes' (never read back)
   bool compact;             // the one-pass kernel applies
   // threads == 1: `lower` holds #P + 1 running sums of the shares (record #P takes the padding lanes), and
-  // row i writes upper_i + lower_i. Otherwise each pair's share goes to `shares` at its entry (#E + 1
-  // records, the last for padding) and row i writes upper_i only.
+  // row i writes upper_i + lower_i. Otherwise each pair's share goes to `shares` at its entry (#E records)
+  // and row i writes upper_i only.
   double* lower;
   double* shares;
   double* force;      // #P by 3
@@ -80,12 +80,12 @@ struct RowPass {
 // particle / share records and the block's arrays by 4 x 4 transposes (one vector load or store per record
 // instead of a scalar one per coordinate). upper_i = its four lanes' partial sums in ascending order of
 // blocks, combined by lane_sum; the padding lanes add zeros.
+static_assert(kPad == 4, "force_rows moves lanes in groups of four");
 SURFELEDIT_INLINE void force_rows(const RowPass& rp, Index begin, Index end, PairBlock& b) {
   const Neighbourhood& nb = *rp.nb;
   const Index n = nb.size();
   const double far = 2.0 * rp.p->weight.radius;  // padding lanes: out of range, so they give zeros
   const Index* indices = nb.indices.data();
-  const std::int64_t pad_entry = static_cast<std::int64_t>(nb.indices.size());
   double* const lower = rp.lower;  // locals: stores through double* would make the compiler reload them
   double* const shares = rp.shares;
   const double* const particles = rp.particles;
@@ -133,8 +133,8 @@ SURFELEDIT_INLINE void force_rows(const RowPass& rp, Index begin, Index end, Pai
             double* acc = lower + 8 * (real ? js[l + q] : n);
             store4(acc, load4(acc) + share_f[q]);
             store4(acc + 4, load4(acc + 4) + share_t[q]);
-          } else {
-            double* out = shares + 8 * (real ? c0 + l + q : pad_entry);
+          } else if (real) {  // threads share no padding record
+            double* out = shares + 8 * (c0 + l + q);
             store4(out, share_f[q]);
             store4(out + 4, share_t[q]);
           }
@@ -223,7 +223,7 @@ void compute_forces(const ParticleState& s, const Neighbourhood& nb, const Parti
   } else {
     // mirror[c] of a lower entry (row j, neighbour k < j) is the entry of j in row k.
     const std::size_t entries = nb.indices.size();
-    out.shares.assign(8 * (entries + 1), 0.0);
+    out.shares.resize(8 * entries);  // every upper entry is written before it is read
     rp.shares = out.shares.data();
     std::vector<std::int64_t>& mirror = out.mirror;
     mirror.assign(entries, 0);

@@ -13,7 +13,8 @@ namespace surfeledit::fused_pairs {
 #define SURFELEDIT_INLINE [[gnu::always_inline]] inline
 
 constexpr int kLanes = 64;  // pairs evaluated together: one row's upper neighbours, in blocks
-constexpr int kPad = 4;     // lanes evaluated in multiples of this (divides kLanes)
+constexpr int kPad = 4;     // lanes evaluated in multiples of this (divides kLanes; the row pass moves
+                            // lanes in groups of four)
 
 // Pairs (i, j_l), i < j_l, r_l = x_j - x_i, as structure of arrays so that the pair kernel vectorises.
 struct PairBlock {

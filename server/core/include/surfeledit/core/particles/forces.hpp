@@ -23,7 +23,7 @@ struct SystemForces {
   Values pair_energy;                // #P: sum of E_ij over the neighbours j > i
   std::vector<double> particles;     // 8 (#P + 1): per particle (x, y, z, 0, nx, ny, nz, 0), then padding
   std::vector<double> lower;         // 8 (#P + 1), threads == 1: running sums of the lower pairs' shares
-  std::vector<double> shares;        // 8 (#E + 1) (E neighbour entries), threads > 1: share of pair (i, j),
+  std::vector<double> shares;        // 8 #E (E neighbour entries), threads > 1: share of pair (i, j),
                                      // i < j, for j at its entry in row i: (-f, k, t_j, 0)
   std::vector<std::int64_t> mirror;  // #E, threads > 1: entry of j in row i for the entry of i in row j
 };
