@@ -7,6 +7,7 @@
 
 #include "particle_fixtures.hpp"
 #include "surfeledit/core/particles/engine.hpp"
+#include "surfeledit/core/particles/integrators.hpp"
 
 namespace surfeledit {
 namespace {
@@ -189,6 +190,28 @@ TEST(ParticleEngine, RejectsBadSettings) {
   p.project_tangent = true;
   ParticleEngine engine(plane_patch(3, 0, 0, 0, 1), Points(), p);
   EXPECT_THROW(engine.step(), Error);  // no original surface
+}
+
+// The integrator turns a particle by theta = h omega: against Eigen's angle-axis rotation (cos / sin), for
+// angles on both sides of where the integrator switches from its series to cos and sin (a = 0.1).
+TEST(ParticleEngine, RotationStepEqualsTheAngleAxisRotation) {
+  ParticleParams p;
+  p.integrator = ParticleIntegrator::EulerCromer;
+  p.velocity_control = false;
+  p.damping = p.angular_damping = 0.0;
+  const double h = 0.5;
+  for (double angle : {0.0, 1e-9, 1e-4, 0.01, 0.05, 0.0999, 0.1001, 0.7, 2.5}) {
+    const Vec3 axis = Vec3(0.3, -0.5, 0.8).normalized();
+    ParticleState s = ParticleState::from_surfels(Points::Zero(1, 3), Vec3(0.2, 0.1, 1.0).transpose());
+    const Eigen::Quaterniond q0 = s.q[0];
+    s.w.row(0) = (angle / h) * axis.transpose();
+    SystemForces f;
+    f.force = f.torque = Points::Zero(1, 3);
+    integrate(s, f, Values::Ones(1), p, h);
+    const Eigen::Quaterniond truth = Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)) * q0;
+    EXPECT_LT((s.q[0].coeffs() - truth.coeffs()).norm(), 1e-15) << "angle " << angle;
+    EXPECT_NEAR(s.q[0].norm(), 1.0, 1e-15) << "angle " << angle;
+  }
 }
 
 }  // namespace
