@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Callable, Dict, List, Tuple
 
 import numpy as np
-import pytest
 
 import surfeledit
 from surfeledit import errors
@@ -32,9 +31,16 @@ def _server(tmp_path: Path, name: str, domain: int, *extra: str) -> ServerProces
     return srv
 
 
-def _journaled(tmp_path: Path, name: str, domain: int, journal: Path, *extra: str) -> ServerProcess:
-    return _server(tmp_path, name, domain, "--journal", str(journal), "--journal-snapshot-records",
-                   str(SNAPSHOT_RECORDS), *extra)
+def _restart(servers: List[ServerProcess], tmp_path: Path, name: str, domain: int, *extra: str) -> ServerProcess:
+    """Kills the newest of ``servers`` with SIGKILL and starts another (appended: the test stops them all)."""
+    servers[-1].proc.kill()
+    servers[-1].proc.wait()
+    servers.append(_server(tmp_path, name, domain, *extra))
+    return servers[-1]
+
+
+def _journal_flags(journal: Path) -> Tuple[str, ...]:
+    return ("--journal", str(journal), "--journal-snapshot-records", str(SNAPSHOT_RECORDS))
 
 
 def _recovery(srv: ServerProcess) -> Tuple[int, int]:
@@ -102,7 +108,7 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
     ref_domain, j_domain = free_domain(), free_domain()
     journal = tmp_path / "journal"
     ref = _server(tmp_path, "reference", ref_domain)
-    srv = _journaled(tmp_path, "journaled-0", j_domain, journal)
+    srv = _server(tmp_path, "journaled-0", j_domain, *_journal_flags(journal))
     servers = [ref, srv]
     pair = Pair(ref_domain, j_domain)
     try:
@@ -135,10 +141,7 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
         assert before[0] == before[1]
         records = int(before[1][0]) + 8  # at least one record per version, plus opens, invites, joins
 
-        srv.proc.kill()  # SIGKILL
-        srv.proc.wait()
-        srv = _journaled(tmp_path, "journaled-1", j_domain, journal)
-        servers.append(srv)
+        srv = _restart(servers, tmp_path, "journaled-1", j_domain, *_journal_flags(journal))
         snapshot, replayed = _recovery(srv)
         assert snapshot >= 2, "the script spans several snapshots"
         assert 0 < replayed <= SNAPSHOT_RECORDS, f"only the tail is replayed, not {replayed} of ~{records} records"
@@ -224,10 +227,7 @@ def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -
         before = _view(s)
         assert "snapshot deferred (session 'hier'" in srv.log_tail(10**7)
         assert sorted(journal.glob("snapshot-*.bin")) == taken  # none since: the log keeps every record
-        srv.proc.kill()
-        srv.proc.wait()
-        srv = _server(tmp_path, "hier-1", domain, "--journal", str(journal), "--journal-snapshot-records", "3")
-        servers.append(srv)
+        srv = _restart(servers, tmp_path, "hier-1", domain, "--journal", str(journal), "--journal-snapshot-records", "3")
         # Every record since the last snapshot (or the log's start) is replayed.
         snapshot, replayed = _recovery(srv)
         assert snapshot == max((int(p.stem.split("-")[1]) for p in taken), default=0) and replayed == _frames(segment) - (1 if taken else 0)
@@ -261,10 +261,7 @@ def test_a_snapshot_is_taken_when_the_log_exceeds_its_byte_bound(tmp_path: Path)
         s.remove(np.arange(3))
         before = _view(s)
         assert "snapshot 1 taken" in srv.log_tail(10**7) and (journal / "snapshot-1.bin").exists()
-        srv.proc.kill()
-        srv.proc.wait()
-        srv = _server(tmp_path, "mb-1", domain, *args)
-        servers.append(srv)
+        srv = _restart(servers, tmp_path, "mb-1", domain, *args)
         assert _recovery(srv) == (1, _frames(journal / "journal-1.log") - 1)  # all but its own Snapshot record
         assert _view(s) == before
     finally:
