@@ -78,7 +78,11 @@ class Client:
         self.security = security_config(security)
         prefix = self.security.client_id_prefix() if self.security else ""
         self.client_id = client_id or f"{prefix}{socket.gethostname()}-{os.getpid()}-{uuid.uuid4().hex[:12]}"
-        self._next_id = 1
+        # Request ids start at this process's creation time in microseconds since the epoch: a restarted
+        # process reusing its client id never repeats an id of its previous life, whose replies the server
+        # may still hold (its reply store, restored by --journal) or still deliver (the reply writer's
+        # transient-local history), so an old reply is never taken for a new request.
+        self._next_id = time.time_ns() // 1000
         self._lock = threading.RLock()
         self._server = _server
         self._server_log: Optional[Path] = None

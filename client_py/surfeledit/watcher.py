@@ -63,6 +63,17 @@ class Watcher:
         self._lock = threading.Lock()
         client.attach(self)
 
+    @property
+    def greeted(self) -> bool:
+        """True once the server greeted this watcher's reader: every later update reaches it."""
+        return self._inbox.greeted
+
+    def wait_greeted(self, timeout: float) -> bool:
+        """Waits up to ``timeout`` seconds more for the server's greeting when :meth:`Session.watch` gave
+        up waiting (discovery on a loaded machine can take longer); True once greeted."""
+        with self._lock:
+            return self._inbox.greeted or self._inbox.await_greeting(timeout)
+
     def __enter__(self) -> "Watcher":
         return self
 

@@ -40,7 +40,6 @@ import numpy as np
 import surfeledit
 from surfeledit import errors
 from surfeledit._protocol import proto
-from surfeledit.connection import wait_matched
 from surfeledit.results import Changes, State, merge
 
 
@@ -69,11 +68,11 @@ def same(a: State, b: State) -> bool:
 
 
 def watch(session: surfeledit.Session) -> surfeledit.Watcher:
-    """A watcher of the session whose reader matched the server's update writer (updates are volatile: one
-    published before the match is never seen); waits up to 20 s, where the watcher itself waits 2 s."""
+    """A watcher of the session that the server greeted (its update writer matched the reader: updates are
+    volatile, one published before the match is never seen); waits up to 20 s, where watch() waits 2 s."""
     w = session.watch()
-    if not wait_matched(session.client._participant, (w._inbox.reader,), 20.0):
-        raise SystemExit("the watcher did not match the server's update writer within 20 s")
+    if not w.wait_greeted(20.0):
+        raise SystemExit("the server did not greet the watcher within 20 s")
     return w
 
 

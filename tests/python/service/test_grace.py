@@ -18,7 +18,6 @@ import pytest
 
 import surfeledit
 
-from surfeledit.connection import wait_matched
 
 from .collab_peer import watch
 from .conftest import ServerProcess, connect_to
@@ -97,7 +96,7 @@ def test_a_restarted_client_resumes_within_the_grace_period_and_not_after(
         # A session only the peer is in: the observer is no member, it reads the update stream only.
         me = "restartable-" + observer.client_id
         watcher = surfeledit.Watcher(observer, "solo")
-        assert wait_matched(observer._participant, (watcher._inbox.reader,), 20.0)
+        assert watcher.wait_greeted(20.0)
         p = peers("hold", srv, session="solo", client_id=me, points=500)
         held = line(p)
         presence_until(watcher, "join", me)

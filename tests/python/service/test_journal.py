@@ -240,3 +240,33 @@ def test_load_file_is_replayed_from_the_file_and_a_changed_file_stops_recovery(t
         client.reconnect = 0.0
         srv.stop()
         client.close()
+
+
+def test_a_process_reusing_its_client_id_never_meets_its_predecessors_replies(tmp_path: Path) -> None:
+    """A client process and the server both crash; a new process takes the same client id (to find its
+    sessions again). The recovered reply store still holds its predecessor's replies by request id, so the
+    new process's request ids must not repeat the old ones (PROTOCOL.md "Idempotence"): its requests are
+    applied, not refused as repeats with another op nor answered with an old reply."""
+    domain = free_domain()
+    journal = tmp_path / "journal"
+    srv = _server(tmp_path, domain, journal, 0)
+    old = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, client_id="reused")
+    try:
+        positions, normals, radii, _ = generated_scene(0.1)
+        s = old.open_session("reused")
+        s.load_points(positions, normals, radii)
+        s.remove(np.arange(3))
+        info = s.info()
+        before = (int(info.surfels), int(info.state_hash))
+        srv.proc.kill()
+        srv.proc.wait()
+        old.close()
+        srv = _server(tmp_path, domain, journal, 1)
+        with surfeledit.connect(domain=domain, spawn=False, timeout=10.0, client_id="reused") as new:
+            t = new.join_session("reused")
+            info = t.info()
+            assert (int(info.surfels), int(info.state_hash)) == before
+            t.remove(np.arange(3, 5))
+            assert int(t.info().surfels) == len(positions) - 5
+    finally:
+        srv.stop()

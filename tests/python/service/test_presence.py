@@ -12,7 +12,6 @@ import surfeledit
 from surfeledit import errors
 from surfeledit._protocol import proto
 
-from surfeledit.connection import wait_matched
 
 from .collab_peer import watch
 from .conftest import generated_scene
@@ -108,7 +107,7 @@ def test_presence_callback_is_called(client: surfeledit.Client,
     owner = client.open_session("callback")
     got: List[surfeledit.PresenceEvent] = []
     watcher = owner.watch(on_presence=got.append)
-    assert wait_matched(client._participant, (watcher._inbox.reader,), 20.0)
+    assert watcher.wait_greeted(20.0)
     other = make_client()
     other.join_session("callback", token=owner.invite("viewer")).close()
     deadline = time.monotonic() + 10.0
