@@ -195,8 +195,7 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
             restored, replayed = _recovery(other)
             assert restored < int(newest.stem.split("-")[1]) and replayed >= SNAPSHOT_RECORDS, what
             c = surfeledit.connect(domain=domain, spawn=False, timeout=10.0, client_id="bob-snap")
-            # bob's request ids go on from where they were: the recovered reply store holds the used ones.
-            c._next_id = pair.clients["bob"][1]._next_id + 1000  # noqa: SLF001
+            # A new process of bob's: its request ids come after the old ones the recovered store holds.
             try:
                 assert _view(c.join_session("snap")) == want, what
             finally:
