@@ -57,17 +57,6 @@ bool read_at(int fd, std::uint64_t offset, std::uint8_t* out, std::size_t size, 
   return true;
 }
 
-void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& path) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("cannot append to journal '" + path + "'", errno);
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
-}
 
 // The header of a new segment.
 std::array<std::uint8_t, kHeaderBytes> new_header() {
@@ -184,7 +173,7 @@ void JournalLog::scan(std::uint64_t segment, bool last) {
     if (::ftruncate(fd_.get(), 0) != 0) fail("cannot truncate journal '" + path_ + "'", errno);
     const std::array<std::uint8_t, kHeaderBytes> header = new_header();
     if (::lseek(fd_.get(), 0, SEEK_SET) < 0) fail("cannot seek in journal '" + path_ + "'", errno);
-    write_all(fd_.get(), header.data(), header.size(), path_);
+    journal::write_all(fd_.get(), header.data(), header.size(), "cannot append to journal '" + path_ + "'");
     if (::fsync(fd_.get()) != 0) fail("cannot fsync journal '" + path_ + "'", errno);
     if (created && ::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir_ + "'", errno);
     size_ = kHeaderBytes;
@@ -304,7 +293,7 @@ void JournalLog::start_segment(std::uint64_t segment, RecordKind kind, const std
   size_ = 0;
   try {
     const std::array<std::uint8_t, kHeaderBytes> header = new_header();
-    write_all(fd_.get(), header.data(), header.size(), path_);
+    journal::write_all(fd_.get(), header.data(), header.size(), "cannot append to journal '" + path_ + "'");
     size_ = kHeaderBytes;
     append(kind, payload);
     if (::fdatasync(fd_.get()) != 0) fail("cannot fdatasync journal '" + path_ + "'", errno);

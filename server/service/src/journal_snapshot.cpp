@@ -31,19 +31,19 @@ std::uint64_t get(const std::uint8_t* p, int bytes) {
   return v;
 }
 
-void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& path) {
+}  // namespace
+
+void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& what) {
   while (size > 0) {
     const ssize_t n = ::write(fd, data, size);
     if (n < 0) {
       if (errno == EINTR) continue;
-      fail("cannot write snapshot '" + path + "'", errno);
+      fail(what, errno);
     }
     data += n;
     size -= static_cast<std::size_t>(n);
   }
 }
-
-}  // namespace
 
 std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc) {
   uLong c = crc;
@@ -81,9 +81,10 @@ SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std
   try {
     UniqueFd fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600));
     if (fd.get() < 0) fail("cannot create snapshot '" + tmp + "'", errno);
-    write_all(fd.get(), header.data(), header.size(), tmp);
+    const std::string what = "cannot write snapshot '" + tmp + "'";
+    write_all(fd.get(), header.data(), header.size(), what);
     for (const std::string& part : parts) {
-      write_all(fd.get(), reinterpret_cast<const std::uint8_t*>(part.data()), part.size(), tmp);
+      write_all(fd.get(), reinterpret_cast<const std::uint8_t*>(part.data()), part.size(), what);
     }
     if (::fdatasync(fd.get()) != 0) fail("cannot fdatasync snapshot '" + tmp + "'", errno);
     if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename snapshot '" + tmp + "'", errno);

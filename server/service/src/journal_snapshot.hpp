@@ -19,6 +19,9 @@ namespace surfeledit::service::journal {
 // CRC-32 (zlib) of `size` bytes continuing `crc` (0 to start); any size.
 std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
 
+// Writes all `size` bytes to `fd`, again after a short write or EINTR; throws JournalError "<what>: <error>".
+void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& what);
+
 std::string snapshot_path(const std::string& dir, std::uint64_t seq);
 
 // Writes snapshot `seq` holding the concatenation of `parts` durably (its directory entry too, through
