@@ -251,18 +251,23 @@ TEST(JournalRecords, RefusalAndExpiryRoundTrip) {
   EXPECT_THROW(j::decode_refusal(payload), JournalError);
 }
 
-// Segments (docs/journal.md "Snapshots"): a new segment starts with one record; the log reads the kept
-// segments in order as one sequence; older ones are deleted on request; a gap between segments, a newest
-// segment cut before its first record, and a corrupt segment that is not the last are handled as documented.
+// Segments (docs/journal.md "Snapshots"): a new segment starts with its header alone; the log reads the
+// kept segments in order as one sequence; older ones are forgotten (and their files handed back for
+// deletion) on request; a gap between segments, a newest segment without a record, and a corrupt segment
+// that is not the last are handled as documented.
 TEST(JournalLog, SegmentsReadInOrderAndOldOnesAreDropped) {
   TempDir dir;
   const auto payloads = sample_payloads();
   {
     JournalLog log(dir.path.string());
     log.append(RecordKind::Request, payloads[0]);
-    log.start_segment(1, RecordKind::Snapshot, payloads[1]);
+    log.sync();
+    log.start_segment(1);
+    log.append(RecordKind::Snapshot, payloads[1]);
     log.append(RecordKind::Request, payloads[2]);
-    log.start_segment(2, RecordKind::Snapshot, payloads[3]);
+    log.sync();
+    log.start_segment(2);
+    log.append(RecordKind::Snapshot, payloads[3]);
     log.append(RecordKind::Refusal, payloads[4]);
     log.sync();
     EXPECT_EQ(log.segment(), 2u);
@@ -278,8 +283,12 @@ TEST(JournalLog, SegmentsReadInOrderAndOldOnesAreDropped) {
     EXPECT_EQ(log.index().size(), 5u);
     EXPECT_EQ(log.index()[3].segment, 2u);
     EXPECT_EQ(log.payload(2), payloads[2]);
-    log.drop_segments_before(1);
+    const std::vector<std::string> doomed = log.forget_segments_before(1);
+    ASSERT_EQ(doomed.size(), 1u);
+    EXPECT_EQ(doomed[0], JournalLog::segment_path(dir.path.string(), 0));
     EXPECT_EQ(log.first_segment(), 1u);
+    EXPECT_EQ(log.bytes(), fs::file_size(dir.path / "journal-1.log") + fs::file_size(dir.path / "journal-2.log"));
+    fs::remove(doomed[0]);
   }
   EXPECT_FALSE(fs::exists(dir.path / "journal.log"));
   got = read_all(dir.path);

@@ -80,16 +80,20 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
   }
   handler.set_on_load_done({});
   handler.start_recovered_leases(std::chrono::milliseconds(config_.rejoin_ms));
-  // Snapshots count from the current segment's start (its Snapshot record, or the log's start).
+  // Snapshots count from the current segment's start. Snapshot k is the state at the start of segment k
+  // (its record follows somewhere in segment k), and its record counts the records before that start.
   const auto& index = log_->index();
   since_snapshot_ = static_cast<std::uint64_t>(
       std::count_if(index.begin(), index.end(), [&](const JournalLog::RecordRef& r) { return r.segment == log_->segment(); }));
   total_records_ = index.size();
   for (std::size_t i = 0; i < index.size(); ++i) {
     if (index[i].kind != RecordKind::Snapshot) continue;
-    total_records_ += journal::decode_snapshot(log_->payload(i)).records - i;
+    const journal::SnapshotRecord first = journal::decode_snapshot(log_->payload(i));
+    total_records_ += first.records - segment_start(first.seq);
     break;
   }
+  // A snapshot's temporary file is never complete after a stop (a crash while it was written).
+  journal::remove_snapshots_before(config_.dir, log_->dir_fd(), 0);
   recovery_.bytes = log_->bytes();
   recovery_.cut_bytes = log_->cut_bytes();
   recovery_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -103,12 +107,22 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
                  recovery_.replayed, recovery_.cut_bytes ? " (a torn tail was cut)" : "");
 }
 
+std::size_t Journal::segment_start(std::uint64_t segment) const {
+  const auto& index = log_->index();
+  return static_cast<std::size_t>(
+      std::find_if(index.begin(), index.end(), [&](const JournalLog::RecordRef& r) { return r.segment >= segment; }) -
+      index.begin());
+}
+
 std::size_t Journal::restore_newest_snapshot(Handler& handler) {
   const auto& index = log_->index();
   for (std::size_t i = index.size(); i-- > 0;) {
     if (index[i].kind != RecordKind::Snapshot) continue;
     const journal::SnapshotRecord record = journal::decode_snapshot(log_->payload(i));
     try {
+      if (record.seq != index[i].segment) {
+        throw JournalError("its record is in segment " + std::to_string(index[i].segment));
+      }
       const std::string bytes = journal::read_snapshot_file(config_.dir, record);
       SnapshotReader in(bytes.data() + journal::kSnapshotHeaderBytes, bytes.size() - journal::kSnapshotHeaderBytes);
       handler.restore(in);  // reads and checks everything before it changes anything
@@ -118,10 +132,13 @@ std::size_t Journal::restore_newest_snapshot(Handler& handler) {
                      record.seq, i + 1, e.what());
       continue;
     }
+    // The state at the start of its segment: every record of the segment is replayed (its own record
+    // and any other Snapshot record replay as nothing).
+    const std::size_t from = segment_start(record.seq);
     recovery_.snapshot = record.seq;
-    recovery_.skipped = i + 1;
+    recovery_.skipped = from;
     kept_snapshot_ = record.seq;
-    return i + 1;
+    return from;
   }
   if (log_->first_segment() != 0) {
     throw JournalError("journal '" + config_.dir + "': no snapshot in it could be restored and the log before segment " +
@@ -166,7 +183,7 @@ void Journal::replay(RecordKind kind, const std::vector<std::uint8_t>& payload, 
       handler.apply_expiry(journal::decode_expiry(payload).expiry, ignored);
       ++recovery_.expiries;
       return;
-    case RecordKind::Snapshot:  // a snapshot newer than the one restored: not usable; its state is replayed
+    case RecordKind::Snapshot:  // the one restored, or one newer: not usable; its state is replayed
       return;
   }
 }
@@ -269,11 +286,19 @@ void Journal::flush(bool force) {
   for (auto& release : ready) release();
 }
 
+Journal::~Journal() {
+  writer_.reset();  // finishes its jobs (a snapshot in hand is written; without its record it is ignored)
+}
+
 void Journal::maybe_snapshot() {
+  if (writer_ && in_flight_) {
+    if (auto written = writer_->take_written()) complete_snapshot(*written);
+  }
   if (failed() || (config_.snapshot_records == 0 && config_.snapshot_mb == 0)) return;
   const bool due = (config_.snapshot_records && since_snapshot_ >= config_.snapshot_records) ||
                    (config_.snapshot_mb && log_->segment_bytes() > (config_.snapshot_mb << 20));
-  if (!due || since_snapshot_ < retry_at_) return;
+  // At most one in flight: a due snapshot waits for the writer thread (tried again when it finished).
+  if (!due || since_snapshot_ < retry_at_ || in_flight_) return;
   const Handler::SnapshotBlock block = handler_.not_snapshottable();
   if (!block.why.empty()) {
     // Tried again at the next record when an upload or load is what waits (it ends by itself), else a
@@ -292,43 +317,73 @@ void Journal::maybe_snapshot() {
 
 void Journal::take_snapshot() {
   const auto t0 = Clock::now();
-  flush(true);  // the open group's replies go out: the snapshot follows every record before it
+  flush(true);  // the open group's records are durable and its replies out: the new segment's syncs miss them
   if (failed()) return;
   const std::uint64_t seq = log_->segment() + 1;
-  journal::SnapshotRecord record;
-  double save_ms = 0.0;
+  InFlight taken;
+  taken.taken = t0;
+  taken.records = total_records_;
+  std::vector<std::string> parts;
   try {
-    std::vector<std::string> parts;
+    if (!writer_) writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] { if (on_written_) on_written_(); });
     const auto s0 = Clock::now();
     handler_.save(parts);
-    save_ms = std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
-    record = journal::write_snapshot_file(*log_, seq, parts);
-    record.records = total_records_;
-    log_->start_segment(seq, RecordKind::Snapshot, journal::encode(record));
+    taken.save_ms = std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
+    log_->start_segment(seq);  // every later record goes to segment `seq`: the state saved is its start
   } catch (const std::exception& e) {
     // Nothing changed: the log goes on in its segment; tried again after as many records.
     retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);
     logger()->error("journal: snapshot {} not taken: {}; the log keeps every record", seq, e.what());
     return;
   }
-  ++total_records_;
-  since_snapshot_ = 1;  // the Snapshot record
-  try {
-    // The new snapshot is durable: keep the one before it as its fallback, drop what is older.
-    log_->drop_segments_before(kept_snapshot_);
-    journal::remove_snapshots_before(*log_, kept_snapshot_);
-  } catch (const std::exception& e) {
-    logger()->warn("journal: old segments or snapshots not removed: {}", e.what());
+  since_snapshot_ = 0;
+  writer_->write(seq, std::move(parts));
+  taken.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  in_flight_ = taken;
+}
+
+void Journal::complete_snapshot(const journal::WrittenSnapshot& written) {
+  const InFlight taken = *in_flight_;
+  in_flight_.reset();
+  if (!written.error.empty()) {
+    // Its segment stays without a record: recovery replays it from the snapshot before (or the log's start).
+    retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);
+    logger()->error("journal: snapshot {} not written: {}; the log keeps every record", written.seq, written.error);
+    return;
   }
-  kept_snapshot_ = seq;
+  journal::SnapshotRecord record = written.record;
+  record.records = taken.records;
+  try {
+    append(RecordKind::Snapshot, journal::encode(record));
+  } catch (const std::exception& e) {
+    failure_ = std::string("journal: ") + e.what();
+    logger()->critical("{}: no more replies are sent", failure_);
+    return;
+  }
+  flush(true);  // the record durable (and the open group's replies out) before older files go
+  if (failed()) return;
+  // The new snapshot is durable: keep the one before it as its fallback, drop what is older.
+  writer_->remove(log_->forget_segments_before(kept_snapshot_), kept_snapshot_);
+  kept_snapshot_ = written.seq;
   snapshots_.taken += 1;
-  snapshots_.seq = seq;
+  snapshots_.seq = written.seq;
   snapshots_.bytes = record.file_bytes;
-  snapshots_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  snapshots_.save_ms = save_ms;
+  snapshots_.ms = taken.ms;
+  snapshots_.save_ms = taken.save_ms;
+  snapshots_.write_ms = written.times.write_ms;
+  snapshots_.sync_ms = written.times.sync_ms;
+  snapshots_.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - taken.taken).count();
   logger()->info("journal: snapshot {} taken after {} record(s): {:.2f} MB, the request loop waited {:.1f} ms, of "
-                 "which {:.1f} ms saving the state (the rest: writing, fsyncs, the new segment)",
-                 seq, record.records, static_cast<double>(record.file_bytes) / 1e6, snapshots_.ms, save_ms);
+                 "which {:.1f} ms saving the state; the writer thread wrote it in {:.1f} ms and synced it in {:.1f} "
+                 "ms; durable {:.1f} ms after its point",
+                 written.seq, record.records, static_cast<double>(record.file_bytes) / 1e6, snapshots_.ms,
+                 snapshots_.save_ms, snapshots_.write_ms, snapshots_.sync_ms, snapshots_.total_ms);
+}
+
+void Journal::finish_snapshot() {
+  if (!writer_ || !in_flight_) return;
+  writer_->wait_idle();
+  if (auto written = writer_->take_written()) complete_snapshot(*written);
 }
 
 }  // namespace surfeledit::service

@@ -12,7 +12,7 @@
 #include <string>
 #include <utility>
 
-#include "journal_snapshot.hpp"
+#include "journal_io.hpp"
 #include "surfeledit/service/journal.hpp"
 #include "surfeledit/service/log.hpp"
 
@@ -25,17 +25,10 @@ constexpr std::uint32_t kFormat = 1;       // framing version in the header
 constexpr std::size_t kHeaderBytes = 16;   // magic, format, record format, reserved
 constexpr std::size_t kFrameBytes = 9;     // length, crc, kind
 
-[[noreturn]] void fail(const std::string& what, int err) {
-  throw JournalError(what + ": " + std::strerror(err));
-}
+using journal::fail;
 
-void put_u32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-
-std::uint32_t get_u32(const std::uint8_t* p) {
-  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
-}
+void put_u32(std::uint8_t* p, std::uint32_t v) { journal::put_le(p, v, 4); }
+std::uint32_t get_u32(const std::uint8_t* p) { return static_cast<std::uint32_t>(journal::get_le(p, 4)); }
 
 // CRC-32 of the kind byte and the payload.
 std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size_t size) {
@@ -190,12 +183,13 @@ void JournalLog::scan(std::uint64_t segment, bool last) {
                        "; this server reads format " + std::to_string(kFormat));
   }
   const std::uint32_t records = get_u32(header.data() + 12);
-  if (records != kRecordFormat) {
+  if (records < kOldestRecordFormat || records > kRecordFormat) {
     throw JournalError("journal '" + path_ + "' holds records of format " + std::to_string(records) +
                        (records == 0 ? " (written before record formats were recorded: its requests may lack fields "
                                        "added since, e.g. the blend / fill_holes projection)"
                                      : "") +
-                       "; this server reads record format " + std::to_string(kRecordFormat) +
+                       "; this server reads record formats " + std::to_string(kOldestRecordFormat) + " to " +
+                       std::to_string(kRecordFormat) +
                        ": recover it with the server that wrote it, or move it away");
   }
 
@@ -277,52 +271,38 @@ void JournalLog::read(std::size_t from,
   for (std::size_t i = from; i < index_.size(); ++i) on_record(index_[i].kind, payload(i));
 }
 
-void JournalLog::sync_dir() {
-  if (::fsync(dir_fd_.get()) != 0) fail("cannot fsync journal directory '" + dir_ + "'", errno);
-}
+void JournalLog::sync_dir() { journal::sync_dir(dir_fd_.get(), dir_); }
 
-void JournalLog::start_segment(std::uint64_t segment, RecordKind kind, const std::vector<std::uint8_t>& payload) {
+void JournalLog::start_segment(std::uint64_t segment) {
   if (segment <= segment_) throw JournalError("journal segment " + std::to_string(segment) + " is not new");
   std::string path = segment_path(dir_, segment);
   UniqueFd fd(::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
   if (fd.get() < 0) fail("cannot create journal segment '" + path + "'", errno);
-  // append() writes to the new segment; on failure everything goes back to the current one.
-  const std::uint64_t old_size = size_, old_records = records_;
-  std::swap(fd_, fd);
-  std::swap(path_, path);
-  size_ = 0;
   try {
     const std::array<std::uint8_t, kHeaderBytes> header = new_header();
-    journal::write_all(fd_.get(), header.data(), header.size(), "cannot append to journal '" + path_ + "'");
-    size_ = kHeaderBytes;
-    append(kind, payload);
-    if (::fdatasync(fd_.get()) != 0) fail("cannot fdatasync journal '" + path_ + "'", errno);
-    sync_dir();
+    journal::write_all(fd.get(), header.data(), header.size(), "cannot append to journal '" + path + "'");
+    if (::fdatasync(fd.get()) != 0) fail("cannot fdatasync journal '" + path + "'", errno);
+    sync_dir();  // its entry is durable before any record in it is acknowledged
   } catch (...) {
-    ::unlink(path_.c_str());
-    std::swap(fd_, fd);
-    std::swap(path_, path);
-    size_ = old_size;
-    records_ = old_records;
+    ::unlink(path.c_str());
     throw;
   }
-  older_[segment_] = old_size;
+  older_[segment_] = size_;
+  std::swap(fd_, fd);
+  path_ = std::move(path);
   segment_ = segment;
+  size_ = kHeaderBytes;
 }
 
-void JournalLog::drop_segments_before(std::uint64_t segment) {
+std::vector<std::string> JournalLog::forget_segments_before(std::uint64_t segment) {
   segment = std::min(segment, segment_);
-  bool dropped = false;
+  std::vector<std::string> paths;
   for (auto it = older_.begin(); it != older_.end() && it->first < segment;) {
-    const std::string path = segment_path(dir_, it->first);
-    if (::unlink(path.c_str()) != 0 && errno != ENOENT) fail("cannot remove journal segment '" + path + "'", errno);
+    paths.push_back(segment_path(dir_, it->first));
     it = older_.erase(it);
-    dropped = true;
   }
-  if (dropped) {
-    first_ = older_.empty() ? segment_ : older_.begin()->first;
-    sync_dir();
-  }
+  if (!paths.empty()) first_ = older_.empty() ? segment_ : older_.begin()->first;
+  return paths;
 }
 
 void JournalLog::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {

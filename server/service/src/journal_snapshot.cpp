@@ -3,11 +3,10 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
-#include <algorithm>
 #include <array>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <vector>
@@ -20,57 +19,26 @@ constexpr std::array<char, 8> kMagic = {'S', 'E', 'S', 'N', 'A', 'P', 'S', 'H'};
 constexpr std::uint32_t kFileFormat = 1;
 constexpr std::size_t kHeaderBytes = kSnapshotHeaderBytes;
 
-[[noreturn]] void fail(const std::string& what, int err) { throw JournalError(what + ": " + std::strerror(err)); }
-
-void put(std::uint8_t* p, std::uint64_t v, int bytes) {
-  for (int i = 0; i < bytes; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint64_t get(const std::uint8_t* p, int bytes) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < bytes; ++i) v |= std::uint64_t(p[i]) << (8 * i);
-  return v;
-}
-
 }  // namespace
-
-void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& what) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail(what, errno);
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
-}
-
-std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc) {
-  uLong c = crc;
-  while (size > 0) {  // zlib takes uInt lengths
-    const std::size_t n = std::min<std::size_t>(size, 1u << 30);
-    c = crc32(c, data, static_cast<uInt>(n));
-    data += n;
-    size -= n;
-  }
-  return static_cast<std::uint32_t>(c);
-}
 
 std::string snapshot_path(const std::string& dir, std::uint64_t seq) {
   return dir + "/snapshot-" + std::to_string(seq) + ".bin";
 }
 
-SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::vector<std::string>& parts) {
-  const std::string path = snapshot_path(log.dir(), seq);
+SnapshotRecord write_snapshot_file(const std::string& dir, int dir_fd, std::uint64_t seq,
+                                   const std::vector<std::string>& parts, SnapshotFileTimes* times) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  const std::string path = snapshot_path(dir, seq);
   const std::string tmp = path + ".tmp";
   std::uint64_t payload = 0;
   for (const std::string& part : parts) payload += part.size();
   std::array<std::uint8_t, kHeaderBytes> header{};
   std::memcpy(header.data(), kMagic.data(), kMagic.size());
-  put(header.data() + 8, kFileFormat, 4);
-  put(header.data() + 12, kRecordFormat, 4);
-  put(header.data() + 16, seq, 8);
-  put(header.data() + 24, payload, 8);
+  put_le(header.data() + 8, kFileFormat, 4);
+  put_le(header.data() + 12, kRecordFormat, 4);
+  put_le(header.data() + 16, seq, 8);
+  put_le(header.data() + 24, payload, 8);
   SnapshotRecord record;
   record.seq = seq;
   record.file_bytes = kHeaderBytes + payload;
@@ -86,9 +54,14 @@ SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std
     for (const std::string& part : parts) {
       write_all(fd.get(), reinterpret_cast<const std::uint8_t*>(part.data()), part.size(), what);
     }
+    const auto t1 = Clock::now();
     if (::fdatasync(fd.get()) != 0) fail("cannot fdatasync snapshot '" + tmp + "'", errno);
     if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename snapshot '" + tmp + "'", errno);
-    log.sync_dir();
+    sync_dir(dir_fd, dir);
+    if (times) {
+      times->write_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+      times->sync_ms = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+    }
   } catch (...) {
     ::unlink(tmp.c_str());
     ::unlink(path.c_str());
@@ -121,18 +94,18 @@ std::string read_snapshot_file(const std::string& dir, const SnapshotRecord& rec
   if (crc32_of(p, bytes.size()) != record.file_crc) {
     throw JournalError("snapshot '" + path + "' does not match its record's checksum (corrupt)");
   }
-  if (std::memcmp(p, kMagic.data(), kMagic.size()) != 0 || get(p + 8, 4) != kFileFormat ||
-      get(p + 12, 4) != kRecordFormat || get(p + 16, 8) != record.seq ||
-      get(p + 24, 8) != record.file_bytes - kHeaderBytes) {
+  if (std::memcmp(p, kMagic.data(), kMagic.size()) != 0 || get_le(p + 8, 4) != kFileFormat ||
+      get_le(p + 12, 4) < kOldestRecordFormat || get_le(p + 12, 4) > kRecordFormat || get_le(p + 16, 8) != record.seq ||
+      get_le(p + 24, 8) != record.file_bytes - kHeaderBytes) {
     throw JournalError("snapshot '" + path + "' has another header (format, record format or number)");
   }
   return bytes;
 }
 
-void remove_snapshots_before(JournalLog& log, std::uint64_t seq) {
+void remove_snapshots_before(const std::string& dir, int dir_fd, std::uint64_t seq) {
   std::error_code ec;
   std::vector<std::string> doomed;
-  for (const auto& item : std::filesystem::directory_iterator(log.dir(), ec)) {
+  for (const auto& item : std::filesystem::directory_iterator(dir, ec)) {
     const std::string name = item.path().filename().string();
     if (name.rfind("snapshot-", 0) != 0) continue;
     const std::size_t dot = name.find('.');
@@ -141,11 +114,11 @@ void remove_snapshots_before(JournalLog& log, std::uint64_t seq) {
     const bool tmp = name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0;
     if (std::stoull(digits) < seq || tmp) doomed.push_back(item.path().string());
   }
-  if (ec) fail("cannot list journal directory '" + log.dir() + "'", ec.value());
+  if (ec) fail("cannot list journal directory '" + dir + "'", ec.value());
   for (const std::string& path : doomed) {
     if (::unlink(path.c_str()) != 0 && errno != ENOENT) fail("cannot remove snapshot '" + path + "'", errno);
   }
-  if (!doomed.empty()) log.sync_dir();
+  if (!doomed.empty()) sync_dir(dir_fd, dir);
 }
 
 }  // namespace surfeledit::service::journal

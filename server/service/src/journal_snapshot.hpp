@@ -11,30 +11,33 @@
 #include <string>
 #include <vector>
 
+#include "journal_io.hpp"
 #include "journal_records.hpp"
 #include "surfeledit/service/journal.hpp"
 
 namespace surfeledit::service::journal {
 
-// CRC-32 (zlib) of `size` bytes continuing `crc` (0 to start); any size.
-std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
-
-// Writes all `size` bytes to `fd`, again after a short write or EINTR; throws JournalError "<what>: <error>".
-void write_all(int fd, const std::uint8_t* data, std::size_t size, const std::string& what);
-
 std::string snapshot_path(const std::string& dir, std::uint64_t seq);
 
-// Writes snapshot `seq` holding the concatenation of `parts` durably (its directory entry too, through
-// `log`); returns its Snapshot record (records = 0, for the caller). Removes what it wrote on failure.
-// Throws JournalError.
-SnapshotRecord write_snapshot_file(JournalLog& log, std::uint64_t seq, const std::vector<std::string>& parts);
+// Where the time of write_snapshot_file went, ms.
+struct SnapshotFileTimes {
+  double write_ms = 0.0;  // creating the temporary file and writing it (CRC included)
+  double sync_ms = 0.0;   // its fdatasync, the rename and the directory's fsync
+};
+
+// Writes snapshot `seq` holding the concatenation of `parts` durably into `dir` (open as `dir_fd`):
+// `.tmp`, fdatasync, rename, directory fsync; returns its Snapshot record (records = 0, for the caller).
+// Removes what it wrote on failure. Throws JournalError.
+SnapshotRecord write_snapshot_file(const std::string& dir, int dir_fd, std::uint64_t seq,
+                                   const std::vector<std::string>& parts, SnapshotFileTimes* times = nullptr);
 
 // The file `record` names, checked against the record and its header; its payload starts at
 // kSnapshotHeaderBytes. Throws JournalError saying what is wrong (missing, size, checksum, header).
 std::string read_snapshot_file(const std::string& dir, const SnapshotRecord& record);
 constexpr std::size_t kSnapshotHeaderBytes = 32;
 
-// Removes the snapshot files numbered below `seq` (and temporary files left by a crash). Throws JournalError.
-void remove_snapshots_before(JournalLog& log, std::uint64_t seq);
+// Removes the snapshot files numbered below `seq` and every temporary one (never complete after a crash;
+// call only while no snapshot is being written), then fsyncs the directory. Throws JournalError.
+void remove_snapshots_before(const std::string& dir, int dir_fd, std::uint64_t seq);
 
 }  // namespace surfeledit::service::journal

@@ -43,6 +43,7 @@ constexpr dds_attach_t kStopTag = 2;
 constexpr dds_attach_t kLoadsTag = 3;
 constexpr dds_attach_t kWritersTag = 4;
 constexpr dds_attach_t kWatchersTag = 5;  // an update writer matched a new watcher
+constexpr dds_attach_t kSnapshotTag = 6;  // the journal's writer thread finished a snapshot file
 
 // Topic types with their XTypes type information (PROTOCOL.md, "Topics and QoS"), so that DDS tools
 // (`cyclonedds typeof`, `cyclonedds ls`) can show them. Request has no enum-typed member (op and kinds
@@ -119,11 +120,13 @@ struct Service::Impl {
         requests(dds::make_read_condition(request_reader)),
         stop_guard(participant),
         loads_guard(participant),
+        snapshot_guard(participant),
         waitset(participant),
         publisher(make_publisher(c)) {
     waitset.attach(requests, kRequestsTag);
     waitset.attach(stop_guard.entity(), kStopTag);
     waitset.attach(loads_guard.entity(), kLoadsTag);
+    waitset.attach(snapshot_guard.entity(), kSnapshotTag);
     waitset.attach(writer_wake.entity(), kWritersTag);
     for (const dds::Entity* w : {&update_writer, &compact_update_writer}) {
       dds::notify_matches(*w);
@@ -132,6 +135,7 @@ struct Service::Impl {
     if (!c.journal.dir.empty()) {
       journal = std::make_unique<Journal>(c.journal, handler);  // recovery: replays the log into the handler
       handler.set_on_stored([this](const Reply& reply) { journal->on_stored(reply); });
+      journal->set_on_snapshot_written([this] { snapshot_guard.trigger(); });
     }
     handler.set_on_load_done([this] { loads_guard.trigger(); });
   }
@@ -202,6 +206,7 @@ struct Service::Impl {
   dds::Entity requests;  // read condition: the reader holds samples
   dds::GuardCondition stop_guard;
   dds::GuardCondition loads_guard;  // a file load finished (FileLoads, on its thread)
+  dds::GuardCondition snapshot_guard;  // the journal's writer thread finished a snapshot file
   dds::WaitSet waitset;
   // Last: destroyed (drained and joined) first, while the update writer still exists.
   // nullptr: updates are written on the request thread (UpdateThread::Off, or Auto without a spare core).
@@ -493,12 +498,16 @@ void Service::run() {
     s.finish_loads();
     s.serve_available();
     s.check_leases();
-    if (s.journal) s.journal->maybe_snapshot();  // expiries count as records too
+    if (s.journal) {
+      s.snapshot_guard.clear();     // before looking: a snapshot finishing meanwhile triggers it again
+      s.journal->maybe_snapshot();  // a written snapshot's record; expiries count as records too
+    }
     // The request reader is empty (serve_available took until nothing was left): the open group is
     // committed now rather than at its deadline, so a lone client does not wait for group_ms; requests
     // that arrive during this fsync form the next group (PROTOCOL.md "Journal").
     s.flush_journal(true);
   }
+  if (s.journal) s.journal->finish_snapshot();  // a snapshot in flight gets its record
   s.flush_journal(true);  // the last group's replies go out before stopping
   s.stop_publisher();
   logger()->info("stopped");

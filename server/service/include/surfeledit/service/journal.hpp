@@ -49,11 +49,15 @@ class JournalError : public std::runtime_error {
 };
 
 // The format of the records (the header's second version): what a Request record's CDR holds (the IDL's
-// Request as of this server) and the other records' layouts. Bumped whenever either changes (a field added
-// to a request type changes the CDR); a journal of another record format is refused (JournalError) rather
-// than replayed wrongly. 0: journals written before the header held it (before the blend / fill_holes
-// `projection` field was journaled alike).
-constexpr std::uint32_t kRecordFormat = 1;
+// Request as of this server), the other records' layouts and where they stand. Bumped whenever one
+// changes (a field added to a request type changes the CDR); a journal of a format outside
+// kOldestRecordFormat..kRecordFormat is refused (JournalError) rather than replayed wrongly. 0: journals
+// written before the header held it (before the blend / fill_holes `projection` field was journaled
+// alike). 1: snapshot k's record is the first record of segment k. 2: snapshot k is the state at the
+// start of segment k and its record follows anywhere in segment k, once its file is durable (written
+// off the request thread); format 1 is the special case of 2 where the record comes first, so both read.
+constexpr std::uint32_t kRecordFormat = 2;
+constexpr std::uint32_t kOldestRecordFormat = 1;  // the oldest record format this server reads
 
 // Exit code of surfeledit-server when the journal cannot be used.
 constexpr int kJournalExitCode = 3;
@@ -63,7 +67,7 @@ enum class RecordKind : std::uint8_t {
   Request = 1,  // an accepted request: its CDR form and what its reply said
   Refusal = 2,  // a refused request's reply (kept for repeats; replay does not re-run it)
   Expiry = 3,   // a lease or grace period that ran out (Handler::expire_leases, apply_expiry)
-  Snapshot = 4,  // a snapshot file was written: the state after every record before it (first of a segment)
+  Snapshot = 4,  // snapshot k's file is durable: the state at the start of segment k (a record in segment k)
 };
 
 // Owns a file descriptor (closed on destruction). Move-only.
@@ -83,7 +87,7 @@ class UniqueFd {
 };
 
 // The log: segments DIR/journal.log (segment 0) and DIR/journal-<k>.log (k = 1, 2, ...; segment k
-// starts with the Snapshot record of snapshot k), read in order as one sequence of records. Each
+// starts where snapshot k was taken and holds its Snapshot record once its file is durable), read in order as one sequence of records. Each
 // segment has a 16-byte header (magic "SEJOURNL", u32 framing format 1, u32 record format
 // kRecordFormat, 4 reserved bytes), then records framed as
 //   u32 payload length | u32 CRC-32 (zlib) of kind and payload | u8 kind | payload
@@ -124,12 +128,13 @@ class JournalLog {
   void append(RecordKind kind, const std::vector<std::uint8_t>& payload);
   // Forces everything appended to disk (fdatasync). Throws JournalError.
   void sync();
-  // Starts segment `segment` (> the current one) holding one record, made durable with its directory
-  // entry; later appends go there. On failure the new file is removed and appends stay in the current
-  // segment. Throws JournalError.
-  void start_segment(std::uint64_t segment, RecordKind kind, const std::vector<std::uint8_t>& payload);
-  // Deletes the segments numbered below `segment` (never the current one). Throws JournalError.
-  void drop_segments_before(std::uint64_t segment);
+  // Starts segment `segment` (> the current one), its header and directory entry durable; later appends
+  // go there. Sync the current segment first (its unsynced records are not synced by later syncs). On
+  // failure the new file is removed and appends stay in the current segment. Throws JournalError.
+  void start_segment(std::uint64_t segment);
+  // Forgets the segments numbered below `segment` (never the current one) and returns their files, oldest
+  // first, for the caller to delete in that order (the journal's writer thread does).
+  std::vector<std::string> forget_segments_before(std::uint64_t segment);
   // Forces the directory's entries to disk (fsync). Throws JournalError.
   void sync_dir();
 
@@ -141,6 +146,7 @@ class JournalLog {
   std::uint64_t cut_bytes() const { return cut_bytes_; }      // bytes of torn / corrupt tail cut at open
   const std::string& path() const { return path_; }           // the current segment
   const std::string& dir() const { return dir_; }
+  int dir_fd() const { return dir_fd_.get(); }                // the directory, open (for its fsyncs)
 
   // The file of segment `segment` in `dir`.
   static std::string segment_path(const std::string& dir, std::uint64_t segment);
