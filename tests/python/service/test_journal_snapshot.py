@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import shutil
+import time
 from pathlib import Path
 from typing import Callable, Dict, List, Tuple
 
@@ -37,6 +38,29 @@ def _restart(servers: List[ServerProcess], tmp_path: Path, name: str, domain: in
     servers[-1].proc.wait()
     servers.append(_server(tmp_path, name, domain, *extra))
     return servers[-1]
+
+
+def settled(srv: ServerProcess, timeout: float = 60.0) -> int:
+    """Waits until every snapshot the server started was written or failed (the writer thread finished
+    it and the request thread journaled its record or logged why not), seen twice 0.2 s apart (a finished
+    snapshot may start the next one at once); returns how many were taken."""
+    end, last = time.monotonic() + timeout, None
+    while time.monotonic() < end:
+        log = srv.log_tail(10**8)
+        started = len(re.findall(r"snapshot \d+ started", log))
+        ended = len(re.findall(r"snapshot \d+ (?:taken|not written)", log))
+        if started == ended and last == started:
+            return len(re.findall(r"snapshot \d+ taken", log))
+        last = started if started == ended else None
+        time.sleep(0.2)
+    raise AssertionError(f"snapshots still in flight after {timeout} s:\n{srv.log_tail()}")
+
+
+def wait_for(condition: Callable[[], bool], what: str, timeout: float = 30.0) -> None:
+    end = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < end, what
+        time.sleep(0.05)
 
 
 def _journal_flags(journal: Path) -> Tuple[str, ...]:
@@ -140,12 +164,14 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
         before = [_view(s) for s in pair.sessions["alice"]]
         assert before[0] == before[1]
         records = int(before[1][0]) + 8  # at least one record per version, plus opens, invites, joins
-
+        settled(srv)
+        # The writer thread deletes what the newest snapshot made obsolete once its record is durable.
+        wait_for(lambda: len(list(journal.glob("snapshot-*.bin"))) <= 2 and len(list(journal.glob("journal*.log"))) <= 2,
+                 "older snapshots and segments are deleted")
         srv = _restart(servers, tmp_path, "journaled-1", j_domain, *_journal_flags(journal))
         snapshot, replayed = _recovery(srv)
         assert snapshot >= 2, "the script spans several snapshots"
         assert 0 < replayed <= SNAPSHOT_RECORDS, f"only the tail is replayed, not {replayed} of ~{records} records"
-        assert len(list(journal.glob("snapshot-*.bin"))) <= 2 and len(list(journal.glob("journal*.log"))) <= 2
 
         # The same state, version and history as the server that never restarted.
         after = [_view(s) for s in pair.sessions["alice"]]
@@ -218,6 +244,7 @@ def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -
         s = c.open_session("hier")
         s.load_points(positions, normals, radii)  # snapshots may be taken until the hierarchy is set
         s.configure(zero_hierarchy="aabb")
+        settled(srv)
         taken = sorted(journal.glob("snapshot-*.bin"))
         segment = max(journal.glob("journal*.log"), key=lambda p: p.stat().st_mtime_ns)
         s.set_regions(zero=ids[part != 1], one=ids[part == 1])
@@ -229,7 +256,7 @@ def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -
         srv = _restart(servers, tmp_path, "hier-1", domain, "--journal", str(journal), "--journal-snapshot-records", "3")
         # Every record since the last snapshot (or the log's start) is replayed.
         snapshot, replayed = _recovery(srv)
-        assert snapshot == max((int(p.stem.split("-")[1]) for p in taken), default=0) and replayed == _frames(segment) - (1 if taken else 0)
+        assert snapshot == max((int(p.stem.split("-")[1]) for p in taken), default=0) and replayed == _frames(segment)
         assert replayed >= 7
         assert _view(s) == before
     finally:
@@ -259,9 +286,10 @@ def test_a_snapshot_is_taken_when_the_log_exceeds_its_byte_bound(tmp_path: Path)
         assert "snapshot deferred (1 upload(s) unfinished)" in log
         s.remove(np.arange(3))
         before = _view(s)
+        settled(srv)
         assert "snapshot 1 taken" in srv.log_tail(10**7) and (journal / "snapshot-1.bin").exists()
         srv = _restart(servers, tmp_path, "mb-1", domain, *args)
-        assert _recovery(srv) == (1, _frames(journal / "journal-1.log") - 1)  # all but its own Snapshot record
+        assert _recovery(srv) == (1, _frames(journal / "journal-1.log"))  # its segment, its own record included
         assert _view(s) == before
     finally:
         c.reconnect = 0.0
