@@ -328,8 +328,10 @@ void Journal::take_snapshot() {
     if (!writer_) writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] { if (on_written_) on_written_(); });
     const auto s0 = Clock::now();
     handler_.save(parts);
-    taken.save_ms = std::chrono::duration<double, std::milli>(Clock::now() - s0).count();
+    const auto s1 = Clock::now();
+    taken.save_ms = std::chrono::duration<double, std::milli>(s1 - s0).count();
     log_->start_segment(seq);  // every later record goes to segment `seq`: the state saved is its start
+    taken.segment_ms = std::chrono::duration<double, std::milli>(Clock::now() - s1).count();
   } catch (const std::exception& e) {
     // Nothing changed: the log goes on in its segment; tried again after as many records.
     retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);
@@ -343,8 +345,8 @@ void Journal::take_snapshot() {
   taken.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   in_flight_ = taken;
   logger()->info("journal: snapshot {} started after {} record(s): the request loop waited {:.1f} ms, of which "
-                 "{:.1f} ms saving the state; the writer thread writes its {:.2f} MB",
-                 seq, taken.records, taken.ms, taken.save_ms, static_cast<double>(bytes) / 1e6);
+                 "{:.1f} ms saving the state and {:.1f} ms starting its segment; the writer thread writes its {:.2f} MB",
+                 seq, taken.records, taken.ms, taken.save_ms, taken.segment_ms, static_cast<double>(bytes) / 1e6);
 }
 
 void Journal::complete_snapshot(const journal::WrittenSnapshot& written) {

@@ -138,6 +138,7 @@ class Journal {
     Clock::time_point taken;     // its point
     double ms = 0.0;             // how long the point blocked the loop
     double save_ms = 0.0;        // of which Handler::save
+    double segment_ms = 0.0;     // of which starting the new segment (its header and directory entry synced)
   };
   std::optional<InFlight> in_flight_;
   std::function<void()> on_written_;                 // wakes the request loop (set_on_snapshot_written)
