@@ -116,11 +116,17 @@ class Pair:
         assert out[0] == out[1], out
         return out
 
-    def close(self) -> None:
-        for pair in self.clients.values():
-            for c in pair:
-                c.reconnect = 0.0
-                c.close()
+    def all(self) -> List[surfeledit.Client]:
+        return [c for pair in self.clients.values() for c in pair]
+
+
+def stop_all(servers: List[ServerProcess], *clients: surfeledit.Client) -> None:
+    """Teardown: closes the clients (not reconnecting any more), then stops every server."""
+    for c in clients:
+        c.reconnect = 0.0
+        c.close()
+    for s in servers:
+        s.stop()
 
 
 def _step(s: surfeledit.Session, t: Tuple[float, float, float]) -> tuple:
@@ -227,9 +233,7 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
             finally:
                 c.close()
     finally:
-        pair.close()
-        for s in servers:
-            s.stop()
+        stop_all(servers, *pair.all())
 
 
 def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -> None:
@@ -260,10 +264,7 @@ def test_a_session_that_is_not_snapshottable_keeps_full_replay(tmp_path: Path) -
         assert replayed >= 7
         assert _view(s) == before
     finally:
-        c.reconnect = 0.0
-        c.close()
-        for x in servers:
-            x.stop()
+        stop_all(servers, c)
 
 
 def test_a_snapshot_is_taken_when_the_log_exceeds_its_byte_bound(tmp_path: Path) -> None:
@@ -292,7 +293,4 @@ def test_a_snapshot_is_taken_when_the_log_exceeds_its_byte_bound(tmp_path: Path)
         assert _recovery(srv) == (1, _frames(journal / "journal-1.log"))  # its segment, its own record included
         assert _view(s) == before
     finally:
-        c.reconnect = 0.0
-        c.close()
-        for x in servers:
-            x.stop()
+        stop_all(servers, c)

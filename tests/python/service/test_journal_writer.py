@@ -11,7 +11,6 @@ failed write, or with a file renamed whose record never came, must recover exact
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import stat
 import threading
@@ -22,8 +21,8 @@ import numpy as np
 
 import surfeledit
 
-from .conftest import ServerProcess, free_domain
-from .test_journal_snapshot import Pair, _recovery, _restart, _server, _step, _view, settled, wait_for
+from .conftest import free_domain
+from .test_journal_snapshot import Pair, _recovery, _restart, _server, _step, _view, settled, stop_all, wait_for
 from .test_tools import claim_arms, two_arms
 
 EVERY = 5  # --journal-snapshot-records
@@ -74,12 +73,6 @@ def _records(segment: Path) -> List[Tuple[int, int]]:
     return out
 
 
-def _stop_all(pair: Pair, servers: List[ServerProcess]) -> None:
-    pair.close()
-    for s in servers:
-        s.stop()
-
-
 def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recovers(tmp_path: Path) -> None:
     ref_domain, j_domain = free_domain(), free_domain()
     journal = tmp_path / "journal"
@@ -116,7 +109,7 @@ def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recov
         final = [_view(s) for s in pair.sessions["alice"]]
         assert final[0] == final[1]
     finally:
-        _stop_all(pair, servers)
+        stop_all(servers, *pair.all())
 
 
 def test_a_failed_snapshot_write_leaves_its_segment_to_the_log_and_the_next_one_is_taken(tmp_path: Path) -> None:
@@ -160,7 +153,7 @@ def test_a_failed_snapshot_write_leaves_its_segment_to_the_log_and_the_next_one_
         assert _recovery(servers[-1])[0] == 0
         assert _recovered_view(domain) == want
     finally:
-        _stop_all(pair, servers)
+        stop_all(servers, *pair.all())
 
 
 def test_a_snapshot_file_whose_record_never_came_is_ignored(tmp_path: Path) -> None:
@@ -207,4 +200,4 @@ def test_a_snapshot_file_whose_record_never_came_is_ignored(tmp_path: Path) -> N
         assert restored < k and f"snapshot {k} restored" not in other.log_tail(10**7)
         assert _recovered_view(j_domain) == views[len(views) - 1 - len(cut)]
     finally:
-        _stop_all(pair, servers)
+        stop_all(servers, *pair.all())
