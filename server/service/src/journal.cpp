@@ -325,7 +325,11 @@ void Journal::take_snapshot() {
   taken.records = total_records_;
   std::vector<std::string> parts;
   try {
-    if (!writer_) writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] { if (on_written_) on_written_(); });
+    if (!writer_) {
+      writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] {
+        if (on_written_) on_written_();
+      });
+    }
     const auto s0 = Clock::now();
     handler_.save(parts);
     const auto s1 = Clock::now();
@@ -345,13 +349,15 @@ void Journal::take_snapshot() {
   taken.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   in_flight_ = taken;
   logger()->info("journal: snapshot {} started after {} record(s): the request loop waited {:.1f} ms, of which "
-                 "{:.1f} ms saving the state and {:.1f} ms starting its segment; the writer thread writes its {:.2f} MB",
+                 "{:.1f} ms saving the state and {:.1f} ms starting its segment; the writer thread writes its "
+                 "{:.2f} MB",
                  seq, taken.records, taken.ms, taken.save_ms, taken.segment_ms, static_cast<double>(bytes) / 1e6);
 }
 
 void Journal::complete_snapshot(const journal::WrittenSnapshot& written) {
   const InFlight taken = *in_flight_;
   in_flight_.reset();
+  if (failed()) return;  // nothing more is journaled; the file without its record is never used
   if (!written.error.empty()) {
     // Its segment stays without a record: recovery replays it from the snapshot before (or the log's start).
     retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);

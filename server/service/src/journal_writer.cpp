@@ -29,7 +29,9 @@ SnapshotThread::~SnapshotThread() {
 void SnapshotThread::write(std::uint64_t seq, std::vector<std::string> parts) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (in_flight_) throw JournalError("journal: snapshot " + std::to_string(seq) + " handed over while another is in flight");
+    if (in_flight_) {
+      throw JournalError("journal: snapshot " + std::to_string(seq) + " handed over while another is in flight");
+    }
     in_flight_ = true;
     Job job;
     job.seq = seq;

@@ -99,6 +99,7 @@ class Pair:
     """The same clients (ids) on the reference server and on the journaled one."""
 
     def __init__(self, ref_domain: int, j_domain: int) -> None:
+        self.domains = (ref_domain, j_domain)
         self.clients: Dict[str, List[surfeledit.Client]] = {}
         for who in ("alice", "bob"):
             self.clients[who] = [surfeledit.connect(domain=d, spawn=False, timeout=10.0, reconnect=30.0,
@@ -115,6 +116,20 @@ class Pair:
                 out.append((type(e).__name__, e.field, str(e)))
         assert out[0] == out[1], out
         return out
+
+    def open_arms(self) -> Tuple[np.ndarray, np.ndarray]:
+        """On both servers: alice opens session "snap" with the two-arm scene, bob joins as an editor, each
+        claims an arm. Returns (ids, part) of the scene."""
+        positions, normals, radii, part = two_arms()
+        ids = np.arange(len(part))
+        for k in range(2):
+            a = self.clients["alice"][k].open_session("snap")
+            a.load_points(positions, normals, radii)
+            b = self.clients["bob"][k].join_session("snap", token=a.invite("editor"))
+            self.sessions.setdefault("alice", []).append(a)
+            self.sessions.setdefault("bob", []).append(b)
+            claim_arms(a, b, ids, part)
+        return ids, part
 
     def all(self) -> List[surfeledit.Client]:
         return [c for pair in self.clients.values() for c in pair]
@@ -142,15 +157,7 @@ def test_recovery_from_snapshot_and_tail_equals_a_server_that_never_restarted(tm
     servers = [ref, srv]
     pair = Pair(ref_domain, j_domain)
     try:
-        positions, normals, radii, part = two_arms()
-        ids = np.arange(len(part))
-        for k in range(2):
-            a = pair.clients["alice"][k].open_session("snap")
-            a.load_points(positions, normals, radii)
-            b = pair.clients["bob"][k].join_session("snap", token=a.invite("editor"))
-            pair.sessions.setdefault("alice", []).append(a)
-            pair.sessions.setdefault("bob", []).append(b)
-            claim_arms(a, b, ids, part)
+        ids, part = pair.open_arms()
         # A request early in the log, long before the last snapshot: its repeat must be answered from the
         # reply store the snapshot restored (its record is not replayed).
         early = []

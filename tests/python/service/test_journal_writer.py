@@ -17,13 +17,10 @@ import threading
 from pathlib import Path
 from typing import List, Tuple
 
-import numpy as np
-
 import surfeledit
 
-from .conftest import free_domain
+from .conftest import ServerProcess, free_domain
 from .test_journal_snapshot import Pair, _recovery, _restart, _server, _step, _view, settled, stop_all, wait_for
-from .test_tools import claim_arms, two_arms
 
 EVERY = 5  # --journal-snapshot-records
 
@@ -32,17 +29,19 @@ def _flags(journal: Path) -> Tuple[str, ...]:
     return ("--journal", str(journal), "--journal-snapshot-records", str(EVERY))
 
 
-def _open(pair: Pair) -> None:
-    """The two-arm scene shared by alice and bob on both servers, each claiming an arm."""
-    positions, normals, radii, part = two_arms()
-    ids = np.arange(len(part))
-    for k in range(2):
-        a = pair.clients["alice"][k].open_session("snap")
-        a.load_points(positions, normals, radii)
-        b = pair.clients["bob"][k].join_session("snap", token=a.invite("editor"))
-        pair.sessions.setdefault("alice", []).append(a)
-        pair.sessions.setdefault("bob", []).append(b)
-        claim_arms(a, b, ids, part)
+def _start(tmp_path: Path) -> Tuple[List[ServerProcess], Path, Pair]:
+    """A reference server, a journaled one (snapshots every EVERY records) and the clients of both."""
+    ref_domain, j_domain = free_domain(), free_domain()
+    journal = tmp_path / "journal"
+    servers = [_server(tmp_path, "reference", ref_domain), _server(tmp_path, "journaled-0", j_domain, *_flags(journal))]
+    return servers, journal, Pair(ref_domain, j_domain)
+
+
+def _hold_snapshot_1(journal: Path) -> Path:
+    """A FIFO where the writer thread creates snapshot 1's temporary file: it blocks there until it is read."""
+    fifo = journal / "snapshot-1.bin.tmp"
+    os.mkfifo(fifo)
+    return fifo
 
 
 def _steps(pair: Pair, n: int, start: int = 0) -> None:
@@ -74,15 +73,11 @@ def _records(segment: Path) -> List[Tuple[int, int]]:
 
 
 def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recovers(tmp_path: Path) -> None:
-    ref_domain, j_domain = free_domain(), free_domain()
-    journal = tmp_path / "journal"
-    servers = [_server(tmp_path, "reference", ref_domain), _server(tmp_path, "journaled-0", j_domain, *_flags(journal))]
-    srv = servers[-1]
-    fifo = journal / "snapshot-1.bin.tmp"
-    os.mkfifo(fifo)  # the writer thread blocks creating snapshot 1 until someone reads it: never, here
-    pair = Pair(ref_domain, j_domain)
+    servers, journal, pair = _start(tmp_path)
+    srv, j_domain = servers[-1], pair.domains[1]
+    fifo = _hold_snapshot_1(journal)  # never read here
     try:
-        _open(pair)  # more than EVERY records: snapshot 1 is taken and handed to the writer
+        pair.open_arms()  # more than EVERY records: snapshot 1 is taken and handed to the writer
         wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
         # The request loop goes on while the file is held half-way: these replies come back (the old code
         # waited in the loop for the file, i.e. forever here) ...
@@ -113,15 +108,11 @@ def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recov
 
 
 def test_a_failed_snapshot_write_leaves_its_segment_to_the_log_and_the_next_one_is_taken(tmp_path: Path) -> None:
-    ref_domain, j_domain = free_domain(), free_domain()
-    journal = tmp_path / "journal"
-    servers = [_server(tmp_path, "reference", ref_domain), _server(tmp_path, "journaled-0", j_domain, *_flags(journal))]
-    srv = servers[-1]
-    fifo = journal / "snapshot-1.bin.tmp"
-    os.mkfifo(fifo)
-    pair = Pair(ref_domain, j_domain)
+    servers, journal, pair = _start(tmp_path)
+    srv, j_domain = servers[-1], pair.domains[1]
+    fifo = _hold_snapshot_1(journal)
     try:
-        _open(pair)
+        pair.open_arms()
         wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
         _steps(pair, 3)
         # Reading the FIFO to its end lets the writer write everything; its fdatasync then fails (a pipe):
@@ -161,13 +152,10 @@ def test_a_snapshot_file_whose_record_never_came_is_ignored(tmp_path: Path) -> N
     segment that holds a Snapshot record at that record (dropping it, what follows and any later segment).
     The records cut are the last steps, so recovery must equal the reference as it was that many steps
     earlier, and must not restore the snapshot whose file is there but whose record is not."""
-    ref_domain, j_domain = free_domain(), free_domain()
-    journal = tmp_path / "journal"
-    servers = [_server(tmp_path, "reference", ref_domain), _server(tmp_path, "journaled-0", j_domain, *_flags(journal))]
-    srv = servers[-1]
-    pair = Pair(ref_domain, j_domain)
+    servers, journal, pair = _start(tmp_path)
+    srv, j_domain = servers[-1], pair.domains[1]
     try:
-        _open(pair)
+        pair.open_arms()
         settled(srv)  # from here on every record is a step's (the views below are the reference's only)
         views = [_view(pair.sessions["alice"][0])]
         for i in range(3 * EVERY + 1):
