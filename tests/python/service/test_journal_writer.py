@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import stat
 import threading
+import time
 from pathlib import Path
 from typing import List, Tuple
 
@@ -187,5 +189,34 @@ def test_a_snapshot_file_whose_record_never_came_is_ignored(tmp_path: Path) -> N
         restored = _recovery(other)[0]
         assert restored < k and f"snapshot {k} restored" not in other.log_tail(10**7)
         assert _recovered_view(j_domain) == views[len(views) - 1 - len(cut)]
+    finally:
+        stop_all(servers, *pair.all())
+
+
+def test_sigterm_waits_for_the_snapshot_in_flight_then_stops_cleanly(tmp_path: Path) -> None:
+    """A clean stop with a snapshot in flight: the server waits for the writer thread (held here until the test
+    reads the FIFO; the write then fails, as a pipe cannot be synced), says so, exits 0, and the journal it
+    leaves recovers the reference's state."""
+    servers, journal, pair = _start(tmp_path)
+    srv, j_domain = servers[-1], pair.domains[1]
+    fifo = _hold_snapshot_1(journal)
+    try:
+        pair.open_arms()
+        wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
+        _steps(pair, 3)
+        want = _view(pair.sessions["alice"][0])
+        srv.proc.send_signal(signal.SIGTERM)
+        time.sleep(1.0)
+        assert srv.alive, "the stop waits for the snapshot in flight"
+        reader = threading.Thread(target=fifo.read_bytes)
+        reader.start()
+        reader.join(60.0)
+        assert srv.proc.wait(timeout=60) == 0
+        log = srv.log_tail(10**7)
+        assert "snapshot 1 not written" in log and "stopped" in log
+        srv = _server(tmp_path, "journaled-1", j_domain, *_flags(journal))
+        servers.append(srv)
+        assert _recovery(srv)[0] == 0
+        assert _view(pair.sessions["alice"][1]) == want
     finally:
         stop_all(servers, *pair.all())
