@@ -314,3 +314,45 @@ TEST(JournalLog, SegmentsReadInOrderAndOldOnesAreDropped) {
   fs::copy_file(dir.path / "journal-2.log", dir.path / "journal-4.log");
   EXPECT_THROW(read_all(dir.path), JournalError);
 }
+
+// A segment created ahead for the next snapshot (JournalLog::create_segment: its header alone) is dropped
+// when the log is opened, before the segment before it is judged: that one's torn tail is then the last
+// segment's and is cut (not an error), and appends go there. start_segment adopts a file created ahead
+// and makes one again in place of a file that is not a new header.
+TEST(JournalLog, SegmentCreatedAheadIsDroppedAtOpenAndTheTornTailBeforeItIsCut) {
+  TempDir dir;
+  const auto payloads = sample_payloads();
+  {
+    JournalLog log(dir.path.string());
+    log.append(RecordKind::Request, payloads[3]);
+    log.append(RecordKind::Request, payloads[4]);
+    log.sync();
+    JournalLog::create_segment(dir.path.string(), log.dir_fd(), 1);
+    EXPECT_EQ(fs::file_size(dir.path / "journal-1.log"), 16u);
+  }
+  std::vector<std::uint8_t> bytes = file_bytes(dir.path / "journal.log");
+  bytes.resize(bytes.size() - 3);  // the second record torn
+  write_bytes(dir.path / "journal.log", bytes);
+  {
+    JournalLog log(dir.path.string());
+    EXPECT_EQ(log.segment(), 0u);
+    ASSERT_EQ(log.index().size(), 1u);
+    EXPECT_GT(log.cut_bytes(), 0u);
+    EXPECT_FALSE(fs::exists(dir.path / "journal-1.log"));
+    // Adopted when created ahead; made again when the file there is not a new segment's header alone.
+    JournalLog::create_segment(dir.path.string(), log.dir_fd(), 1);
+    log.start_segment(1, true);
+    log.append(RecordKind::Refusal, payloads[1]);
+    log.sync();
+    write_bytes(dir.path / "journal-2.log", {1, 2, 3});
+    log.start_segment(2, true);
+    log.append(RecordKind::Expiry, payloads[2]);
+    log.sync();
+  }
+  const auto got = read_all(dir.path);
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(got[0].second, payloads[3]);
+  EXPECT_EQ(got[1].first, RecordKind::Refusal);
+  EXPECT_EQ(got[2].first, RecordKind::Expiry);
+  EXPECT_EQ(got[2].second, payloads[2]);
+}

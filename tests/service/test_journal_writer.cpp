@@ -124,6 +124,16 @@ TEST(JournalSnapshotThread, ResultOnlyOnceTheFileIsDurableOneInFlightFailuresAnd
   EXPECT_TRUE(fs::exists(dir.path / "journal-2.log"));
   EXPECT_TRUE(fs::exists(file));
   EXPECT_EQ(wakes.count, 2);  // removal wakes nobody
+
+  // A segment created ahead: its header alone, durable; a failure (it exists already) leaves none prepared.
+  thread.prepare(3);
+  thread.wait_idle();
+  EXPECT_EQ(thread.prepared(), 3u);
+  EXPECT_EQ(fs::file_size(dir.path / "journal-3.log"), 16u);
+  thread.prepare(3);
+  thread.wait_idle();
+  EXPECT_EQ(thread.prepared(), 0u);
+  EXPECT_EQ(wakes.count, 2);
 }
 
 TEST(JournalSnapshotThread, DestructorFinishesTheSnapshotInHand) {

@@ -94,6 +94,10 @@ Journal::Journal(const JournalConfig& config, Handler& handler) : config_(config
   }
   // A snapshot's temporary file is never complete after a stop (a crash while it was written).
   journal::remove_snapshots_before(config_.dir, log_->dir_fd(), 0);
+  if (config_.snapshot_records || config_.snapshot_mb) {
+    start_writer();
+    writer_->prepare(log_->segment() + 1);  // the first snapshot's segment, ahead
+  }
   recovery_.bytes = log_->bytes();
   recovery_.cut_bytes = log_->cut_bytes();
   recovery_.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -286,6 +290,13 @@ void Journal::flush(bool force) {
   for (auto& release : ready) release();
 }
 
+void Journal::start_writer() {
+  if (writer_) return;
+  writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] {
+    if (on_written_) on_written_();
+  });
+}
+
 Journal::~Journal() {
   writer_.reset();  // finishes its jobs (a snapshot in hand is written; without its record it is ignored)
 }
@@ -325,16 +336,15 @@ void Journal::take_snapshot() {
   taken.records = total_records_;
   std::vector<std::string> parts;
   try {
-    if (!writer_) {
-      writer_ = std::make_unique<journal::SnapshotThread>(config_.dir, [this] {
-        if (on_written_) on_written_();
-      });
-    }
+    start_writer();
     const auto s0 = Clock::now();
     handler_.save(parts);
     const auto s1 = Clock::now();
     taken.save_ms = std::chrono::duration<double, std::milli>(s1 - s0).count();
-    log_->start_segment(seq);  // every later record goes to segment `seq`: the state saved is its start
+    // Every later record goes to segment `seq`: the state saved is its start. Its file was created ahead by
+    // the writer thread, unless that is still under way (waited for) or failed (created here).
+    if (writer_->prepared() != seq) writer_->wait_idle();
+    log_->start_segment(seq, writer_->prepared() == seq);
     taken.segment_ms = std::chrono::duration<double, std::milli>(Clock::now() - s1).count();
   } catch (const std::exception& e) {
     // Nothing changed: the log goes on in its segment; tried again after as many records.
@@ -362,6 +372,7 @@ void Journal::complete_snapshot(const journal::WrittenSnapshot& written) {
     // Its segment stays without a record: recovery replays it from the snapshot before (or the log's start).
     retry_at_ = since_snapshot_ + std::max<std::uint64_t>(config_.snapshot_records, kRetryRecords);
     logger()->error("journal: snapshot {} not written: {}; the log keeps every record", written.seq, written.error);
+    writer_->prepare(log_->segment() + 1);
     return;
   }
   journal::SnapshotRecord record = written.record;
@@ -377,6 +388,7 @@ void Journal::complete_snapshot(const journal::WrittenSnapshot& written) {
   if (failed()) return;
   // The new snapshot is durable: keep the one before it as its fallback, drop what is older.
   writer_->remove(log_->forget_segments_before(kept_snapshot_), kept_snapshot_);
+  writer_->prepare(log_->segment() + 1);
   kept_snapshot_ = written.seq;
   snapshots_.taken += 1;
   snapshots_.seq = written.seq;

@@ -109,6 +109,7 @@ class Journal {
   std::size_t restore_newest_snapshot(Handler& handler);
   // The index (in log_->index()) of the first record of segment `segment` or later.
   std::size_t segment_start(std::uint64_t segment) const;
+  void start_writer();  // the writer thread, once
   void take_snapshot();
   // Journals the record of the snapshot the writer thread finished (or logs why it failed).
   void complete_snapshot(const journal::WrittenSnapshot& written);

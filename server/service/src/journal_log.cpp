@@ -128,9 +128,19 @@ JournalLog::JournalLog(const std::string& dir) : dir_(dir) {
                        std::to_string(*segments.rbegin()) + " have gaps (a segment file was removed)");
   }
   first_ = *segments.begin();
+  // A newest segment k > 0 holding at most its header (created ahead for the next snapshot, or cut while
+  // it was started) goes first: the one before it is then the last, whose torn tail may be cut.
+  if (segments.size() > 1) {
+    const std::string newest = segment_path(dir_, *segments.rbegin());
+    struct stat st {};
+    if (::stat(newest.c_str(), &st) == 0 && static_cast<std::uint64_t>(st.st_size) <= kHeaderBytes) {
+      if (::unlink(newest.c_str()) != 0) fail("cannot remove the empty journal segment '" + newest + "'", errno);
+      sync_dir();
+      segments.erase(std::prev(segments.end()));
+    }
+  }
   for (std::uint64_t k : segments) scan(k, k == *segments.rbegin());
-  // A newest segment k > 0 without its snapshot record (cut while it was started): appends go to the
-  // one before.
+  // A newest segment k > 0 without any record (its first one torn): appends go to the one before.
   if (segment_ > first_ && (index_.empty() || index_.back().segment != segment_)) {
     fd_ = UniqueFd();
     if (::unlink(path_.c_str()) != 0) fail("cannot remove the empty journal segment '" + path_ + "'", errno);
@@ -273,19 +283,41 @@ void JournalLog::read(std::size_t from,
 
 void JournalLog::sync_dir() { journal::sync_dir(dir_fd_.get(), dir_); }
 
-void JournalLog::start_segment(std::uint64_t segment) {
-  if (segment <= segment_) throw JournalError("journal segment " + std::to_string(segment) + " is not new");
-  std::string path = segment_path(dir_, segment);
-  UniqueFd fd(::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
+void JournalLog::create_segment(const std::string& dir, int dir_fd, std::uint64_t segment) {
+  const std::string path = segment_path(dir, segment);
+  UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
   if (fd.get() < 0) fail("cannot create journal segment '" + path + "'", errno);
   try {
     const std::array<std::uint8_t, kHeaderBytes> header = new_header();
     journal::write_all(fd.get(), header.data(), header.size(), "cannot append to journal '" + path + "'");
     if (::fdatasync(fd.get()) != 0) fail("cannot fdatasync journal '" + path + "'", errno);
-    sync_dir();  // its entry is durable before any record in it is acknowledged
+    journal::sync_dir(dir_fd, dir);  // its entry is durable before any record in it is acknowledged
   } catch (...) {
     ::unlink(path.c_str());
     throw;
+  }
+}
+
+void JournalLog::start_segment(std::uint64_t segment, bool created) {
+  if (segment <= segment_) throw JournalError("journal segment " + std::to_string(segment) + " is not new");
+  std::string path = segment_path(dir_, segment);
+  // The file holding a new segment's header alone, or an invalid descriptor.
+  auto open_new = [&] {
+    UniqueFd fd(::open(path.c_str(), O_RDWR | O_CLOEXEC));
+    struct stat st {};
+    std::array<std::uint8_t, kHeaderBytes> header{};
+    if (fd.get() < 0 || ::fstat(fd.get(), &st) != 0 || static_cast<std::uint64_t>(st.st_size) != kHeaderBytes ||
+        !read_at(fd.get(), 0, header.data(), header.size(), path) || header != new_header()) {
+      return UniqueFd();
+    }
+    return fd;
+  };
+  UniqueFd fd = created ? open_new() : UniqueFd();
+  if (fd.get() < 0) {
+    if (created) ::unlink(path.c_str());  // not what was created ahead: made again
+    create_segment(dir_, dir_fd_.get(), segment);
+    fd = open_new();
+    if (fd.get() < 0) throw JournalError("journal segment '" + path + "' cannot be opened after it was created");
   }
   older_[segment_] = size_;
   std::swap(fd_, fd);

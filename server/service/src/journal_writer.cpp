@@ -26,31 +26,45 @@ SnapshotThread::~SnapshotThread() {
   thread_.join();
 }
 
-void SnapshotThread::write(std::uint64_t seq, std::vector<std::string> parts) {
+void SnapshotThread::push(Job job) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (in_flight_) {
-      throw JournalError("journal: snapshot " + std::to_string(seq) + " handed over while another is in flight");
+    if (job.kind == Kind::Write) {
+      if (in_flight_) {
+        throw JournalError("journal: snapshot " + std::to_string(job.seq) + " handed over while another is in flight");
+      }
+      in_flight_ = true;
     }
-    in_flight_ = true;
-    Job job;
-    job.seq = seq;
-    job.parts = std::move(parts);
     jobs_.push_back(std::move(job));
   }
   wake_.notify_one();
 }
 
+void SnapshotThread::write(std::uint64_t seq, std::vector<std::string> parts) {
+  Job job;
+  job.seq = seq;
+  job.parts = std::move(parts);
+  push(std::move(job));
+}
+
 void SnapshotThread::remove(std::vector<std::string> segments, std::uint64_t snapshots_before) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    Job job;
-    job.remove = true;
-    job.seq = snapshots_before;
-    job.segments = std::move(segments);
-    jobs_.push_back(std::move(job));
-  }
-  wake_.notify_one();
+  Job job;
+  job.kind = Kind::Remove;
+  job.seq = snapshots_before;
+  job.segments = std::move(segments);
+  push(std::move(job));
+}
+
+void SnapshotThread::prepare(std::uint64_t segment) {
+  Job job;
+  job.kind = Kind::Prepare;
+  job.seq = segment;
+  push(std::move(job));
+}
+
+std::uint64_t SnapshotThread::prepared() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return prepared_;
 }
 
 bool SnapshotThread::busy() const {
@@ -80,8 +94,19 @@ void SnapshotThread::run() {
     jobs_.pop_front();
     working_ = true;
     lock.unlock();
-    if (job.remove) {
+    if (job.kind == Kind::Remove) {
       remove_files(job);
+    } else if (job.kind == Kind::Prepare) {
+      std::uint64_t made = 0;
+      try {
+        JournalLog::create_segment(dir_, dir_fd_.get(), job.seq);
+        made = job.seq;
+      } catch (const std::exception& e) {
+        logger()->warn("journal: segment {} not created ahead: {}; the snapshot's point creates it", job.seq, e.what());
+      }
+      lock.lock();
+      prepared_ = made;
+      lock.unlock();
     } else {
       WrittenSnapshot done;
       done.seq = job.seq;

@@ -45,6 +45,10 @@ class SnapshotThread {
   // Hands over files to delete in order (journal segments), then the snapshots below `seq` and every
   // temporary one, then a directory fsync. A failure is logged (the files stay; nothing depends on them).
   void remove(std::vector<std::string> segments, std::uint64_t snapshots_before);
+  // Hands over creating segment `segment` ahead (JournalLog::create_segment), for the next snapshot's point.
+  void prepare(std::uint64_t segment);
+  // The segment the last prepare() created (0: none, or it failed; it is logged).
+  std::uint64_t prepared() const;
   // A snapshot was handed over and its result not taken yet.
   bool busy() const;
   // The result of the snapshot handed over, once the thread finished it (nullopt: none, or not yet).
@@ -53,12 +57,14 @@ class SnapshotThread {
   void wait_idle();
 
  private:
+  enum class Kind { Write, Remove, Prepare };
   struct Job {
-    std::uint64_t seq = 0;                  // write: the snapshot's number; remove: snapshots below it
+    Kind kind = Kind::Write;
+    std::uint64_t seq = 0;                  // write: the snapshot's number; remove: snapshots below it; prepare: the segment
     std::vector<std::string> parts;         // write: the payload
     std::vector<std::string> segments;      // remove: segment files, oldest first
-    bool remove = false;                    // which job
   };
+  void push(Job job);
   void run();
   void remove_files(const Job& job);
 
@@ -73,6 +79,7 @@ class SnapshotThread {
   bool stop_ = false;                        // guarded
   bool in_flight_ = false;                   // a snapshot was handed over, its result not taken (guarded)
   std::optional<WrittenSnapshot> written_;   // guarded
+  std::uint64_t prepared_ = 0;               // the segment created ahead (guarded)
   std::thread thread_;                       // last: started once the rest is ready
 };
 

@@ -95,7 +95,7 @@ class UniqueFd {
 // last segment (a short frame, a length beyond the file or kMaxRecordBytes, a checksum mismatch, an
 // unknown kind) with a log line: what follows the first bad frame is never applied. A bad frame in a
 // segment that is not the last, or a gap in the numbers, is a JournalError (never skipped). The
-// directory is locked (flock) while the log is open. One thread uses it.
+// directory is locked (flock) while the log is open. One thread uses it (create_segment: any).
 class JournalLog {
  public:
   static constexpr std::uint32_t kMaxRecordBytes = std::uint32_t(1) << 30;  // largest payload accepted
@@ -129,9 +129,14 @@ class JournalLog {
   // Forces everything appended to disk (fdatasync). Throws JournalError.
   void sync();
   // Starts segment `segment` (> the current one), its header and directory entry durable; later appends
-  // go there. Sync the current segment first (its unsynced records are not synced by later syncs). On
-  // failure the new file is removed and appends stay in the current segment. Throws JournalError.
-  void start_segment(std::uint64_t segment);
+  // go there. Sync the current segment first (its unsynced records are not synced by later syncs).
+  // `created`: create_segment() made its file already (it is checked), else it is created here. On failure
+  // appends stay in the current segment. Throws JournalError.
+  void start_segment(std::uint64_t segment, bool created = false);
+  // Creates segment `segment`'s file in `dir` (open as `dir_fd`) holding its header, durable with its
+  // directory entry; removed on failure. Any thread (the journal's writer thread creates the next one
+  // ahead; a newest segment holding only its header is removed when the log is opened). Throws JournalError.
+  static void create_segment(const std::string& dir, int dir_fd, std::uint64_t segment);
   // Forgets the segments numbered below `segment` (never the current one) and returns their files, oldest
   // first, for the caller to delete in that order (the journal's writer thread does).
   std::vector<std::string> forget_segments_before(std::uint64_t segment);
