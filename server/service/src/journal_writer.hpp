@@ -60,7 +60,7 @@ class SnapshotThread {
   enum class Kind { Write, Remove, Prepare };
   struct Job {
     Kind kind = Kind::Write;
-    std::uint64_t seq = 0;                  // write: the snapshot's number; remove: snapshots below it; prepare: the segment
+    std::uint64_t seq = 0;  // write: the snapshot's number; remove: snapshots below it; prepare: the segment
     std::vector<std::string> parts;         // write: the payload
     std::vector<std::string> segments;      // remove: segment files, oldest first
   };
