@@ -17,7 +17,7 @@ import stat
 import threading
 import time
 from pathlib import Path
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import surfeledit
 
@@ -31,19 +31,22 @@ def _flags(journal: Path) -> Tuple[str, ...]:
     return ("--journal", str(journal), "--journal-snapshot-records", str(EVERY))
 
 
-def _start(tmp_path: Path) -> Tuple[List[ServerProcess], Path, Pair]:
-    """A reference server, a journaled one (snapshots every EVERY records) and the clients of both."""
+def _start(tmp_path: Path, hold: bool = False) -> Tuple[List[ServerProcess], Path, Pair, Optional[Path]]:
+    """A reference server, a journaled one (snapshots every EVERY records) and the clients of both; with
+    `hold`, a FIFO where the writer thread creates snapshot 1's temporary file: it blocks there until the
+    FIFO is read."""
     ref_domain, j_domain = free_domain(), free_domain()
     journal = tmp_path / "journal"
     servers = [_server(tmp_path, "reference", ref_domain), _server(tmp_path, "journaled-0", j_domain, *_flags(journal))]
-    return servers, journal, Pair(ref_domain, j_domain)
+    fifo = journal / "snapshot-1.bin.tmp" if hold else None
+    if fifo:
+        os.mkfifo(fifo)
+    return servers, journal, Pair(ref_domain, j_domain), fifo
 
 
-def _hold_snapshot_1(journal: Path) -> Path:
-    """A FIFO where the writer thread creates snapshot 1's temporary file: it blocks there until it is read."""
-    fifo = journal / "snapshot-1.bin.tmp"
-    os.mkfifo(fifo)
-    return fifo
+def _open_until_snapshot_1_started(pair: Pair, srv: ServerProcess) -> None:
+    pair.open_arms()  # more than EVERY records: snapshot 1 is taken and handed to the writer
+    wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
 
 
 def _steps(pair: Pair, n: int, start: int = 0) -> None:
@@ -75,12 +78,10 @@ def _records(segment: Path) -> List[Tuple[int, int]]:
 
 
 def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recovers(tmp_path: Path) -> None:
-    servers, journal, pair = _start(tmp_path)
+    servers, journal, pair, fifo = _start(tmp_path, hold=True)  # the FIFO is never read here
     srv, j_domain = servers[-1], pair.domains[1]
-    fifo = _hold_snapshot_1(journal)  # never read here
     try:
-        pair.open_arms()  # more than EVERY records: snapshot 1 is taken and handed to the writer
-        wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
+        _open_until_snapshot_1_started(pair, srv)
         # The request loop goes on while the file is held half-way: these replies come back (the old code
         # waited in the loop for the file, i.e. forever here) ...
         _steps(pair, 2 * EVERY + 2)
@@ -110,12 +111,10 @@ def test_steps_are_answered_while_the_snapshot_file_is_held_and_kill9_then_recov
 
 
 def test_a_failed_snapshot_write_leaves_its_segment_to_the_log_and_the_next_one_is_taken(tmp_path: Path) -> None:
-    servers, journal, pair = _start(tmp_path)
+    servers, journal, pair, fifo = _start(tmp_path, hold=True)
     srv, j_domain = servers[-1], pair.domains[1]
-    fifo = _hold_snapshot_1(journal)
     try:
-        pair.open_arms()
-        wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
+        _open_until_snapshot_1_started(pair, srv)
         _steps(pair, 3)
         # Reading the FIFO to its end lets the writer write everything; its fdatasync then fails (a pipe):
         # the snapshot is not written, what it wrote is removed, segment 1 stays without a record.
@@ -154,7 +153,7 @@ def test_a_snapshot_file_whose_record_never_came_is_ignored(tmp_path: Path) -> N
     segment that holds a Snapshot record at that record (dropping it, what follows and any later segment).
     The records cut are the last steps, so recovery must equal the reference as it was that many steps
     earlier, and must not restore the snapshot whose file is there but whose record is not."""
-    servers, journal, pair = _start(tmp_path)
+    servers, journal, pair, _ = _start(tmp_path)
     srv, j_domain = servers[-1], pair.domains[1]
     try:
         pair.open_arms()
@@ -197,12 +196,10 @@ def test_sigterm_waits_for_the_snapshot_in_flight_then_stops_cleanly(tmp_path: P
     """A clean stop with a snapshot in flight: the server waits for the writer thread (held here until the test
     reads the FIFO; the write then fails, as a pipe cannot be synced), says so, exits 0, and the journal it
     leaves recovers the reference's state."""
-    servers, journal, pair = _start(tmp_path)
+    servers, journal, pair, fifo = _start(tmp_path, hold=True)
     srv, j_domain = servers[-1], pair.domains[1]
-    fifo = _hold_snapshot_1(journal)
     try:
-        pair.open_arms()
-        wait_for(lambda: "snapshot 1 started" in srv.log_tail(10**7), "snapshot 1 is started")
+        _open_until_snapshot_1_started(pair, srv)
         _steps(pair, 3)
         want = _view(pair.sessions["alice"][0])
         srv.proc.send_signal(signal.SIGTERM)
