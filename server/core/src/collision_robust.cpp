@@ -169,21 +169,25 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   return true;
 }
 
-std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions) const {
+std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions) {
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kOriginalLeafSize;
+  std::shared_ptr<const KdTree> tree;
   if (orig_.alive.empty() || std::all_of(orig_.alive.begin(), orig_.alive.end(), [](std::uint8_t a) { return a != 0; })) {
-    return std::make_shared<const KdTree>(positions, params);
+    tree = std::make_shared<const KdTree>(positions, params);
+  } else {
+    IndexList rows;
+    for (std::size_t o = 0; o < orig_.alive.size(); ++o)
+      if (orig_.alive[o]) rows.push_back(static_cast<Index>(o));
+    tree = std::make_shared<const KdTree>(positions, rows, params);
   }
-  IndexList rows;
-  for (std::size_t o = 0; o < orig_.alive.size(); ++o)
-    if (orig_.alive[o]) rows.push_back(static_cast<Index>(o));
-  return std::make_shared<const KdTree>(positions, rows, params);
+  tree_bytes_ = tree->memory_bytes();
+  return tree;
 }
 
 std::size_t RobustKernel::memory_bytes() const {
   return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size() + orig_.radii.size()) * sizeof(double) +
-         orig_.deformable.memory_bytes() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : 0) +
+         orig_.deformable.memory_bytes() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : tree_bytes_) +
          (orig_of_row_.capacity() + row_of_orig_.capacity()) * sizeof(Index) + (inside_ ? inside_->memory_bytes() : 0);
 }
 

@@ -156,6 +156,7 @@ void RobustKernel::save(SnapshotWriter& out) const {
   out.vec(orig_.alive);
   out.vec(orig_of_row_);
   out.vec(row_of_orig_);
+  out.u64(orig_.tree ? orig_.tree->memory_bytes() : tree_bytes_);
 }
 
 // The zero rows are the model's: the tree over the original model is built at the first bind (the model is
@@ -174,6 +175,7 @@ void RobustKernel::load(SnapshotReader& in, Index rows) {
   orig.alive = in.vec<std::uint8_t>("original alive flags");
   IndexList orig_of_row = in.vec<Index>("original rows");
   IndexList row_of_orig = in.vec<Index>("model rows of the original");
+  const std::size_t tree_bytes = in.capacity("original tree bytes", 0, 1);
   const std::size_t d = deformable.size();
   if (static_cast<std::size_t>(orig.positions.rows()) != d || static_cast<std::size_t>(orig.normals.rows()) != d ||
       static_cast<std::size_t>(orig.radii.size()) != d) {
@@ -206,6 +208,7 @@ void RobustKernel::load(SnapshotReader& in, Index rows) {
   row_of_orig_ = std::move(row_of_orig);
   inside_.reset();
   pending_inside_ = false;
+  tree_bytes_ = tree_bytes;
   model_positions_ = model_normals_ = model_radii_ = nullptr;
 }
 

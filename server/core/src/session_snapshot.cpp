@@ -273,10 +273,12 @@ void EditSession::save(SnapshotWriter& out) const {
     out.boolean(tool.stale);
     out.boolean(tool.stale_rows_known);
     out.vec(tool.stale_rows);
-    out.vec(tool.held_rows);
-    out.mat(tool.held.positions);
-    out.mat(tool.held.normals);
-    out.mat(tool.held.radii);
+    // Held rows are read only while the tool is stale with known rows (Tool::held_before); otherwise none.
+    const bool held = tool.stale && tool.stale_rows_known;
+    out.vec(held ? tool.held_rows : IndexList());
+    out.mat(held ? tool.held.positions : Points(0, 3));
+    out.mat(held ? tool.held.normals : Points(0, 3));
+    out.mat(held ? tool.held.radii : Values());
     out.u32(t.row_lists.at(tool.shared_rows.get()));
     out.u64(tool.fresh_at);
     out.u32(t.detectors.find(tool.fresh_object));

@@ -58,6 +58,10 @@ void Tool::mark_stale(const IndexList* moved) {
     stale_rows_known = false;
     stale_rows.clear();
   }
+  if (!stale_rows_known) {
+    held_rows = IndexList();
+    held = RigidRows();
+  }
   if (stale_rows_known && !std::is_sorted(stale_rows.begin(), stale_rows.end())) std::sort(stale_rows.begin(), stale_rows.end());
 }
 

@@ -156,7 +156,7 @@ class RobustKernel {
   // of the tree (kdtree_search.hpp) 24 measured ~10 % faster than the default 10 and than 16 or 32 on the
   // piercing scene, with fewer nodes (RESULTS §39).
   static constexpr int kOriginalLeafSize = 24;
-  std::shared_ptr<const KdTree> original_tree(const Points& positions) const;
+  std::shared_ptr<const KdTree> original_tree(const Points& positions);
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
@@ -243,7 +243,10 @@ class RobustKernel {
   const double* model_radii_ = nullptr;
   void bind_model(const CollisionScene& scene);
   bool with_inside() const { return params_.inside != InsideMode::Nearest || params_.swept; }
-  bool pending_inside_ = false;  // the inside model is to be built at the next bind (zero rows were removed)
+  bool pending_inside_ = false;
+  // Bytes of the original model's tree as last built: memory_bytes() counts it while the tree waits for the next
+  // bind (after a removal or a snapshot load), so the history's byte counts do not depend on when it is built.
+  std::size_t tree_bytes_ = 0;  // the inside model is to be built at the next bind (zero rows were removed)
   std::shared_ptr<const InsideModel> inside_;  // over the alive zero surfels; null with nearest and no swept
 };
 
