@@ -489,6 +489,9 @@ SessionReport EditSession::report() const {
       for (auto& [name, bytes] : t.detector->structures()) rep.structures.push_back({name, bytes});
       if (rep.hierarchy_status.empty()) rep.hierarchy_status = t.detector->hierarchy_info().status;
     }
+    // What it keeps of rows another tool moved since its detector last saw them (Tool::hold_rigid).
+    const std::size_t held = static_cast<std::size_t>(t.held.positions.size() + t.held.normals.size() + t.held.radii.size());
+    if (held > 0) rep.structures.push_back({"rigid_held", held * sizeof(double) + t.held_rows.capacity() * sizeof(Index)});
     const std::size_t origins = static_cast<std::size_t>(t.merge.origin_positions.size() + t.merge.origin_normals.size());
     if (origins > 0) rep.structures.push_back({"merge_origins", origins * sizeof(double)});
     if (t.previous.size() > 0) {
