@@ -41,7 +41,8 @@ class RobustKernel {
 
   explicit RobustKernel(const CollisionParams& params) : params_(params) {}
 
-  // Takes the snapshot of the model as it is now. Throws InvalidArgument when there are no zero rows.
+  // The model as it is now becomes the original model (its deformable rows copied, its tree built). Throws
+  // InvalidArgument when there are no zero rows.
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
   // Spheres start with the distance to the nearest zero surfel (a temporary tree over the zero rows).
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads,
