@@ -10,6 +10,7 @@
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/snapshot_io.hpp"
 #include "surfeledit/core/two_arms.hpp"
 
 namespace surfeledit {
@@ -238,6 +239,43 @@ TEST(ToolRigid, TheHistoryBoundCountsTheDetectorsItKeepsAlive) {
   EXPECT_NE(s.session.state_hash(), hash);
   s.session.redo("b");
   EXPECT_EQ(s.session.state_hash(), hash);
+}
+
+// A stale tool keeps what the other tool's step moved as its detector saw it (Tool::hold_rigid: Robust keeps no
+// copy of its zero rows, issue 14); the session snapshot keeps it too: a restored session's next steps equal
+// the never-saved one's; the held rows are listed in the session report.
+TEST(ToolRigid, ASnapshotOfAStaleToolKeepsWhereTheMovedRowsWere) {
+  Swing x({{"algorithm", std::string("robust")}}, true);
+  for (int k = 0; k < 3; ++k) {
+    x.swing("a");
+    x.swing("b");
+  }
+  x.swing("a");
+  x.swing("a");  // b is stale: a's arm moved twice since b's detector saw it
+  const auto held = [](const EditSession& s) {
+    std::size_t bytes = 0;
+    for (const auto& st : s.report().structures)
+      if (st.name == "rigid_held") bytes += st.bytes;
+    return bytes;
+  };
+  const std::size_t a_rows = x.session.fields("a")->deformable.size();
+  EXPECT_GE(held(x.session), a_rows * 7 * sizeof(double));  // positions, normals, radius per moved row
+
+  SnapshotWriter w;
+  x.session.save(w);
+  EditSession z{"swing", Swing::params(true)};
+  SnapshotReader r(w.bytes());
+  z.restore(r);
+  EXPECT_EQ(held(z), held(x.session));
+  DeformParams p;
+  p.translation = Vec3(-0.05, 0, 0);
+  for (int k = 0; k < 3; ++k) {
+    const StepResult rx = x.session.deform(p, "b");
+    const StepResult rz = z.deform(p, "b");
+    EXPECT_EQ(rx.colliding, rz.colliding) << k;
+    EXPECT_EQ(rx.depths, rz.depths) << k;
+  }
+  EXPECT_EQ(x.session.state_hash(), z.state_hash());
 }
 
 }  // namespace

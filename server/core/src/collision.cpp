@@ -79,7 +79,7 @@ std::vector<std::pair<std::string, std::size_t>> CollisionDetector::structures()
   return {{std::string("collision_") + to_string(params_.algorithm), memory_bytes()}};
 }
 
-bool CollisionDetector::on_rigid_moved(const CollisionScene&, const IndexList&) { return false; }
+bool CollisionDetector::on_rigid_moved(const CollisionScene&, const IndexList&, const RigidRows&) { return false; }
 
 bool CollisionDetector::start_rebuild(const CollisionScene&) { return false; }
 

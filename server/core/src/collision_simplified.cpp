@@ -72,6 +72,7 @@ class SimplifiedDetector final : public ApproximateDetector {
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
+    rows_.kernel.bind(scene);
     const int threads = resolve_threads(params_.threads);
     const Index nc = clusters_.cluster_count();
     const ZeroSet& zero = this->zero();

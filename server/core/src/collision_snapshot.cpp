@@ -148,47 +148,68 @@ void ZeroSetKernel::save(SnapshotWriter& out) const { put_zero_set(out, zero_); 
 void ZeroSetKernel::load(SnapshotReader& in, Index rows) { zero_ = get_zero_set(in, rows); }
 
 void RobustKernel::save(SnapshotWriter& out) const {
+  out.u64(static_cast<std::uint64_t>(original_rows()));
+  out.vec(orig_.deformable.list());
   out.mat(orig_.positions);
   out.mat(orig_.normals);
   out.mat(orig_.radii);
-  out.vec(orig_.zero);
   out.vec(orig_.alive);
   out.vec(orig_of_row_);
+  out.vec(row_of_orig_);
+  out.u64(orig_.tree ? orig_.tree->memory_bytes() : tree_bytes_);
 }
 
+// The zero rows are the model's: the tree over the original model is built at the first bind (the model is
+// then where this detector saw it) or by on_rigid_moved (which is told where the moved rows were).
 void RobustKernel::load(SnapshotReader& in, Index rows) {
-  Snapshot orig;
+  const std::uint64_t n64 = in.u64("original rows count");
+  if (n64 > static_cast<std::uint64_t>(std::numeric_limits<Index>::max())) in.fail("original rows count", "out of range");
+  const Index n = static_cast<Index>(n64);
+  const IndexList deformable = in.vec<Index>("original deformable rows");
+  check_rows(in, deformable, n, "original deformable rows");
+  Original orig;
+  orig.deformable.assign(n, deformable);
   orig.positions = in.mat<Points>("original positions");
   orig.normals = in.mat<Points>("original normals");
   orig.radii = in.mat<Values>("original radii");
-  orig.zero = in.vec<std::uint8_t>("original zero flags");
   orig.alive = in.vec<std::uint8_t>("original alive flags");
   IndexList orig_of_row = in.vec<Index>("original rows");
-  const std::size_t n = orig.zero.size();
-  if (static_cast<std::size_t>(orig.positions.rows()) != n || static_cast<std::size_t>(orig.normals.rows()) != n ||
-      static_cast<std::size_t>(orig.radii.size()) != n || orig.alive.size() != n) {
+  IndexList row_of_orig = in.vec<Index>("model rows of the original");
+  const std::size_t tree_bytes = in.capacity("original tree bytes", 0, 1);
+  const std::size_t d = deformable.size();
+  if (static_cast<std::size_t>(orig.positions.rows()) != d || static_cast<std::size_t>(orig.normals.rows()) != d ||
+      static_cast<std::size_t>(orig.radii.size()) != d) {
     in.fail("original model", "arrays of different lengths");
   }
+  if (!orig.positions.allFinite() || !orig.normals.allFinite() || !orig.radii.allFinite()) {
+    in.fail("original positions", "not finite");
+  }
+  if (!orig.alive.empty() && orig.alive.size() != static_cast<std::size_t>(n)) in.fail("original alive flags", "not one per row");
   // Empty: the identity (no row inserted or removed since the reset), so the original model has one row per row.
-  if ((orig_of_row.empty() ? n : orig_of_row.size()) != static_cast<std::size_t>(rows)) {
+  if ((orig_of_row.empty() ? static_cast<std::size_t>(n) : orig_of_row.size()) != static_cast<std::size_t>(rows)) {
     in.fail("original rows", "not one per model row");
   }
   for (Index o : orig_of_row)
-    if (o < -1 || o >= static_cast<Index>(n)) in.fail("original rows", "row " + std::to_string(o) + " out of range");
+    if (o < -1 || o >= n) in.fail("original rows", "row " + std::to_string(o) + " out of range");
+  if (!row_of_orig.empty() && row_of_orig.size() != static_cast<std::size_t>(n)) in.fail("model rows of the original", "not one per row");
+  for (Index r : row_of_orig)
+    if (r < -1 || r >= rows) in.fail("model rows of the original", "row " + std::to_string(r) + " out of range");
   bool any_zero = false;
-  for (std::size_t o = 0; o < n; ++o) {
-    if (orig.alive[o] > 1 || orig.zero[o] > 1) in.fail("original flags", "not 0 or 1");
-    any_zero = any_zero || (orig.zero[o] && orig.alive[o]);
+  for (Index o = 0; o < n; ++o) {
+    const std::uint8_t a = orig.alive.empty() ? 1 : orig.alive[static_cast<std::size_t>(o)];
+    if (a > 1) in.fail("original flags", "not 0 or 1");
+    const Index r = row_of_orig.empty() ? o : row_of_orig[static_cast<std::size_t>(o)];
+    if (!orig.deformable.test(o) && a && (r < 0 || r >= rows)) in.fail("model rows of the original", "a zero row outside the model");
+    any_zero = any_zero || (!orig.deformable.test(o) && a);
   }
   if (!any_zero) in.fail("original model", "no zero surfel");
-  try {  // the tree as reset / on_removed / on_rigid_moved build it (a removal never comes back)
-    orig.tree = original_tree(orig.positions, orig.alive, params_.knn_eps);
-  } catch (const Error& e) {
-    in.fail("original positions", e.what());
-  }
   orig_ = std::move(orig);
   orig_of_row_ = std::move(orig_of_row);
+  row_of_orig_ = std::move(row_of_orig);
   inside_.reset();
+  pending_inside_ = false;
+  tree_bytes_ = tree_bytes;
+  model_positions_ = model_normals_ = model_radii_ = nullptr;
 }
 
 }  // namespace detail

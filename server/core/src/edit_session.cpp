@@ -68,19 +68,26 @@ void EditSession::mark_others_stale(const IndexList* moved) {
     if (&t != tool_ && t.fields) t.mark_stale(moved);
 }
 
+void EditSession::hold_for_others(const IndexList& rows) {
+  if (!params_.incremental_rigid) return;
+  for (auto& [id, t] : tools_)
+    if (&t != tool_) t.hold_rigid(model_, rows);
+}
+
 void EditSession::sync_tool() {
   Tool& t = *tool_;
   if (!t.stale) return;
   // Rows this tool treats as rigid changed under its detector (another tool's op). Moved rows only: the
-  // detector updates its structures for them (on_rigid_moved). History images refer to the detector
-  // object and must keep it as it was, so a shared detector is cloned first (a detector that cannot be
-  // cloned is reset instead).
+  // detector updates its structures for them (on_rigid_moved), told where they were (Tool::held, kept by
+  // hold_for_others before each op that moved them). History images refer to the detector object and must
+  // keep it as it was, so a shared detector is cloned first (a detector that cannot be cloned is reset instead).
   bool followed = false;
+  RigidRows before;
   if (params_.incremental_rigid && t.fields && t.detector && t.stale_rows_known &&
-      t.fields->regions.size() == static_cast<std::size_t>(model_.size())) {
+      t.fields->regions.size() == static_cast<std::size_t>(model_.size()) && t.held_before(before)) {
     const bool shared = t.detector.use_count() > 1;
     std::shared_ptr<CollisionDetector> d = shared ? std::shared_ptr<CollisionDetector>(t.detector->clone()) : t.detector;
-    if (d && d->on_rigid_moved(scene_of(model_, *t.fields), t.stale_rows)) {
+    if (d && d->on_rigid_moved(scene_of(model_, *t.fields), t.stale_rows, before)) {
       t.detector = std::move(d);
       followed = true;
     }
@@ -197,6 +204,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   use(author);
   tool_->fresh_at = 0;  // a step changes the detector (or may: a cancelled one puts its states back)
   sync_tool();
+  hold_for_others(tool_->fields->deformable);  // the rows a step moves, as the other tools' detectors see them
   const std::uint64_t version_before = version_;
   const Index rows_before = model_.size();
   // Resampling may add tangents, rest radii and rows: the whole session is the before-image. Else the
@@ -481,6 +489,9 @@ SessionReport EditSession::report() const {
       for (auto& [name, bytes] : t.detector->structures()) rep.structures.push_back({name, bytes});
       if (rep.hierarchy_status.empty()) rep.hierarchy_status = t.detector->hierarchy_info().status;
     }
+    // What it keeps of rows another tool moved since its detector last saw them (Tool::hold_rigid).
+    const std::size_t held = static_cast<std::size_t>(t.held.positions.size() + t.held.normals.size() + t.held.radii.size());
+    if (held > 0) rep.structures.push_back({"rigid_held", held * sizeof(double) + t.held_rows.capacity() * sizeof(Index)});
     const std::size_t origins = static_cast<std::size_t>(t.merge.origin_positions.size() + t.merge.origin_normals.size());
     if (origins > 0) rep.structures.push_back({"merge_origins", origins * sizeof(double)});
     if (t.previous.size() > 0) {

@@ -213,6 +213,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
                      : entry.image.tool_only ? capture_tool(entry.image.tool_only->tool.fields_kept)
                                              : capture_whole(false);
   const IdList ids_before = model_.ids();
+  if (entry.image.rows) hold_for_others(*entry.image.rows->rows);  // they move under the other tools' detectors
   restore(entry.image, false);
   // A step's rows moved under the other tools' detectors (a whole image puts every tool back as it was).
   if (entry.image.rows) mark_others_stale(entry.image.rows->rows.get());

@@ -1,4 +1,4 @@
-// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 1):
+// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 2: tools keep their held rigid rows):
 // magic, format version; the detector table (every detector object once, by identity: tools and
 // history images refer to it by index, 0 = none); the detector-image table (each with the index of
 // a detector that reads it); the table of shared row lists; then the session's scalars, model, row
@@ -17,7 +17,7 @@ using namespace snapshot_values;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
-constexpr std::uint32_t kFormat = 1;
+constexpr std::uint32_t kFormat = 2;
 
 // Pointer tables: index 0 is null, objects from 1 in first-seen order.
 template <typename T>
@@ -273,6 +273,12 @@ void EditSession::save(SnapshotWriter& out) const {
     out.boolean(tool.stale);
     out.boolean(tool.stale_rows_known);
     out.vec(tool.stale_rows);
+    // Held rows are read only while the tool is stale with known rows (Tool::held_before); otherwise none.
+    const bool held = tool.stale && tool.stale_rows_known;
+    out.vec(held ? tool.held_rows : IndexList());
+    out.mat(held ? tool.held.positions : Points(0, 3));
+    out.mat(held ? tool.held.normals : Points(0, 3));
+    out.mat(held ? tool.held.radii : Values());
     out.u32(t.row_lists.at(tool.shared_rows.get()));
     out.u64(tool.fresh_at);
     out.u32(t.detectors.find(tool.fresh_object));
@@ -345,6 +351,16 @@ void EditSession::restore(SnapshotReader& in) {
     tool.stale = in.boolean("tool stale");
     tool.stale_rows_known = in.boolean("tool stale rows known");
     tool.stale_rows = in.vec<Index>("tool stale rows");
+    tool.held_rows = in.vec<Index>("tool held rows");
+    tool.held.positions = in.mat<Points>("tool held positions");
+    tool.held.normals = in.mat<Points>("tool held normals");
+    tool.held.radii = in.mat<Values>("tool held radii");
+    const auto held = static_cast<Eigen::Index>(tool.held_rows.size());
+    if (tool.held.positions.rows() != held || tool.held.normals.rows() != held || tool.held.radii.size() != held)
+      in.fail("tool held rows", "arrays of different lengths");
+    for (std::size_t j = 0; j < tool.held_rows.size(); ++j)
+      if (tool.held_rows[j] < 0 || static_cast<std::size_t>(tool.held_rows[j]) >= rows || (j > 0 && tool.held_rows[j] <= tool.held_rows[j - 1]))
+        in.fail("tool held rows", "not ascending model rows");
     tool.shared_rows = Loaded::pick(in, l.row_lists, "tool row list");
     tool.fresh_at = in.u64("tool fresh at");
     tool.fresh_object = Loaded::pick(in, l.detectors, "tool fresh detector").get();

@@ -58,6 +58,10 @@ void Tool::mark_stale(const IndexList* moved) {
     stale_rows_known = false;
     stale_rows.clear();
   }
+  if (!stale_rows_known) {
+    held_rows = IndexList();
+    held = RigidRows();
+  }
   if (stale_rows_known && !std::is_sorted(stale_rows.begin(), stale_rows.end())) std::sort(stale_rows.begin(), stale_rows.end());
 }
 
@@ -65,6 +69,60 @@ void Tool::clear_stale() {
   stale = false;
   stale_rows_known = false;
   stale_rows.clear();
+  held_rows = IndexList();
+  held = RigidRows();
+}
+
+void Tool::hold_rigid(const SurfelModel& model, const IndexList& rows) {
+  if (!detector || !fields || (stale && !stale_rows_known)) return;
+  if (!stale) {  // what an op that did not move them kept is stale itself
+    held_rows.clear();
+    held = RigidRows();
+  }
+  if (std::includes(held_rows.begin(), held_rows.end(), rows.begin(), rows.end())) return;
+  // Merge: the rows held keep their values (first move wins), the others take the model's now.
+  IndexList both;
+  both.reserve(held_rows.size() + rows.size());
+  std::set_union(held_rows.begin(), held_rows.end(), rows.begin(), rows.end(), std::back_inserter(both));
+  const Eigen::Index n = static_cast<Eigen::Index>(both.size());
+  RigidRows out;
+  out.positions.resize(n, 3);
+  out.normals.resize(n, 3);
+  out.radii.resize(n);
+  std::size_t h = 0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Index r = both[static_cast<std::size_t>(k)];
+    if (h < held_rows.size() && held_rows[h] == r) {
+      const Eigen::Index j = static_cast<Eigen::Index>(h++);
+      out.positions.row(k) = held.positions.row(j);
+      out.normals.row(k) = held.normals.row(j);
+      out.radii[k] = held.radii[j];
+    } else {
+      out.positions.row(k) = model.positions().row(r);
+      out.normals.row(k) = model.normals().row(r);
+      out.radii[k] = model.radii()[r];
+    }
+  }
+  held_rows = std::move(both);
+  held = std::move(out);
+}
+
+bool Tool::held_before(RigidRows& out) const {
+  const Eigen::Index n = static_cast<Eigen::Index>(stale_rows.size());
+  out.positions.resize(n, 3);
+  out.normals.resize(n, 3);
+  out.radii.resize(n);
+  std::size_t h = 0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Index r = stale_rows[static_cast<std::size_t>(k)];
+    while (h < held_rows.size() && held_rows[h] < r) ++h;
+    if (h == held_rows.size() || held_rows[h] != r) return false;
+    const Eigen::Index j = static_cast<Eigen::Index>(h);
+    out.positions.row(k) = held.positions.row(j);
+    out.normals.row(k) = held.normals.row(j);
+    out.radii[k] = held.radii[j];
+  }
+  return true;
 }
 
 void Tool::clear_regions() {

@@ -41,11 +41,15 @@
 //     // Rows removed (`keep` per old row, `new_row` from remap_rows) / `added` rows appended.
 //     void on_removed(const std::vector<bool>& keep, const IndexList& new_row);
 //     void on_inserted(Index added);
-//     // Zero rows `rows` (ascending) moved (CollisionDetector::on_rigid_moved): updates the references
-//     // for them and the states of `deformable` that depended on where they were; false, nothing
-//     // changed, when the kernel cannot (the detector is then reset).
-//     bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-//                         RowStates<State>& states, int threads);
+//     // Zero rows `rows` (ascending) moved (CollisionDetector::on_rigid_moved): `before` holds what they were
+//     // (one entry per row of `rows`). Updates the references for them and the states of `deformable` that
+//     // depended on where they were; false, nothing changed, when the kernel cannot (the detector is then reset).
+//     bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before,
+//                         const IndexList& deformable, RowStates<State>& states, int threads);
+//     // The model of this step, before any update() / not_candidate() of it (the driver calls it at the top of
+//     // every detection): a kernel that reads references from the model (Robust: its zero rows) keeps
+//     // pointers into `scene` until the next bind(); the others do nothing.
+//     void bind(const CollisionScene& scene);
 //     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
 //     const ZeroSet* zero_set() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
@@ -61,6 +65,7 @@
 #include <vector>
 
 #include "../collision_detail.hpp"
+#include "rank_bits.hpp"
 
 namespace surfeledit::detail {
 
@@ -101,64 +106,66 @@ struct Sphere {
   }
 };
 
-// One state per deformable row, indexed by model row (issue 14): rows without a state (zero rows) hold
-// nothing but their entry of the row -> slot map (4 bytes), and are never indexed. States are kept in
-// ascending row order, so a sweep over the deformable rows walks them in storage order.
+// One state per deformable row, indexed by model row (issue 14): which rows have a state is one bit per
+// row with its rank (RankBits: 0.19 bytes per row against 4 for an int32 row -> slot map, RESULTS §47), and
+// rows without one (zero rows) are never indexed. States are kept in ascending row order, so a sweep over the
+// deformable rows walks them in storage order (stored_data()) and the state of row r is the rank(r)-th.
 template <typename State>
 class RowStates {
  public:
   // `rows` model rows; the rows `with_state` (ascending) get a default State.
   void assign(Index rows, const IndexList& with_state) {
-    slot_.assign(static_cast<std::size_t>(rows), -1);
+    has_.assign(rows, with_state);
     dense_.assign(with_state.size(), State());
-    for (std::size_t q = 0; q < with_state.size(); ++q) slot_[static_cast<std::size_t>(with_state[q])] = static_cast<Index>(q);
   }
   template <typename I>
-  State& operator[](I r) { return dense_[static_cast<std::size_t>(slot_[static_cast<std::size_t>(r)])]; }
+  State& operator[](I r) { return dense_[static_cast<std::size_t>(has_.rank(static_cast<Index>(r)))]; }
   template <typename I>
-  const State& operator[](I r) const { return dense_[static_cast<std::size_t>(slot_[static_cast<std::size_t>(r)])]; }
+  const State& operator[](I r) const { return dense_[static_cast<std::size_t>(has_.rank(static_cast<Index>(r)))]; }
   // Model rows (with or without a state).
-  std::size_t size() const { return slot_.size(); }
+  std::size_t size() const { return static_cast<std::size_t>(has_.rows()); }
   // Appends a row with state `s` (after every row that has one).
   void push_back(const State& s) {
-    slot_.push_back(static_cast<Index>(dense_.size()));
+    has_.push_back(true);
     dense_.push_back(s);
   }
   // Keeps the rows with keep[r] (one flag per row), in order.
   void compact(const std::vector<bool>& keep) {
-    std::size_t w = 0, d = 0;
-    for (std::size_t r = 0; r < slot_.size(); ++r) {
-      if (!keep[r]) continue;
-      const Index s = slot_[r];
-      if (s >= 0) {
-        dense_[d] = dense_[static_cast<std::size_t>(s)];  // s >= d: states are in row order
-        slot_[w] = static_cast<Index>(d++);
-      } else {
-        slot_[w] = -1;
-      }
-      ++w;
+    std::size_t d = 0;
+    for (Index r = 0; r < has_.rows(); ++r) {
+      if (!has_.test(r)) continue;
+      const std::size_t s = static_cast<std::size_t>(has_.rank(r));
+      if (keep[static_cast<std::size_t>(r)]) dense_[d++] = dense_[s];  // s >= d: states are in row order
     }
-    slot_.resize(w);
     dense_.resize(d);
+    has_.compact(keep);
   }
-  std::size_t memory_bytes() const { return slot_.capacity() * sizeof(Index) + dense_.capacity() * sizeof(State); }
+  std::size_t memory_bytes() const { return has_.memory_bytes() + dense_.capacity() * sizeof(State); }
 
   // The states in storage order (ascending row): stored_data()[q] is the q-th row with a state.
   std::size_t stored() const { return dense_.size(); }
   State* stored_data() { return dense_.data(); }
   const State* stored_data() const { return dense_.data(); }
-  // The storage itself, for snapshots (row_detector.hpp put_states / get_states).
-  const std::vector<Index>& slots() const { return slot_; }
+  // For snapshots (row_detector.hpp put_states / get_states): each row's slot (-1 without a state), and the states.
+  std::vector<Index> slots() const {
+    std::vector<Index> out(size(), -1);
+    for (Index r = 0; r < has_.rows(); ++r)
+      if (has_.test(r)) out[static_cast<std::size_t>(r)] = has_.rank(r);
+    return out;
+  }
   const std::vector<State>& dense() const { return dense_; }
   // Adopts `slots` and `dense` as read from a snapshot; the caller has checked that the slots >= 0 are
   // 0, 1, ... in row order and that there are dense.size() of them.
-  void adopt(std::vector<Index> slots, std::vector<State> dense) {
-    slot_ = std::move(slots);
+  void adopt(const std::vector<Index>& slots, std::vector<State> dense) {
+    IndexList with;
+    for (std::size_t r = 0; r < slots.size(); ++r)
+      if (slots[r] >= 0) with.push_back(static_cast<Index>(r));
+    has_.assign(static_cast<Index>(slots.size()), with);
     dense_ = std::move(dense);
   }
 
  private:
-  std::vector<Index> slot_;   // #P: index into dense_, -1 for a row without a state
+  RankBits has_;              // #P: rows with a state
   std::vector<State> dense_;  // one per row with a state, in ascending row order
 };
 

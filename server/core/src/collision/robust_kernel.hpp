@@ -1,6 +1,8 @@
 // Robust Algo as a kernel (§4.4 of docs/algorithms.md, thesis §6.3, Code 6.8): points are classified
-// against the ORIGINAL whole model (a frozen snapshot taken at reset: zero surfels plus the deformable
-// ones at their positions then, k-d tree built once). A change of that inside state counts as a
+// against the ORIGINAL whole model (taken at reset: zero surfels plus the deformable ones at their
+// positions then, k-d tree built once). Only the deformable rows' values at reset are copied; the zero
+// rows are read from the model (bind()), where they stay until another tool moves them
+// (on_rigid_moved, which is told where they were). A change of that inside state counts as a
 // collision change only when the nearest original surfel is a zero surfel; a point collides iff its
 // state changed an odd number of times (Def. 4.3). Each point keeps a sphere (c, rho2) and is only
 // re-tested once it leaves it. Depth (Eq. 6.4): rho - |p - c|.
@@ -14,6 +16,7 @@
 
 #include "inside_model.hpp"
 #include "kernel.hpp"
+#include "rank_bits.hpp"
 
 namespace surfeledit::detail {
 
@@ -38,7 +41,8 @@ class RobustKernel {
 
   explicit RobustKernel(const CollisionParams& params) : params_(params) {}
 
-  // Takes the snapshot of the model as it is now. Throws InvalidArgument when there are no zero rows.
+  // The model as it is now becomes the original model (its deformable rows copied, its tree built). Throws
+  // InvalidArgument when there are no zero rows.
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
   // Spheres start with the distance to the nearest zero surfel (a temporary tree over the zero rows).
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads,
@@ -89,39 +93,71 @@ class RobustKernel {
     orig_of_row_.resize(orig_of_row_.size() + static_cast<std::size_t>(added), -1);
   }
   // Moved zero rows take their new place in the original model (the rigid part is where it is now; the
-  // deformable part's original surfaces stay where they were at reset), the snapshot's tree is rebuilt (a
-  // new object), and the points a moved surface may have crossed or whose sphere holds a moved surfel
-  // (rows_near_moved) are tested at their next step. Inside states and parities are kept: that test
-  // compares a point's inside state with the rigid part where it is now. Not with an inside model
-  // (winding, vote, swept).
-  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      RowStates<State>& states, int threads);
+  // deformable part's original surfaces stay where they were at reset), the original model's tree is
+  // rebuilt (a new object), and the points a moved surface may have crossed or whose sphere holds a moved
+  // surfel (rows_near_moved) are tested at their next step. Inside states and parities are kept: that test
+  // compares a point's inside state with the rigid part where it is now. `before`: where the moved rows
+  // were (the old tree's points). Not with an inside model (winding, vote, swept).
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before,
+                      const IndexList& deformable, RowStates<State>& states, int threads);
+  // Points into the model's arrays for this step's zero-row reads; builds the original model's tree when it
+  // has none (after a removal of zero rows or a snapshot load: from the model as it is now, which is where
+  // this detector's zero rows are while its tool is not stale).
+  void bind(const CollisionScene& scene);
   const ZeroSet* zero_set() const { return nullptr; }
   std::size_t memory_bytes() const;
   // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
   // same order, which gives the same tree); load() checks them against `rows` model rows.
-  bool snapshottable() const { return !inside_; }  // not with an inside model (winding, vote, swept)
+  bool snapshottable() const { return !with_inside(); }  // not with an inside model (winding, vote, swept)
   void save(SnapshotWriter& out) const;
   void load(SnapshotReader& in, Index rows);
 
  private:
-  // The original model, frozen at reset (#O rows = rows at reset).
-  struct Snapshot {
-    Points positions;                 // #O by 3
-    Points normals;                   // #O by 3
-    Values radii;                     // #O
-    std::vector<std::uint8_t> zero;   // #O: 1 = zero surfel
-    std::vector<std::uint8_t> alive;  // #O: 0 once a zero surfel was removed from the model
-    std::shared_ptr<const KdTree> tree;  // over the alive rows of `positions`; immutable, shared by copies
+  // The original model (#O rows = rows at reset): its zero rows are the model's (row_of()), its deformable
+  // rows copied at reset.
+  struct Original {
+    RankBits deformable;              // #O: deformable at reset; such a row's values are at its rank below
+    Points positions;                 // #D by 3: the deformable rows at reset, in row order
+    Points normals;                   // #D by 3
+    Values radii;                     // #D
+    std::vector<std::uint8_t> alive;  // #O: 0 once a zero surfel was removed from the model; empty while all are alive
+    std::shared_ptr<const KdTree> tree;  // over the alive rows; immutable, shared by copies; null until bind() builds it
   };
+  // One surfel of the original model, as a test reads it.
+  struct Ref {
+    Vec3 p;         // position
+    Vec3 n;         // unit normal
+    double radius;  // disc radius
+    bool zero;      // a zero surfel (a change of inside state against it counts)
+  };
+  // Original row o: from the copy (deformable) or from the bound model (zero).
+  Ref ref(Index o) const {
+    if (orig_.deformable.test(o)) {
+      const Index d = orig_.deformable.rank(o);
+      return {row3(orig_.positions, d), row3(orig_.normals, d), orig_.radii[d], false};
+    }
+    const double* p = model_positions_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
+    const double* n = model_normals_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
+    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), model_radii_[row_of(o)], true};
+  }
+  bool alive(Index o) const { return orig_.alive.empty() || orig_.alive[static_cast<std::size_t>(o)] != 0; }
+  Index original_rows() const { return orig_.deformable.rows(); }
+  // The original model's positions (#O by 3; removed rows 0), zero rows from `scene` but the rows `moved` at
+  // `before` (the model before the move), when given.
+  Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
+                         const RigidRows* before = nullptr) const;
+  // The inside state of a point at p against the original model (its tree, bound model).
+  bool inside_original(const Vec3& p) const {
+    const Ref k = ref(orig_.tree->nearest(p));
+    return (p - k.p).dot(k.n) < params_.threshold;
+  }
 
   // The original model's k-d tree over its alive rows (every row while all are alive), as reset, removals,
   // rigid moves and snapshot loads build it. Leaves of kOriginalLeafSize points: with the k = 1 leaf scan
   // of the tree (kdtree_search.hpp) 24 measured ~10 % faster than the default 10 and than 16 or 32 on the
   // piercing scene, with fewer nodes (RESULTS §39).
   static constexpr int kOriginalLeafSize = 24;
-  static std::shared_ptr<const KdTree> original_tree(const Points& positions, const std::vector<std::uint8_t>& alive,
-                                                     double eps);
+  std::shared_ptr<const KdTree> original_tree(const Points& positions);
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
@@ -160,17 +196,16 @@ class RobustKernel {
     const double w = params_.threshold;
     if (s.flags & kFirstUpdate) {
       s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
-      const Index k = orig_.tree->nearest(s.old_position);
       ++made;
-      set_inside(s, (s.old_position - row3(orig_.positions, k)).dot(row3(orig_.normals, k)) < w);
+      set_inside(s, inside_original(s.old_position));
     }
-    const Index k = orig_.tree->nearest(p1);
+    const Ref k = ref(orig_.tree->nearest(p1));
     ++made;
-    const Vec3 d = p1 - row3(orig_.positions, k);
-    r_near = orig_.radii[k];
-    s.sphere = {p1, sphere_rho2(d.squaredNorm(), orig_.radii[k], params_.sphere_margin)};
-    const bool inside_now = d.dot(row3(orig_.normals, k)) < w;
-    if (orig_.zero[k] && inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    const Vec3 d = p1 - k.p;
+    r_near = k.radius;
+    s.sphere = {p1, sphere_rho2(d.squaredNorm(), k.radius, params_.sphere_margin)};
+    const bool inside_now = d.dot(k.n) < w;
+    if (k.zero && inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
     set_inside(s, inside_now);
     return made;
   }
@@ -185,18 +220,34 @@ class RobustKernel {
   }
 
   CollisionParams params_;
-  Snapshot orig_;
+  Original orig_;
   // #P: row of the original model, -1 for inserted rows; empty while it is the identity (no row was
   // inserted or removed since the reset: 4 bytes per row saved).
   IndexList orig_of_row_;
+  // #O: model row of an original row, -1 once removed; empty while it is the identity (no row removed since
+  // the reset; insertions append rows, so they keep it).
+  IndexList row_of_orig_;
   Index orig_of(Index r) const { return orig_of_row_.empty() ? r : orig_of_row_[static_cast<std::size_t>(r)]; }
-  std::size_t rows_now() const { return orig_of_row_.empty() ? orig_.zero.size() : orig_of_row_.size(); }
+  Index row_of(Index o) const { return row_of_orig_.empty() ? o : row_of_orig_[static_cast<std::size_t>(o)]; }
+  std::size_t rows_now() const {
+    return orig_of_row_.empty() ? static_cast<std::size_t>(original_rows()) : orig_of_row_.size();
+  }
   // orig_of_row_ as a list (before rows are inserted or removed).
   void spell_out_rows() {
     if (!orig_of_row_.empty()) return;
-    orig_of_row_.resize(orig_.zero.size());
+    orig_of_row_.resize(static_cast<std::size_t>(original_rows()));
     for (std::size_t r = 0; r < orig_of_row_.size(); ++r) orig_of_row_[r] = static_cast<Index>(r);
   }
+  // The model bound by bind(): #P by 3, #P by 3, #P (row-major).
+  const double* model_positions_ = nullptr;
+  const double* model_normals_ = nullptr;
+  const double* model_radii_ = nullptr;
+  void bind_model(const CollisionScene& scene);
+  bool with_inside() const { return params_.inside != InsideMode::Nearest || params_.swept; }
+  bool pending_inside_ = false;
+  // Bytes of the original model's tree as last built: memory_bytes() counts it while the tree waits for the next
+  // bind (after a removal or a snapshot load), so the history's byte counts do not depend on when it is built.
+  std::size_t tree_bytes_ = 0;  // the inside model is to be built at the next bind (zero rows were removed)
   std::shared_ptr<const InsideModel> inside_;  // over the alive zero surfels; null with nearest and no swept
 };
 

@@ -215,6 +215,7 @@ class RowDetector final : public NarrowDetector {
                                     const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
+    rows_.kernel.bind(scene);
     hit_.resize(rows_.deformable.size());
     const Tally tally = sweep(rows_.deformable, scene, previous, candidate);
     CollisionResult result;
@@ -238,13 +239,16 @@ class RowDetector final : public NarrowDetector {
   }
   // Rigid rows moved (another tool's op): the kernel updates its references and the states that
   // depended on them. Rows that are not Zero, or a scene of another row count: false, nothing changed.
-  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows) override {
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before) override {
     const Index n = rows_.rows();
     if (scene.positions.rows() != n || static_cast<Index>(scene.regions.size()) != n) return false;
     for (Index r : rows)
       if (r < 0 || r >= n || scene.regions[static_cast<std::size_t>(r)] != Region::Zero) return false;
+    const auto size = static_cast<Eigen::Index>(rows.size());
+    if (before.positions.rows() != size || before.normals.rows() != size || before.radii.size() != size) return false;
     journal_.on = false;
-    return rows_.kernel.on_rigid_moved(scene, rows, rows_.deformable, rows_.states, resolve_threads(params_.threads));
+    return rows_.kernel.on_rigid_moved(scene, rows, before, rows_.deformable, rows_.states,
+                                       resolve_threads(params_.threads));
   }
   std::size_t memory_bytes() const override {
     return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
@@ -283,6 +287,7 @@ class RowDetector final : public NarrowDetector {
                               const std::vector<std::uint8_t>& candidate) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
+    rows_.kernel.bind(scene);
     IndexList rows;
     for (Index r : rows_.deformable)
       if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
@@ -381,8 +386,9 @@ class RowDetector final : public NarrowDetector {
     rows.deformable = in.vec<Index>("deformable rows");
     check_rows(in, rows.deformable, rows.rows(), "deformable rows");
     if (rows.states.dense().size() != rows.deformable.size()) in.fail("detector states", "not one per deformable row");
+    const std::vector<Index> slots = rows.states.slots();
     for (Index r : rows.deformable) {
-      if (rows.states.slots()[static_cast<std::size_t>(r)] < 0) in.fail("detector states", "a deformable row without one");
+      if (slots[static_cast<std::size_t>(r)] < 0) in.fail("detector states", "a deformable row without one");
     }
     rows.kernel.load(in, rows.rows());
     const double preprocess = in.f64("preprocess_ms");

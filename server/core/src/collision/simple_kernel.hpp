@@ -20,6 +20,7 @@ class ZeroSetKernel {
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads);
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row) { zero_.on_removed(keep, new_row); }
   void on_inserted(Index /*added*/) {}
+  void bind(const CollisionScene& /*scene*/) {}  // the references are copies
   const ZeroSet* zero_set() const { return &zero_; }
   std::size_t memory_bytes() const { return zero_.memory_bytes(); }
   // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
@@ -75,8 +76,9 @@ class SimpleKernel : public ZeroSetKernel {
   void keep_parent(State&, const Vec3&) const {}
   // Every point queries its nearest zero surfel every step: the zero copies are all there is to update.
   // The points the moved surfaces may have crossed are tested without the step bound next time.
-  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      RowStates<State>& states, int threads) {
+  // The zero set's copies of the moved rows are where they were (`before` is not needed).
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& /*before*/,
+                      const IndexList& deformable, RowStates<State>& states, int threads) {
     const double reach = zero_.move_rows(scene, rows);
     if (reach < 0.0) return false;
     for (Index r : rows_near_moved<false>(scene, rows, reach, deformable, states, threads)) states[r].unbounded = 1;

@@ -80,8 +80,9 @@ class TemporalKernel : public ZeroSetKernel {
   // The zero copies, then the points a moved surface may have crossed or whose sphere holds a moved
   // surfel: tested at their next step, without the step bound. Not with an inside model
   // (winding, vote, swept): a moved part changes the solid those test against everywhere near it.
-  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const IndexList& deformable,
-                      RowStates<State>& states, int threads) {
+  // The zero set's copies of the moved rows are where they were (`before` is not needed).
+  bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& /*before*/,
+                      const IndexList& deformable, RowStates<State>& states, int threads) {
     if (inside_) return false;
     const double reach = zero_.move_rows(scene, rows);
     if (reach < 0.0) return false;

@@ -100,6 +100,14 @@ struct CollisionScene {
   const std::vector<Region>& regions;  // #P; deformable = not Zero
 };
 
+// Rigid rows as a detector last saw them, before another tool's ops moved them (on_rigid_moved): one entry
+// per moved row, in the order of the row list that comes with it.
+struct RigidRows {
+  Points positions;  // #rows by 3
+  Points normals;    // #rows by 3, unit
+  Values radii;      // #rows
+};
+
 // What a detector's hierarchies look like now.
 struct HierarchyInfo {
   std::string status;              // "fresh" | "refit" | "rebuilding" (deformable tree; "fresh" for a zero
@@ -151,13 +159,15 @@ class CollisionDetector {
   virtual void on_inserted(const CollisionScene& scene, const IndexList& parents) = 0;
   // Rows the detector treats as rigid (Zero in `scene.regions`) changed under it: another tool's op moved
   // them (issue 11 §1, docs/collaboration.md). `rows`: ascending model rows, every one Zero, the row count
-  // the same as at reset; `scene` holds their positions, normals and radii now. Updates the references
-  // (zero copies and their tree; Robust: those rows of the original model) for these rows only and empties
-  // every sphere that now holds one of them (its point is tested at the next step); other states are kept.
+  // the same as at reset; `scene` holds their positions, normals and radii now, `before` (one entry per row
+  // of `rows`) what they were when this detector last saw them (the caller keeps them: Robust reads its
+  // zero rows from the model and keeps no copy of them). Updates the references (zero copies and their
+  // tree; Robust: the original model's tree) for these rows only and empties every sphere that now holds
+  // one of them (its point is tested at the next step); other states are kept.
   // False (nothing changed) when this detector cannot follow incrementally: the caller resets it. The row
   // detectors (Simple, Improved, Temporal, Robust) with the nearest inside test can; hierarchies, approximate
   // detection, inside modes winding and vote, and the swept test cannot (the default).
-  virtual bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows);
+  virtual bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before);
   // Bytes held (trees, per-surfel state).
   virtual std::size_t memory_bytes() const = 0;
   // What it holds, by name, for a session report (default: one entry "collision_<algorithm>").

@@ -272,6 +272,9 @@ class EditSession {
   // acting tool is stale, its detector follows the moved rows (on_rigid_moved, on a clone when a history
   // image still refers to the detector object) or, when that cannot be, is re-initialised.
   void mark_others_stale(const IndexList* moved = nullptr);
+  // Before an op moves `rows` (ascending): every other tool keeps what they are now (Tool::hold_rigid), for
+  // its detector's on_rigid_moved at that tool's next step.
+  void hold_for_others(const IndexList& rows);
   void sync_tool();
   // Conflict (naming `field` and the other author) when a row with keep[r] false, or a row of
   // `parents` (rows that will get children), is in another tool's lock.

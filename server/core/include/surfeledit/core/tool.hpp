@@ -70,6 +70,10 @@ struct Tool {
   bool stale = false;  // rows it treats as rigid changed under its detector since the detector was built
   bool stale_rows_known = false;  // when stale: every change since moved rows of `stale_rows`, nothing else
   IndexList stale_rows;           // when stale_rows_known: the rows moved since, ascending (model rows)
+  // What rows it treats as rigid were before other tools' ops moved them, as its detector last saw them
+  // (first move wins): `held_rows` ascending (while stale, a superset of stale_rows), `held` one entry each.
+  IndexList held_rows;
+  RigidRows held;
   // Scratch, not part of the state (never in an image):
   bool journaling = false;  // during deform(): the detector's journal holds the step's before-states
   Points previous;          // #P by 3: positions before the current step (reused between steps)
@@ -106,6 +110,12 @@ struct Tool {
   void mark_stale(const IndexList* moved);
   // The detector caught up with the model (reset or updated): not stale.
   void clear_stale();
+  // Before another tool's op moves `rows` (ascending) of `model`: keeps what they are now (held), for the
+  // rows not kept yet since the detector last caught up; nothing when the tool has no detector or is stale
+  // with unknown rows.
+  void hold_rigid(const SurfelModel& model, const IndexList& rows);
+  // What stale_rows were (one entry each, from `held`); false when one of them is not held.
+  bool held_before(RigidRows& out) const;
 };
 
 // Appends one row per parent (a row of `f`) inheriting its region and fields (the model got them appended).
