@@ -5,6 +5,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "row_copy.hpp"
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/util.hpp"
 
@@ -14,6 +15,31 @@ namespace {
 
 CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
+}
+
+// The first k (in list order) whose row rows[k] has a non-finite position or normal; rows.size() when none.
+// At 1M surfels a memory-bound pass: on `threads` threads over fixed ranges (the same k whatever the split).
+std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows, int threads) {
+  const double* P = a.positions.data();
+  const double* N = a.normals.data();
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(rows.size());
+  auto finite = [&](std::ptrdiff_t k) {
+    const double* p = P + 3 * rows[static_cast<std::size_t>(k)];
+    const double* q = N + 3 * rows[static_cast<std::size_t>(k)];
+    // x - x is 0 for every finite x and NaN for an infinite or NaN one: one test for the six values.
+    const double z = (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) + (q[0] - q[0]) + (q[1] - q[1]) + (q[2] - q[2]);
+    return z == 0.0;
+  };
+  std::ptrdiff_t first = n;
+  if (threads <= 1 || rows.size() < detail::kRowCopyParallelMin) {
+    for (std::ptrdiff_t k = 0; k < n; ++k)
+      if (!finite(k)) return static_cast<std::size_t>(k);
+    return rows.size();
+  }
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(min : first)
+  for (std::ptrdiff_t k = 0; k < n; ++k)
+    if (!finite(k) && k < first) first = k;
+  return static_cast<std::size_t>(first);
 }
 
 }  // namespace
@@ -216,7 +242,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   } end_journal{*this};
   SessionImage before = none    ? SessionImage()
                         : whole ? capture_whole(true)
-                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling);
+                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling, step_bent_rows(params));
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   try {
@@ -273,9 +299,8 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   } else if (tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows()) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
-    const double* from = a.positions.data();
-    double* to = previous.data();
-    for (const Index r : tool_->fields->deformable) std::copy_n(from + 3 * r, 3, to + 3 * r);
+    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}},
+                           resolve_threads(params_.threads));
   } else {
     previous = a.positions;  // same size as the last step's: no allocation
   }
@@ -288,11 +313,10 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
   // else is refused here, before the detector sees it (deform() then rolls the rows back).
-  for (const Index row : r.moved) {
-    if (!a.positions.row(row).allFinite() || !a.normals.row(row).allFinite()) {
-      throw Error(ErrorCode::InvalidArgument, "translation",
-                  "the step would move surfel " + std::to_string(model_.ids()[row]) + " to a non-finite position");
-    }
+  const std::size_t bad = first_non_finite(a, r.moved, resolve_threads(params_.threads));
+  if (bad < r.moved.size()) {
+    throw Error(ErrorCode::InvalidArgument, "translation",
+                "the step would move surfel " + std::to_string(model_.ids()[r.moved[bad]]) + " to a non-finite position");
   }
   ++version_;
   touch_rows(r.moved);

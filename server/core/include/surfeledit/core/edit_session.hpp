@@ -280,7 +280,12 @@ class EditSession {
   // everything (`clone`: the detector is cloned, else the live object is shared).
   // `subset`: the detector saves only `rows` too (else every deformable row).
   // `detector` false: no detector states (the step's journal holds them, see journaling_).
-  SessionImage capture_rows(const IndexList& rows, bool subset = false, bool detector = true);
+  // `bent`: the rows whose normals and tangents are kept (null: all; RowsImage::bent).
+  SessionImage capture_rows(const IndexList& rows, bool subset = false, bool detector = true,
+                            std::shared_ptr<const IndexList> bent = nullptr);
+  // The rows among the acting tool's deformable rows whose normals or tangents a step of `params` may
+  // change; null when that may be all of them (a rotation, or no F1 row).
+  std::shared_ptr<const IndexList> step_bent_rows(const DeformParams& params);
   // A step took `before` (a rows image) and has not changed rows, fields or settings otherwise: the whole
   // session as it was before the step, but for the detector, which is the live object (its state is the
   // caller's to put back); for a merge after the step (response "merge").
