@@ -1,8 +1,7 @@
-// A step's before-image at drag sizes (issue 14, the 1M drag): copied on the step's threads over fixed
-// ranges (row_copy.hpp) once the rows are many, and without the normals and tangents of F1 rows when the
-// step has no rotation (RowsImage::bent). Truth: the state the session had before the steps, kept
+// A step's before-image at drag sizes (issue 14, the 1M drag): without the normals and tangents of F1 rows
+// when the step has no rotation (RowsImage::bent). Truth: the state the session had before the steps, kept
 // independently (undo must give it back bit for bit), the state after them (redo), and a one-thread session
-// given the same steps (the parallel copies must give the same bytes).
+// given the same steps (the two-thread one must reach the same bytes).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -14,8 +13,8 @@
 namespace surfeledit {
 namespace {
 
-// A plate (zero region) of 2,000 surfels under a cloud of 150,000 (more than the parallel copy's
-// threshold): the first `one` of them in F1, the rest blend. Random unit normals; with `tangents`,
+// A plate (zero region) of 2,000 surfels under a cloud of 150,000 (the deformation's parallel
+// threshold is 50,000 moved rows): the first `one` of them in F1, the rest blend. Random unit normals; with `tangents`,
 // random tangent axes too.
 struct Scene {
   SurfelModel model;
@@ -125,7 +124,7 @@ TEST_P(StepImages, UndoAfterDragStepsIsBitForBitAtOneAndTwoThreads) {
     s.undo();
     EXPECT_TRUE(State(s) == before.back());
   }
-  // The parallel copies and checks change nothing: the same state at one and two threads.
+  // The same state at one and two threads.
   EXPECT_TRUE(after_steps[0] == after_steps[1]);
 }
 

@@ -18,28 +18,17 @@ CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
 }
 
 // The first k (in list order) whose row rows[k] has a non-finite position or normal; rows.size() when none.
-// At 1M surfels a memory-bound pass: on `threads` threads over fixed ranges (the same k whatever the split).
-std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows, int threads) {
+std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows) {
   const double* P = a.positions.data();
   const double* N = a.normals.data();
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(rows.size());
-  auto finite = [&](std::ptrdiff_t k) {
-    const double* p = P + 3 * rows[static_cast<std::size_t>(k)];
-    const double* q = N + 3 * rows[static_cast<std::size_t>(k)];
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const double* p = P + 3 * rows[k];
+    const double* q = N + 3 * rows[k];
     // x - x is 0 for every finite x and NaN for an infinite or NaN one: one test for the six values.
     const double z = (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) + (q[0] - q[0]) + (q[1] - q[1]) + (q[2] - q[2]);
-    return z == 0.0;
-  };
-  std::ptrdiff_t first = n;
-  if (threads <= 1 || rows.size() < detail::kRowCopyParallelMin) {
-    for (std::ptrdiff_t k = 0; k < n; ++k)
-      if (!finite(k)) return static_cast<std::size_t>(k);
-    return rows.size();
+    if (!(z == 0.0)) return k;
   }
-#pragma omp parallel for schedule(static) num_threads(threads) reduction(min : first)
-  for (std::ptrdiff_t k = 0; k < n; ++k)
-    if (!finite(k) && k < first) first = k;
-  return static_cast<std::size_t>(first);
+  return rows.size();
 }
 
 }  // namespace
@@ -299,8 +288,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   } else if (tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows()) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
-    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}},
-                           resolve_threads(params_.threads));
+    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}});
   } else {
     previous = a.positions;  // same size as the last step's: no allocation
   }
@@ -313,7 +301,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
   // else is refused here, before the detector sees it (deform() then rolls the rows back).
-  const std::size_t bad = first_non_finite(a, r.moved, resolve_threads(params_.threads));
+  const std::size_t bad = first_non_finite(a, r.moved);
   if (bad < r.moved.size()) {
     throw Error(ErrorCode::InvalidArgument, "translation",
                 "the step would move surfel " + std::to_string(model_.ids()[r.moved[bad]]) + " to a non-finite position");

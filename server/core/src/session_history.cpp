@@ -6,7 +6,6 @@
 
 #include "row_copy.hpp"
 #include "surfeledit/core/edit_session.hpp"
-#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
@@ -79,7 +78,7 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
   static const Points none(0, 3);  // (both branches lvalues: no copy of the model's tangents)
   take_rows(model_.has_tangents() ? a.tangent_u : none, turned, r.tangent_u, copies);
   take_rows(model_.has_tangents() ? a.tangent_v : none, turned, r.tangent_v, copies);
-  detail::run_row_copies(copies, resolve_threads(params_.threads));
+  detail::run_row_copies(copies);
   r.version_runs.clear();
   for (Index row : rows) {
     const std::uint64_t v = row_version_[row];
