@@ -1,7 +1,9 @@
 // The server's share of "update written" after one step of the ~1M-surfel drag (issue 14): what the
-// request thread does once the step's reply is out -- the changed rows since the previous version
-// (changes_event) and their copy out of the model (prepare_update) -- and, for a watcher of the compact
+// request thread does once the step's reply is out -- the copy of the moved rows out of the model
+// (prepare_update; a step's event lists the rows the step moved) -- and, for a watcher of the compact
 // encoding, the publisher thread's encoding of every part (encode_compact, parts of max_chunk_surfels).
+// BM_ChangesEvent: the rows changed since a version, what the server lists instead when a slow watcher's
+// queue is over its bound and queued steps are merged into one update (Service::Impl::coalesce).
 // Not included: Cyclone's CDR serialisation and delivery of the samples (dds_write), which happen only
 // while a reader of that encoding is matched (RESULTS §29).
 //

@@ -466,13 +466,17 @@ void EditSession::touch_rows(const IndexList& rows) {
   for (Index r : rows) row_version_[r] = version_;
 }
 
-Changes EditSession::changes_since(std::uint64_t since) const {
+Changes EditSession::changes_since(std::uint64_t since, bool rows) const {
   Changes c;
   if (model_.empty() || since >= version_) return c;
   c.full = since < model_version_;
+  if (rows && c.full) return c;  // every row: none listed
   const IdList& ids = model_.ids();
-  for (std::size_t r = 0; r < ids.size(); ++r)
-    if (c.full || row_version_[r] > since) c.changed.push_back(ids[r]);
+  for (std::size_t r = 0; r < ids.size(); ++r) {
+    if (!c.full && row_version_[r] <= since) continue;
+    if (rows) c.rows.push_back(static_cast<Index>(r));
+    else c.changed.push_back(ids[r]);
+  }
   if (!c.full) {
     for (const auto& [v, id] : removed_log_)
       if (v > since) c.removed.push_back(id);
