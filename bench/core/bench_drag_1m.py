@@ -1,10 +1,15 @@
 #!/usr/bin/env python3
 """The ~1M-surfel drag (issue 14): piercing at scale 4.8, the GUI setting (Temporal, knn_eps 2), in-process,
 at 1 and 2 threads. Per step: the whole call, the deformation share (the session's `apply` timing: the
-step's apply_step and its bookkeeping) and the detector's share; medians over the scenario's steps.
+step's apply_step and its bookkeeping) and the detector's share; medians over the scenario's steps. Also the
+calling thread's CPU time per step (time.thread_time: the whole step's CPU at one thread, where it is the
+figure to compare on a busy machine; at two threads it leaves out the worker's share).
 
     .venv/bin/python bench/core/bench_drag_1m.py [--scale 4.8] [--threads 1,2] [--rounds 1]
         [--package <dir holding another build's surfeledit package, for an A/B>] [--breakdown]
+
+Each thread count's line ends with the sha1 of every step's colliding ids and depths (in step order), so
+two builds' runs can be checked for identical results.
 
 --breakdown calls the core session directly (no Python result objects) and adds the history's share (the
 before-image and the entry, StepResult::history_ms) and the rest (whole call - apply - detect - history: the
@@ -17,10 +22,13 @@ client_py in /tmp) runs the same script; interleave the two in one period for a 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import statistics
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import benchlib  # noqa: E402
@@ -45,21 +53,29 @@ def main() -> int:
           f"{args.algorithm} knn_eps {args.knn_eps}", flush=True)
     params = sc.step_params()
     for threads in (int(t) for t in args.threads.split(",")):
-        total, apply, detect, history = [], [], [], []
+        total, apply, detect, history, cpu = [], [], [], [], []
+        digest = hashlib.sha1()
         for _ in range(args.rounds):
             backend = S.LocalBackend(threads)
             backend.start(sc.scene)
             backend.configure(algorithm=args.algorithm, threads=threads, knn_eps=args.knn_eps)
             for _ in range(sc.steps):
+                c0 = time.thread_time()
                 if args.breakdown:
                     t0 = time.perf_counter()
                     o = backend.session.core.deform(**params)
                     total.append((time.perf_counter() - t0) * 1e3)
+                    cpu.append((time.thread_time() - c0) * 1e3)
                     apply.append(float(o.deform_ms))
                     detect.append(float(o.stats["detect_ms"]) if o.detected else float("nan"))
                     history.append(float(o.history_ms))
+                    digest.update(np.asarray(o.colliding, np.uint64).tobytes())
+                    digest.update(np.asarray(o.depths, np.float64).tobytes())
                     continue
                 r = backend.session.deform(**params)
+                cpu.append((time.thread_time() - c0) * 1e3)
+                digest.update(np.asarray(r.colliding, np.uint64).tobytes())
+                digest.update(np.asarray(r.depths, np.float64).tobytes())
                 total.append(r.timings["total"])
                 apply.append(r.timings["apply"])
                 detect.append(r.timings.get("detect", float("nan")))
@@ -70,7 +86,7 @@ def main() -> int:
             extra = f", history {statistics.median(history):.2f} ms, rest {statistics.median(rest):.2f} ms"
         print(f"threads {threads}: step median {statistics.median(total):.2f} ms "
               f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms{extra}), "
-              f"{len(total)} steps; {benchlib.load_average()}", flush=True)
+              f"calling thread's CPU {statistics.median(cpu):.2f} ms, {len(total)} steps; results sha1 {digest.hexdigest()[:12]}; {benchlib.load_average()}", flush=True)
     return 0
 
 

@@ -5,6 +5,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "row_copy.hpp"
 #include "surfeledit/core/resampling.hpp"
 #include "surfeledit/core/util.hpp"
 
@@ -14,6 +15,20 @@ namespace {
 
 CollisionScene scene_of(const SurfelModel& m, const DeformationFields& f) {
   return CollisionScene{m.positions(), m.normals(), m.radii(), f.regions};
+}
+
+// The first k (in list order) whose row rows[k] has a non-finite position or normal; rows.size() when none.
+std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows) {
+  const double* P = a.positions.data();
+  const double* N = a.normals.data();
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const double* p = P + 3 * rows[k];
+    const double* q = N + 3 * rows[k];
+    // x - x is 0 for every finite x and NaN for an infinite or NaN one: one test for the six values.
+    const double z = (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) + (q[0] - q[0]) + (q[1] - q[1]) + (q[2] - q[2]);
+    if (!(z == 0.0)) return k;
+  }
+  return rows.size();
 }
 
 }  // namespace
@@ -224,7 +239,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   } end_journal{*this};
   SessionImage before = none    ? SessionImage()
                         : whole ? capture_whole(true)
-                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling);
+                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling, step_bent_rows(params));
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   try {
@@ -281,9 +296,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   } else if (tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows()) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
-    const double* from = a.positions.data();
-    double* to = previous.data();
-    for (const Index r : tool_->fields->deformable) std::copy_n(from + 3 * r, 3, to + 3 * r);
+    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}});
   } else {
     previous = a.positions;  // same size as the last step's: no allocation
   }
@@ -296,11 +309,10 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
   // else is refused here, before the detector sees it (deform() then rolls the rows back).
-  for (const Index row : r.moved) {
-    if (!a.positions.row(row).allFinite() || !a.normals.row(row).allFinite()) {
-      throw Error(ErrorCode::InvalidArgument, "translation",
-                  "the step would move surfel " + std::to_string(model_.ids()[row]) + " to a non-finite position");
-    }
+  const std::size_t bad = first_non_finite(a, r.moved);
+  if (bad < r.moved.size()) {
+    throw Error(ErrorCode::InvalidArgument, "translation",
+                "the step would move surfel " + std::to_string(model_.ids()[r.moved[bad]]) + " to a non-finite position");
   }
   ++version_;
   touch_rows(r.moved);
@@ -462,13 +474,17 @@ void EditSession::touch_rows(const IndexList& rows) {
   for (Index r : rows) row_version_[r] = version_;
 }
 
-Changes EditSession::changes_since(std::uint64_t since) const {
+Changes EditSession::changes_since(std::uint64_t since, bool rows) const {
   Changes c;
   if (model_.empty() || since >= version_) return c;
   c.full = since < model_version_;
+  if (rows && c.full) return c;  // every row: none listed
   const IdList& ids = model_.ids();
-  for (std::size_t r = 0; r < ids.size(); ++r)
-    if (c.full || row_version_[r] > since) c.changed.push_back(ids[r]);
+  for (std::size_t r = 0; r < ids.size(); ++r) {
+    if (!c.full && row_version_[r] <= since) continue;
+    if (rows) c.rows.push_back(static_cast<Index>(r));
+    else c.changed.push_back(ids[r]);
+  }
   if (!c.full) {
     for (const auto& [v, id] : removed_log_)
       if (v > since) c.removed.push_back(id);

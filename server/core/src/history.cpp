@@ -18,7 +18,9 @@ std::size_t SessionImage::bytes() const {
   if (rows) {
     // A shared row list counts for its share.
     const std::size_t owners = static_cast<std::size_t>(std::max<long>(1, rows->rows.use_count()));
-    b += (rows->rows ? rows->rows->capacity() * sizeof(Index) / owners : 0) + array_bytes(rows->positions) +
+    const std::size_t bent_owners = static_cast<std::size_t>(std::max<long>(1, rows->bent.use_count()));
+    b += (rows->rows ? rows->rows->capacity() * sizeof(Index) / owners : 0) +
+         (rows->bent ? rows->bent->capacity() * sizeof(Index) / bent_owners : 0) + array_bytes(rows->positions) +
          array_bytes(rows->normals) + array_bytes(rows->tangent_u) + array_bytes(rows->tangent_v) +
          rows->version_runs.capacity() * sizeof(rows->version_runs[0]);
   }

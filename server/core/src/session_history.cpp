@@ -4,23 +4,22 @@
 #include <cstring>
 #include <unordered_set>
 
+#include "row_copy.hpp"
 #include "surfeledit/core/edit_session.hpp"
 
 namespace surfeledit {
 
 namespace {
 
-// Rows `rows` of `a` into `out` (#rows by 3, its buffer reused when the size fits); empty when `a` is empty.
-// (Points are row-major: row r is the 3 doubles at data() + 3 r.)
-void take_rows(const Points& a, const IndexList& rows, Points& out) {
+// Sizes `out` for rows `rows` of `a` (#rows by 3, its buffer reused when the size fits; empty when `a` is
+// empty) and adds the copy that fills it.
+void take_rows(const Points& a, const IndexList& rows, Points& out, std::vector<detail::RowCopy>& copies) {
   if (a.rows() == 0) {
     out.resize(0, 3);
     return;
   }
   out.resize(static_cast<Eigen::Index>(rows.size()), 3);
-  const double* from = a.data();
-  double* to = out.data();
-  for (std::size_t k = 0; k < rows.size(); ++k) std::memcpy(to + 3 * k, from + 3 * rows[k], 3 * sizeof(double));
+  copies.push_back({a.data(), &rows, out.data(), false});
 }
 
 // Row versions of `rows` from their runs.
@@ -38,19 +37,48 @@ void put_rows(Points& a, const IndexList& rows, const Points& values) {
   for (std::size_t k = 0; k < rows.size(); ++k) std::memcpy(to + 3 * rows[k], from + 3 * k, 3 * sizeof(double));
 }
 
+// A rows image's arrays back into the model's (normals and tangents of its `bent` rows only, when it has them).
+void put_image_rows(SurfelArrays& a, const RowsImage& r) {
+  const IndexList& turned = r.bent ? *r.bent : *r.rows;
+  put_rows(a.positions, *r.rows, r.positions);
+  put_rows(a.normals, turned, r.normals);
+  put_rows(a.tangent_u, turned, r.tangent_u);
+  put_rows(a.tangent_v, turned, r.tangent_v);
+}
+
 }  // namespace
 
-SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool detector) {
+std::shared_ptr<const IndexList> EditSession::step_bent_rows(const DeformParams& params) {
+  if (params.angle != 0.0 || !tool_->fields) return nullptr;
+  // Without rotation a row whose blend gradient is 0 keeps its normal and tangents bit for bit
+  // (deformation_kernel.hpp: the flat path); F1 rows have lambda 1 and gradient 0 (DeformationFields).
+  const DeformationFields& f = *tool_->fields;
+  IndexList bent;
+  for (const Index r : f.deformable)
+    if (f.regions[static_cast<std::size_t>(r)] != Region::One) bent.push_back(r);
+  if (bent.size() == f.deformable.size()) return nullptr;
+  // Shared while it does not change (step after step), like the row list.
+  if (!tool_->shared_bent || *tool_->shared_bent != bent) tool_->shared_bent = std::make_shared<const IndexList>(std::move(bent));
+  return tool_->shared_bent;
+}
+
+SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool detector,
+                                       std::shared_ptr<const IndexList> bent) {
   SessionImage image;
   RowsImage r = history_.take_spare();
   // The row list is shared while it does not change (the deformable rows, step after step).
   if (!tool_->shared_rows || *tool_->shared_rows != rows) tool_->shared_rows = std::make_shared<const IndexList>(rows);
   r.rows = tool_->shared_rows;
+  r.bent = std::move(bent);
+  const IndexList& turned = r.bent ? *r.bent : rows;  // rows whose normals and tangents are kept
   const SurfelArrays& a = model_.arrays();
-  take_rows(a.positions, rows, r.positions);
-  take_rows(a.normals, rows, r.normals);
-  take_rows(model_.has_tangents() ? a.tangent_u : Points(), rows, r.tangent_u);
-  take_rows(model_.has_tangents() ? a.tangent_v : Points(), rows, r.tangent_v);
+  std::vector<detail::RowCopy> copies;
+  take_rows(a.positions, rows, r.positions, copies);
+  take_rows(a.normals, turned, r.normals, copies);
+  static const Points none(0, 3);  // (both branches lvalues: no copy of the model's tangents)
+  take_rows(model_.has_tangents() ? a.tangent_u : none, turned, r.tangent_u, copies);
+  take_rows(model_.has_tangents() ? a.tangent_v : none, turned, r.tangent_v, copies);
+  detail::run_row_copies(copies);
   r.version_runs.clear();
   for (Index row : rows) {
     const std::uint64_t v = row_version_[row];
@@ -74,12 +102,8 @@ SessionImage EditSession::whole_before_step(const SessionImage& before) const {
   SessionImage image;
   WholeImage w;
   w.model = model_;
+  put_image_rows(w.model.arrays(), *before.rows);
   const RowsImage& r = *before.rows;
-  SurfelArrays& a = w.model.arrays();
-  put_rows(a.positions, *r.rows, r.positions);
-  put_rows(a.normals, *r.rows, r.normals);
-  put_rows(a.tangent_u, *r.rows, r.tangent_u);
-  put_rows(a.tangent_v, *r.rows, r.tangent_v);
   w.model_version = model_version_;
   w.row_version = row_version_;
   put_versions(w.row_version, *r.rows, r.version_runs);
@@ -156,11 +180,7 @@ void EditSession::restore(const SessionImage& image, bool clone) {
   Tool& t = use(image.tool);
   if (image.rows) {
     const RowsImage& r = *image.rows;
-    SurfelArrays& a = model_.arrays();
-    put_rows(a.positions, *r.rows, r.positions);
-    put_rows(a.normals, *r.rows, r.normals);
-    put_rows(a.tangent_u, *r.rows, r.tangent_u);
-    put_rows(a.tangent_v, *r.rows, r.tangent_v);
+    put_image_rows(model_.arrays(), r);
     put_versions(row_version_, *r.rows, r.version_runs);
     // The detector object the states belong to (the tool may have re-initialised its detector since).
     t.detector = image.detector_object;
@@ -209,7 +229,8 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
   use(entry.image.tool);
-  SessionImage now = entry.image.rows        ? capture_rows(*entry.image.rows->rows)
+  // The rows image of the other side keeps what this one keeps (the step changed no other normals).
+  SessionImage now = entry.image.rows        ? capture_rows(*entry.image.rows->rows, false, true, entry.image.rows->bent)
                      : entry.image.tool_only ? capture_tool(entry.image.tool_only->tool.fields_kept)
                                              : capture_whole(false);
   const IdList ids_before = model_.ids();

@@ -17,7 +17,7 @@ using namespace snapshot_values;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
-constexpr std::uint32_t kFormat = 2;
+constexpr std::uint32_t kFormat = 2;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows
 
 // Pointer tables: index 0 is null, objects from 1 in first-seen order.
 template <typename T>
@@ -48,6 +48,10 @@ struct Tables {
             "' with a hierarchy, clusters, Improved's sweep or an inside model has no snapshot";
     detectors.add(d);
   }
+  void rows_image(const RowsImage& r) {
+    row_lists.add(r.rows.get());
+    row_lists.add(r.bent.get());
+  }
   void image(const SessionImage& im) {
     detector(im.detector_object.get(), "history");
     if (im.detector) {
@@ -57,7 +61,7 @@ struct Tables {
       if (images.list.size() > before) image_owner.push_back(im.detector_object.get());
     }
     if (!im.complete && why.empty()) why = "history: an incomplete image";
-    if (im.rows) row_lists.add(im.rows->rows.get());
+    if (im.rows) rows_image(*im.rows);
     if (im.tool_only) detector(im.tool_only->tool.detector.get(), "history");
     if (im.whole)
       for (const auto& [id, t] : im.whole->tools) detector(t.detector.get(), "history");
@@ -109,6 +113,7 @@ ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) 
 // A rows image (an entry's or a spare buffer); get_rows_image reads it.
 void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r) {
   out.u32(t.row_lists.at(r.rows.get()));
+  out.u32(t.row_lists.at(r.bent.get()));
   out.mat(r.positions);
   out.mat(r.normals);
   out.mat(r.tangent_u);
@@ -150,16 +155,18 @@ void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
 RowsImage get_rows_image(SnapshotReader& in, const Loaded& l) {
   RowsImage r;
   r.rows = Loaded::pick(in, l.row_lists, "image rows");
+  r.bent = Loaded::pick(in, l.row_lists, "image bent rows");
   r.positions = in.mat<Points>("image positions");
   r.normals = in.mat<Points>("image normals");
   r.tangent_u = in.mat<Points>("image tangent_u");
   r.tangent_v = in.mat<Points>("image tangent_v");
   r.version_runs = get_pairs<std::uint64_t, std::uint32_t>(in, "image version runs");
   const std::size_t n = r.rows ? r.rows->size() : 0;
+  const std::size_t nb = r.bent ? r.bent->size() : n;  // rows with normals and tangents
   std::size_t runs = 0;
   for (const auto& run : r.version_runs) runs += run.second;
-  if (static_cast<std::size_t>(r.positions.rows()) != n || static_cast<std::size_t>(r.normals.rows()) != n ||
-      (r.tangent_u.rows() != 0 && static_cast<std::size_t>(r.tangent_u.rows()) != n) ||
+  if (static_cast<std::size_t>(r.positions.rows()) != n || static_cast<std::size_t>(r.normals.rows()) != nb ||
+      (r.tangent_u.rows() != 0 && static_cast<std::size_t>(r.tangent_u.rows()) != nb) ||
       r.tangent_v.rows() != r.tangent_u.rows() || runs != n) {
     in.fail("rows image", "arrays do not match its rows");
   }
@@ -238,7 +245,7 @@ void EditSession::save(SnapshotWriter& out) const {
     t.row_lists.add(tool.shared_rows.get());
   }
   for (const HistoryEntry& e : history_.entries()) t.image(e.image);
-  for (const RowsImage& r : history_.spare()) t.row_lists.add(r.rows.get());
+  for (const RowsImage& r : history_.spare()) t.rows_image(r);
   if (!t.why.empty()) throw Error(ErrorCode::Internal, "snapshot", "session '" + name_ + "' is not snapshottable: " + t.why);
 
   out.u32(kMagic);

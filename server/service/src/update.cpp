@@ -37,12 +37,11 @@ UpdateEvent changes_event(const EditSession& s, const std::string& session, std:
     event.all_rows = event.full;
     return event;
   }
-  const Changes changes = s.changes_since(since);
+  Changes changes = s.changes_since(since, true);
   event.full = changes.full;
   event.all_rows = changes.full;
   if (!changes.full) {
-    append_rows(event.rows, s.model(), changes.changed, "changed");
-    std::sort(event.rows.begin(), event.rows.end());
+    event.rows = std::move(changes.rows);  // ascending
     event.removed = changes.removed;
     std::sort(event.removed.begin(), event.removed.end());
   }

@@ -47,8 +47,13 @@ namespace surfeledit {
 struct RowsImage {
   std::shared_ptr<const IndexList> rows;   // rows moved by the step, ascending (shared by the images of
                                            // steps over the same deformable rows)
-  Points positions, normals;               // #rows by 3
-  Points tangent_u, tangent_v;             // #rows by 3, or empty when the model has no tangents
+  // The rows among `rows` whose normals and tangents are kept, ascending; null: all of `rows`. A step
+  // without rotation leaves the normals and tangents of F1 rows (gradient 0) bit for bit as they were, so
+  // its image keeps those of the other rows only (session_history.cpp, step_bent_rows).
+  std::shared_ptr<const IndexList> bent;
+  Points positions;                        // #rows by 3
+  Points normals;                          // #bent rows by 3 (#rows when `bent` is null)
+  Points tangent_u, tangent_v;             // like normals, or empty when the model has no tangents
   // Per-row versions as runs (version, count), in the order of `rows`: after a step every moved row has
   // the step's version, so there are few runs.
   std::vector<std::pair<std::uint64_t, std::uint32_t>> version_runs;
