@@ -1,17 +1,18 @@
-// Private to kdtree.cpp: the k-d tree's flat layout and its exact descent (docs/algorithms.md §3).
+// Private to the k-d tree's files: its flat layout and its exact descent (docs/algorithms.md §3).
 //
 // Layout. Points are stored in LEAF ORDER (the order the build left them in) as doubles in the tree's
 // local frame, one array per coordinate, so a leaf is one contiguous run of each and a vector scan loads
-// consecutive points' x (y, z) at once; no index indirection is followed while scanning it; `rows[slot]` maps a slot back to the caller's row. Nodes are in depth-first
-// pre-order: an inner node's left child is the next node, its right child is `a`.
+// consecutive points' x (y, z) at once; no index indirection is followed while scanning it; `rows[slot]`
+// maps a slot back to the caller's row. Nodes are in depth-first pre-order: an inner node's left child is
+// the next node, its right child is `a`.
 //
 // Search. The classic incremental-distance descent (Arya & Mount): the squared distance from the query
 // to a node's cell is kept per axis and updated on the one axis a cut changes; a far child is visited
 // when that lower bound times (1 + eps) is <= the current worst accepted distance (inclusive, so ties are
 // never pruned; the bound is summed like a point's distance so rounding cannot lift it above one, and the
-// including files, kdtree.cpp and kdtree_avx2.cpp, are compiled without FMA contraction so both sums round alike). Ties are
-// broken by the smaller slot, so an exact answer is unique whatever the visiting order: a search started
-// from a warm bound returns exactly what a cold one does.
+// including files, kdtree.cpp and kdtree_avx2.cpp, are compiled without FMA contraction so both sums round
+// alike). Ties are broken by the smaller slot, so an exact answer is unique whatever the visiting order: a
+// search started from a warm bound returns exactly what a cold one does.
 #pragma once
 
 #include <algorithm>
