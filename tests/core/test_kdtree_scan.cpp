@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -85,6 +86,17 @@ TEST(KdTreeScan, ScalarAndAutoAreAlwaysAvailable) {
   EXPECT_TRUE(kd_scan_available(KdScan::Scalar));
   // The AVX2 scan needs the CPU's AVX2 (and a build for x86-64).
   if (!__builtin_cpu_supports("avx2")) EXPECT_FALSE(kd_scan_available(KdScan::Avx2));
+  // A scan that does not exist is refused with a typed error naming the field.
+  KdTreeParams p;
+  p.scan = static_cast<KdScan>(9);
+  EXPECT_FALSE(kd_scan_available(p.scan));
+  try {
+    KdTree(Points::Zero(4, 3), p);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(e.field(), "scan");
+  }
 }
 
 TEST(KdTreeScan, VectorScansEqualScalarOnRandomCloudsOffsetsAndScales) {
