@@ -50,11 +50,40 @@ double checked_radius2(double radius) {
   return radius * radius;
 }
 
+const kd::SearchFns* search_for(KdScan scan) {
+  static const kd::SearchFns scalar = kd::search_fns<kd::ScalarScan>();
+  const bool avx2 = kd_scan_available(KdScan::Avx2);
+  switch (scan) {
+    case KdScan::Auto:
+      return avx2 ? kd::avx2_search() : &scalar;
+    case KdScan::Scalar:
+      return &scalar;
+    case KdScan::Avx2:
+      if (avx2) return kd::avx2_search();
+      break;
+  }
+  throw Error(ErrorCode::InvalidArgument, "scan",
+              "leaf scan " + std::to_string(static_cast<int>(scan)) + " is not available on this CPU or build");
+}
+
 void check_k(int k) {
   if (k < 0) throw Error(ErrorCode::InvalidArgument, "k", "k must be >= 0, got " + std::to_string(k));
 }
 
 }  // namespace
+
+void kd::RadiusSet::push(std::uint32_t s, double d2) { out->emplace_back(s, d2); }
+
+bool kd_scan_available(KdScan scan) {
+  switch (scan) {
+    case KdScan::Auto:
+    case KdScan::Scalar:
+      return true;
+    case KdScan::Avx2:
+      return kd::avx2_search() != nullptr && __builtin_cpu_supports("avx2");
+  }
+  return false;
+}
 
 // Trees of at least this many points (about 2 MB of points and nodes, a core's L2 here) answer batches
 // along a Morton curve.
@@ -64,9 +93,11 @@ struct KdTree::Impl {
   KdTreeParams params;
   Vec3 origin = Vec3::Zero();  // centroid of the tree's points, world units
   kd::Tree tree;
+  const kd::SearchFns* search = nullptr;  // the descent with params.scan's leaf scan
 
   Impl(const Points& points, const IndexList* subset, KdTreeParams p) : params(p) {
     check_params(params);
+    search = search_for(params.scan);
     const Eigen::Index n_all = points.rows();
     if (n_all > static_cast<Eigen::Index>(std::numeric_limits<Index>::max())) {
       throw Error(ErrorCode::TooLarge, "points", "too many points: " + std::to_string(n_all));
@@ -178,7 +209,7 @@ Index KdTree::nearest_within(const Vec3& q, double max_dist2, double* dist2) con
   double x[3];
   impl.local(q, x);
   kd::NearestSet set(max_dist2);
-  impl.tree.search(x, set, impl.eps_factor());
+  impl.search->nearest(impl.tree, x, set, impl.eps_factor());
   if (dist2) *dist2 = set.slot == kd::NearestSet::kNone ? std::numeric_limits<double>::infinity() : set.best;
   return set.slot == kd::NearestSet::kNone ? -1 : static_cast<Index>(impl.tree.rows[set.slot]);
 }
@@ -193,7 +224,7 @@ void KdTree::knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& 
   double x[3];
   impl.local(q, x);
   kd::KnnSet set(kk, slots.data(), dist2.data());
-  if (kk > 0) impl.tree.search(x, set, impl.eps_factor());
+  if (kk > 0) impl.search->knn(impl.tree, x, set, impl.eps_factor());
   dist2.resize(set.size());
   indices.resize(set.size());
   for (std::size_t i = 0; i < set.size(); ++i) indices[i] = static_cast<Index>(impl.tree.rows[slots[i]]);
@@ -207,7 +238,7 @@ void KdTree::radius(const Vec3& q, double radius, IndexList& indices, std::vecto
   double x[3];
   impl.local(q, x);
   kd::RadiusSet set{r2, &hits};
-  impl.tree.search(x, set, 1.0);
+  impl.search->radius(impl.tree, x, set, 1.0);
   std::sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) {
     return a.second < b.second || (a.second == b.second && a.first < b.first);
   });
@@ -255,7 +286,7 @@ KnnResult KdTree::knn(const Points& queries, int k) const {
       if (kk == 1) {
         kd::NearestSet set;
         if (warm && n_prev == 1) set.add(impl.tree.dist2(x, prev[0]), prev[0]);
-        impl.tree.search(x, set, eps_factor);
+        impl.search->nearest(impl.tree, x, set, eps_factor);
         found = set.slot == kd::NearestSet::kNone ? 0 : 1;
         slots[0] = set.slot;
         d2[0] = set.best;
@@ -265,7 +296,7 @@ KnnResult KdTree::knn(const Points& queries, int k) const {
           for (std::size_t j = 0; j < kk; ++j) bound = std::max(bound, impl.tree.dist2(x, prev[j]));
         }
         kd::KnnSet set(kk, slots.data(), d2, bound);
-        impl.tree.search(x, set, eps_factor);
+        impl.search->knn(impl.tree, x, set, eps_factor);
         found = set.size();
       }
       for (std::size_t j = 0; j < found; ++j) result.indices(q, j) = static_cast<Index>(impl.tree.rows[slots[j]]);
@@ -295,7 +326,7 @@ RadiusResult KdTree::radius(const Points& queries, double radius) const {
     impl.local(queries.row(q).transpose(), x);
     auto& h = hits[q];
     kd::RadiusSet set{r2, &h};
-    impl.tree.search(x, set, 1.0);
+    impl.search->radius(impl.tree, x, set, 1.0);
     std::sort(h.begin(), h.end(), [](const auto& a, const auto& b) {
       return a.second < b.second || (a.second == b.second && a.first < b.first);
     });
@@ -319,7 +350,7 @@ RadiusResult KdTree::radius(const Points& queries, double radius) const {
 
 std::size_t KdTree::memory_bytes() const {
   const kd::Tree& t = impl_->tree;
-  return sizeof(Impl) + t.xyz.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
+  return sizeof(Impl) + t.coords.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
          t.nodes.capacity() * sizeof(kd::Node);
 }
 

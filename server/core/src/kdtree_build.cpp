@@ -37,9 +37,13 @@ struct Box {
   }
 };
 
-Box box_of(const double* xyz, std::uint32_t b, std::uint32_t e) {
+// The bounding box of slots [b, e) of `t` (its coordinate arrays).
+Box box_of(const Tree& t, std::uint32_t b, std::uint32_t e) {
   Box box = Box::empty();
-  for (std::uint32_t i = b; i < e; ++i) box.add(xyz + 3 * static_cast<std::size_t>(i));
+  for (std::uint32_t i = b; i < e; ++i) {
+    const double p[3] = {t.xs()[i], t.ys()[i], t.zs()[i]};
+    box.add(p);
+  }
   return box;
 }
 
@@ -79,7 +83,7 @@ class MortonBuilder {
                                [bit](std::uint32_t c) { return ((c >> bit) & 1u) == 0; }) -
           code_.begin());
     } else {
-      const Box box = box_of(t_.xyz.data(), b, e);
+      const Box box = box_of(t_, b, e);
       dim = box.widest();
       if (!(box.hi[dim] > box.lo[dim])) return leaf(ni, b, e);  // all points equal
       m = b + (e - b) / 2;
@@ -100,24 +104,24 @@ class MortonBuilder {
   Box leaf(std::uint32_t ni, std::uint32_t b, std::uint32_t e) {
     t_.nodes[ni].a = b;
     t_.nodes[ni].b = e;
-    return box_of(t_.xyz.data(), b, e);
+    return box_of(t_, b, e);
   }
 
   // Reorders slots [b, e) so those before m are <= those after along `dim` (all codes in the range are equal).
   void median_split(std::uint32_t b, std::uint32_t e, std::uint32_t m, int dim) {
     std::vector<std::uint32_t> perm(e - b);
     std::iota(perm.begin(), perm.end(), b);
-    const double* xyz = t_.xyz.data();
-    std::nth_element(perm.begin(), perm.begin() + (m - b), perm.end(), [&](std::uint32_t x, std::uint32_t y) {
-      return xyz[3 * static_cast<std::size_t>(x) + dim] < xyz[3 * static_cast<std::size_t>(y) + dim];
-    });
-    std::vector<double> p(3 * perm.size());
-    std::vector<std::uint32_t> r(perm.size());
-    for (std::size_t i = 0; i < perm.size(); ++i) {
-      std::copy_n(&t_.xyz[3 * static_cast<std::size_t>(perm[i])], 3, &p[3 * i]);
-      r[i] = t_.rows[perm[i]];
+    const double* axis = t_.coords.data() + static_cast<std::size_t>(dim) * t_.stride;
+    std::nth_element(perm.begin(), perm.begin() + (m - b), perm.end(),
+                     [&](std::uint32_t x, std::uint32_t y) { return axis[x] < axis[y]; });
+    std::vector<double> p(perm.size());
+    for (int d = 0; d < 3; ++d) {
+      double* c = t_.coords.data() + static_cast<std::size_t>(d) * t_.stride;
+      for (std::size_t i = 0; i < perm.size(); ++i) p[i] = c[perm[i]];
+      std::copy(p.begin(), p.end(), c + b);
     }
-    std::copy(p.begin(), p.end(), t_.xyz.begin() + 3 * static_cast<std::ptrdiff_t>(b));
+    std::vector<std::uint32_t> r(perm.size());
+    for (std::size_t i = 0; i < perm.size(); ++i) r[i] = t_.rows[perm[i]];
     std::copy(r.begin(), r.end(), t_.rows.begin() + b);
   }
 
@@ -180,12 +184,18 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
     code[i] = c;
   }
   radix_sort(code, rows);
-  t.xyz.resize(3 * n);
   t.rows = std::move(rows);
+  // One array per coordinate in slot order, each followed by its zero tail.
+  t.stride = n + Tree::kTail;
+  t.coords.resize(3 * t.stride);
+  double* c = t.coords.data();
   for (std::size_t i = 0; i < n; ++i) {
     const double* p = points + 3 * static_cast<std::size_t>(t.rows[i]);
-    for (int d = 0; d < 3; ++d) t.xyz[3 * i + d] = p[d] - origin[d];
+    c[i] = p[0] - origin[0];
+    c[t.stride + i] = p[1] - origin[1];
+    c[2 * t.stride + i] = p[2] - origin[2];
   }
+  for (int d = 0; d < 3; ++d) std::fill_n(c + d * t.stride + n, Tree::kTail, 0.0);
   t.nodes.reserve(n / std::max<std::uint32_t>(1, leaf / 2) + 16);
   MortonBuilder(t, code, leaf).build(0, static_cast<std::uint32_t>(n));
   t.nodes.shrink_to_fit();

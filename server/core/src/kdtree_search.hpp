@@ -1,19 +1,21 @@
-// Private to kdtree.cpp: the k-d tree's flat layout and its exact descent (docs/algorithms.md §3).
+// Private to the k-d tree's files: its flat layout and its exact descent (docs/algorithms.md §3).
 //
-// Layout. Points are stored in LEAF ORDER (the order the build left them in), packed x y z doubles in
-// the tree's local frame, so a leaf is one contiguous run of memory and no index indirection is
-// followed while scanning it; `rows[slot]` maps a slot back to the caller's row. Nodes are in depth-first
-// pre-order: an inner node's left child is the next node, its right child is `a`.
+// Layout. Points are stored in LEAF ORDER (the order the build left them in) as doubles in the tree's
+// local frame, one array per coordinate, so a leaf is one contiguous run of each and a vector scan loads
+// consecutive points' x (y, z) at once; no index indirection is followed while scanning it; `rows[slot]`
+// maps a slot back to the caller's row. Nodes are in depth-first pre-order: an inner node's left child is
+// the next node, its right child is `a`.
 //
 // Search. The classic incremental-distance descent (Arya & Mount): the squared distance from the query
 // to a node's cell is kept per axis and updated on the one axis a cut changes; a far child is visited
 // when that lower bound times (1 + eps) is <= the current worst accepted distance (inclusive, so ties are
 // never pruned; the bound is summed like a point's distance so rounding cannot lift it above one, and the
-// including file, kdtree.cpp, is compiled without FMA contraction so both sums round alike). Ties are
-// broken by the smaller slot, so an exact answer is unique whatever the visiting order: a search started
-// from a warm bound returns exactly what a cold one does.
+// including files, kdtree.cpp and kdtree_avx2.cpp, are compiled without FMA contraction so both sums round
+// alike). Ties are broken by the smaller slot, so an exact answer is unique whatever the visiting order: a
+// search started from a warm bound returns exactly what a cold one does.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <type_traits>
@@ -30,7 +32,7 @@ struct Node {
   float hi = 0.0f;      // inner: <= the smallest coordinate along the axis in the right child
   std::uint32_t a = 0;  // inner: index of the right child; leaf: first slot
   std::uint32_t b = 0;  // inner: kInner | axis (0..2); leaf: one past the last slot
-  bool leaf() const { return (b & kInner) == 0; }
+  [[gnu::always_inline]] bool leaf() const { return (b & kInner) == 0; }
 };
 
 // The k = 1 result: the (dist2, slot)-smallest point with dist2 <= the initial bound.
@@ -39,8 +41,8 @@ struct NearestSet {
   std::uint32_t slot;            // winner; kNone while there is none
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   explicit NearestSet(double bound2 = std::numeric_limits<double>::infinity()) : best(bound2), slot(kNone) {}
-  double worst() const { return best; }
-  void add(double d2, std::uint32_t s) {
+  [[gnu::always_inline]] double worst() const { return best; }
+  [[gnu::always_inline]] void add(double d2, std::uint32_t s) {
     if (d2 < best || (d2 == best && s < slot)) {
       best = d2;
       slot = s;
@@ -53,9 +55,9 @@ class KnnSet {
  public:
   KnnSet(std::size_t k, std::uint32_t* slots, double* d2, double bound2 = std::numeric_limits<double>::infinity())
       : k_(k), slots_(slots), d2_(d2), bound_(bound2) {}
-  std::size_t size() const { return n_; }
-  double worst() const { return n_ < k_ ? bound_ : d2_[k_ - 1]; }
-  void add(double d2, std::uint32_t s) {
+  [[gnu::always_inline]] std::size_t size() const { return n_; }
+  [[gnu::always_inline]] double worst() const { return n_ < k_ ? bound_ : d2_[k_ - 1]; }
+  [[gnu::always_inline]] void add(double d2, std::uint32_t s) {
     if (n_ == k_ && !(d2 < d2_[k_ - 1] || (d2 == d2_[k_ - 1] && s < slots_[k_ - 1]))) return;
     if (n_ < k_ && d2 > bound_) return;
     std::size_t j = n_ < k_ ? n_++ : k_ - 1;
@@ -78,95 +80,158 @@ class KnnSet {
 struct RadiusSet {
   double r2;
   std::vector<std::pair<std::uint32_t, double>>* out;
-  double worst() const { return r2; }
-  void add(double d2, std::uint32_t s) {
-    if (d2 <= r2) out->emplace_back(s, d2);
+  [[gnu::always_inline]] double worst() const { return r2; }
+  [[gnu::always_inline]] void add(double d2, std::uint32_t s) {
+    if (d2 <= r2) push(s, d2);
   }
+  // Out of line (kdtree.cpp): the vector's growth is compiled once, for the baseline.
+  void push(std::uint32_t s, double d2);
 };
 
 struct Tree {
-  std::vector<double> xyz;          // 3 x #N, leaf order, local frame (minus `origin` of the owner)
+  // Points in leaf order, local frame (minus `origin` of the owner), stored by coordinate: x of every slot, then
+  // y, then z, each run `stride` = #N + kTail long; the kTail entries past the last slot are zero and only ever
+  // read by the masked lanes of a vector scan that starts near the end (kdtree_avx2.cpp).
+  static constexpr std::size_t kTail = 8;
+  std::vector<double> coords;       // 3 x stride
+  std::size_t stride = 0;
   std::vector<std::uint32_t> rows;  // slot -> caller's row
   std::vector<Node> nodes;          // pre-order; nodes[0] is the root when non-empty
   double box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};  // bounding box of all points, local frame
 
   std::size_t size() const { return rows.size(); }
+  [[gnu::always_inline]] const double* xs() const { return coords.data(); }
+  [[gnu::always_inline]] const double* ys() const { return coords.data() + stride; }
+  [[gnu::always_inline]] const double* zs() const { return coords.data() + 2 * stride; }
 
-  double dist2(const double* q, std::uint32_t s) const {
-    const double* p = &xyz[3 * static_cast<std::size_t>(s)];
-    const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+  [[gnu::always_inline]] double dist2(const double* q, std::uint32_t s) const {
+    const double dx = q[0] - xs()[s], dy = q[1] - ys()[s], dz = q[2] - zs()[s];
     return dx * dx + dy * dy + dz * dz;
   }
+};
 
-  // Feeds `set` every point whose dist2 could beat set.worst(); q in the local frame.
-  // eps_factor = 1 + eps (1 for exact search).
-  template <class Set>
-  void search(const double* q, Set& set, double eps_factor) const {
-    if (nodes.empty()) return;
-    double off[3];
-    for (int d = 0; d < 3; ++d) {
-      const double below = box_lo[d] - q[d], above = q[d] - box_hi[d];
-      off[d] = below > 0.0 ? below * below : (above > 0.0 ? above * above : 0.0);
+// The leaf scan of the baseline build: one point at a time. A vector scan (kdtree_avx2.cpp) computes every
+// point's dist2 with the same operations in the same order (no FMA contraction in either file), so the bits and
+// hence the winners are the same.
+struct ScalarScan {
+  // k = 1: the leaf's (dist2, slot)-smallest point first, without a data-dependent branch per point (slots
+  // ascend within a leaf, so the first strict minimum is the smallest slot among equals), then one add(): the
+  // same lexicographic minimum as adding every point (RESULTS §39). Slots [a, b), a < b.
+  static void nearest(const Tree& t, const double* q, std::uint32_t a, std::uint32_t b, NearestSet& set) {
+    const double qx = q[0], qy = q[1], qz = q[2];
+    const double *X = t.xs(), *Y = t.ys(), *Z = t.zs();
+    double bd = t.dist2(q, a);  // the first point seeds the minimum (even an overflowing +inf one)
+    std::uint32_t bs = a;
+    for (std::uint32_t s = a + 1; s < b; ++s) {
+      const double dx = qx - X[s], dy = qy - Y[s], dz = qz - Z[s];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      bs = d2 < bd ? s : bs;
+      bd = d2 < bd ? d2 : bd;
     }
-    const double mind2 = off[0] + off[1] + off[2];
-    if (mind2 * eps_factor <= set.worst()) descend(0, q, off, set, eps_factor);
+    set.add(bd, bs);
+  }
+  // Any other set: every point in slot order.
+  template <class Set>
+  static void each(const Tree& t, const double* q, std::uint32_t a, std::uint32_t b, Set& set) {
+    for (std::uint32_t s = a; s < b; ++s) set.add(t.dist2(q, s), s);
+  }
+};
+
+// The exact descent over `t` with leaves scanned by `Scan`: feeds `set` every point whose dist2 could beat
+// set.worst(); q in the local frame; eps_factor = 1 + eps (1 for exact search). Near child first down to a
+// leaf; each far child passed on the way is stacked with its cell bound and visited, latest first, if the bound
+// still admits it once the leaf is scanned: the order of the classic recursion, without a call per node and
+// with the choice of the near child made without a branch.
+template <class Scan, class Set>
+class Descent {
+ public:
+  Descent(const Tree& t, const double* q, Set& set, double eps_factor) : t_(t), q_(q), set_(set), eps_(eps_factor) {}
+
+  void run() {
+    if (t_.nodes.empty()) return;
+    Far cell{0, 0.0, {0.0, 0.0, 0.0}};
+    for (int d = 0; d < 3; ++d) {
+      const double below = t_.box_lo[d] - q_[d], above = q_[d] - t_.box_hi[d];
+      cell.off[d] = below > 0.0 ? below * below : (above > 0.0 ? above * above : 0.0);
+    }
+    cell.d2 = cell.off[0] + cell.off[1] + cell.off[2];
+    const Node* nodes = t_.nodes.data();
+    std::size_t depth = 0;
+    if (!(cell.d2 * eps_ <= set_.worst())) return;
+    for (;;) {
+      std::uint32_t ni = cell.node;
+      double ox = cell.off[0], oy = cell.off[1], oz = cell.off[2];
+      while (!nodes[ni].leaf()) {
+        const Node& nd = nodes[ni];
+        const std::uint32_t d = nd.b & 3u;
+        const double to_left = q_[d] - static_cast<double>(nd.lo);   // > 0: q lies beyond the left child's extent
+        const double to_right = static_cast<double>(nd.hi) - q_[d];  // > 0: q lies before the right child's extent
+        const bool left_near = to_left < to_right;
+        // The far child's gap: to_right when the left child is near, else to_left, i.e. the larger one; its
+        // square when positive, else 0 (max(gap, 0)^2 has the same bits as gap > 0 ? gap * gap : 0).
+        const double gap = std::max(std::max(to_left, to_right), 0.0);
+        Far& f = stack_[depth++];
+        f.node = left_near ? nd.a : ni + 1;
+        const double cut = gap * gap;
+        f.off[0] = d == 0 ? cut : ox;
+        f.off[1] = d == 1 ? cut : oy;
+        f.off[2] = d == 2 ? cut : oz;
+        // Summed afresh, in the leaf's order (x, y, z): every per-axis term is <= the same term of any point
+        // in the cell and rounding is monotonic, so the computed bound never exceeds a computed point distance
+        // (an incremental mind2 - saved + cut could, by an ulp, and prune a tie).
+        f.d2 = f.off[0] + f.off[1] + f.off[2];
+        ni = left_near ? ni + 1 : nd.a;
+      }
+      const Node& leaf = nodes[ni];
+      if constexpr (std::is_same_v<Set, NearestSet>) {
+        if (leaf.a != leaf.b) Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
+      } else {
+        Scan::each(t_, q_, leaf.a, leaf.b, set_);
+      }
+      do {
+        if (depth == 0) return;
+        cell = stack_[--depth];
+      } while (!(cell.d2 * eps_ <= set_.worst()));
+    }
   }
 
  private:
-  template <class Set>
-  void descend(std::uint32_t ni, const double* q, double* off, Set& set, double eps_factor) const {
-    const Node& nd = nodes[ni];
-    if (nd.leaf()) {
-      const double qx = q[0], qy = q[1], qz = q[2];
-      const double* p = &xyz[3 * static_cast<std::size_t>(nd.a)];
-      if constexpr (std::is_same_v<Set, NearestSet>) {
-        // k = 1: the leaf's (dist2, slot)-smallest point first, without a data-dependent branch per point
-        // (slots ascend within a leaf, so the first strict minimum is the smallest slot among equals),
-        // then one add(): the same lexicographic minimum as adding every point (RESULTS §39).
-        if (nd.a == nd.b) return;
-        double bd = dist2(q, nd.a);  // the first point seeds the minimum (even an overflowing +inf one)
-        std::uint32_t bs = nd.a;
-        p += 3;
-        for (std::uint32_t s = nd.a + 1; s < nd.b; ++s, p += 3) {
-          const double dx = qx - p[0], dy = qy - p[1], dz = qz - p[2];
-          const double d2 = dx * dx + dy * dy + dz * dz;
-          bs = d2 < bd ? s : bs;
-          bd = d2 < bd ? d2 : bd;
-        }
-        set.add(bd, bs);
-        return;
-      }
-      for (std::uint32_t s = nd.a; s < nd.b; ++s, p += 3) {
-        const double dx = qx - p[0], dy = qy - p[1], dz = qz - p[2];
-        set.add(dx * dx + dy * dy + dz * dz, s);
-      }
-      return;
-    }
-    const std::uint32_t d = nd.b & 3u;
-    const double to_left = q[d] - static_cast<double>(nd.lo);   // > 0: q lies beyond the left child's extent
-    const double to_right = static_cast<double>(nd.hi) - q[d];  // > 0: q lies before the right child's extent
-    std::uint32_t near, far;
-    double cut;
-    if (to_left < to_right) {  // nearer the left child
-      near = ni + 1;
-      far = nd.a;
-      cut = to_right > 0.0 ? to_right * to_right : 0.0;
-    } else {
-      near = nd.a;
-      far = ni + 1;
-      cut = to_left > 0.0 ? to_left * to_left : 0.0;
-    }
-    descend(near, q, off, set, eps_factor);
-    const double saved = off[d];
-    off[d] = cut;
-    // Summed afresh, in the leaf's order (x, y, z): every per-axis term is <= the same term of any point
-    // in the cell and rounding is monotonic, so the computed bound never exceeds a computed point distance
-    // (an incremental mind2 - saved + cut could, by an ulp, and prune a tie).
-    const double far_d2 = off[0] + off[1] + off[2];
-    if (far_d2 * eps_factor <= set.worst()) descend(far, q, off, set, eps_factor);
-    off[d] = saved;
-  }
+  struct Far {
+    std::uint32_t node;  // a far child not visited yet
+    double d2;           // squared distance from q to its cell (a lower bound of its points')
+    double off[3];       // the same per axis
+  };
+  // A path holds at most 30 Morton cuts (each on a lower code bit than its parent's) and 32 median cuts (each
+  // halving a range of equal codes, < 2^32 points): 62 inner nodes, so 64 far children at most.
+  static constexpr std::size_t kMaxDepth = 64;
+
+  const Tree& t_;
+  const double* q_;
+  Set& set_;
+  double eps_;
+  Far stack_[kMaxDepth];
 };
+
+// One search entry per set type, for one leaf scan; a tree's owner picks the table once (kdtree.cpp).
+struct SearchFns {
+  void (*nearest)(const Tree&, const double* q, NearestSet&, double eps_factor);
+  void (*knn)(const Tree&, const double* q, KnnSet&, double eps_factor);
+  void (*radius)(const Tree&, const double* q, RadiusSet&, double eps_factor);
+};
+
+template <class Scan, class Set>
+void search_with(const Tree& t, const double* q, Set& set, double eps_factor) {
+  Descent<Scan, Set>(t, q, set, eps_factor).run();
+}
+
+template <class Scan>
+constexpr SearchFns search_fns() {
+  return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>};
+}
+
+// The AVX2 leaf scans' table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then never
+// chosen). The caller checks the CPU (__builtin_cpu_supports).
+const SearchFns* avx2_search();
 
 // Spreads the low 10 bits of v to every third bit (Morton interleave: x, y, z codes -> one 30-bit code).
 inline std::uint32_t spread10(std::uint32_t v) {

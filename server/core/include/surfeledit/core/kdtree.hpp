@@ -15,11 +15,22 @@
 
 namespace surfeledit {
 
+// How a leaf's points are scanned. Every scan gives the same bits (the same operations per point, no fused
+// multiply-adds), so the choice changes speed only; tests and benchmarks pin one to compare.
+enum class KdScan : std::uint8_t {
+  Auto = 0,    // the widest this CPU has
+  Scalar = 1,  // one point at a time (any CPU)
+  Avx2 = 2,    // four points at a time (CPUs with AVX2)
+};
+// Whether `scan` can run on this CPU and build (Auto and Scalar always can).
+bool kd_scan_available(KdScan scan);
+
 struct KdTreeParams {
   int leaf_size = 10;  // max points per leaf ("bucket size"; the thesis found ~10 best for small k)
   int threads = 0;     // worker threads for batch queries; 0 = all hardware threads
   double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
+  KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
 };
 
 // kNN result for #Q queries: #Q by k, row-major. Rows with fewer than k hits

@@ -1,0 +1,98 @@
+// The k-d tree's leaf scans four points at a time (AVX2; kdtree_search.hpp). This file alone is built with
+// -mavx2 and without fused multiply-adds, so every lane computes dx * dx + dy * dy + dz * dz exactly as the
+// scalar scan does and the winners are bit-identical; KdTree uses it only on a CPU that has AVX2
+// (kd_scan_available). The scan type has internal linkage, so the descent instantiated here (Descent<Avx2Scan,
+// .>) is this file's own; the shared helpers it inlines (the sets' add / worst) are forced inline, so no AVX
+// copy of them can stand in for the baseline's at link time.
+#include "kdtree_search.hpp"
+
+#if defined(__AVX2__) && !defined(__FMA__)
+#include <immintrin.h>
+#endif
+
+namespace surfeledit::kd {
+
+#if defined(__AVX2__) && !defined(__FMA__)
+namespace {
+
+// kLanes[r]: the first r of 4 lanes set (a leaf's last, partial vector; the lanes past the leaf read the next
+// leaf's points or the tree's zero tail and are never fed to the set).
+alignas(32) constexpr std::int64_t kLanes[5][4] = {
+    {0, 0, 0, 0}, {-1, 0, 0, 0}, {-1, -1, 0, 0}, {-1, -1, -1, 0}, {-1, -1, -1, -1}};
+
+struct Avx2Scan {
+  struct Query {
+    __m256d x, y, z;
+    explicit Query(const double* q) : x(_mm256_set1_pd(q[0])), y(_mm256_set1_pd(q[1])), z(_mm256_set1_pd(q[2])) {}
+  };
+  // dist2 of slots s .. s + 3, summed as the scalar scan sums it.
+  static __m256d dist2(const Tree& t, const Query& q, std::uint32_t s) {
+    const __m256d dx = _mm256_sub_pd(q.x, _mm256_loadu_pd(t.xs() + s));
+    const __m256d dy = _mm256_sub_pd(q.y, _mm256_loadu_pd(t.ys() + s));
+    const __m256d dz = _mm256_sub_pd(q.z, _mm256_loadu_pd(t.zs() + s));
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+  }
+  static __m256d lanes(std::uint32_t r) {
+    return _mm256_castsi256_pd(_mm256_load_si256(reinterpret_cast<const __m256i*>(kLanes[r < 4 ? r : 4])));
+  }
+
+  // The smallest of v's four lanes, in every lane.
+  static __m256d lane_min(__m256d v) {
+    v = _mm256_min_pd(v, _mm256_permute2f128_pd(v, v, 1));
+    return _mm256_min_pd(v, _mm256_permute_pd(v, 5));
+  }
+
+  // k = 1: per lane the first strict minimum (slots ascend along a lane; slots are kept as doubles, exact below
+  // 2^53), then the smallest dist2 of the lanes and the smallest slot among the lanes holding it: the
+  // lexicographic (dist2, slot) minimum, the scalar scan's winner, without a branch. A leaf whose every point is
+  // at +inf (overflow) leaves every lane empty; the scalar scan then offers its first point, and so does this one.
+  static void nearest(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
+    const Query q(qp);
+    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    __m256d best = inf, best_slot = inf;
+    __m256d slot = _mm256_setr_pd(a, a + 1.0, a + 2.0, a + 3.0);
+    const __m256d four = _mm256_set1_pd(4.0);
+    for (std::uint32_t s = a; s < b; s += 4) {
+      const __m256d d2 = dist2(t, q, s);
+      const __m256d lt = _mm256_and_pd(_mm256_cmp_pd(d2, best, _CMP_LT_OQ), lanes(b - s));
+      best = _mm256_blendv_pd(best, d2, lt);
+      best_slot = _mm256_blendv_pd(best_slot, slot, lt);
+      slot = _mm256_add_pd(slot, four);
+    }
+    const __m256d m = lane_min(best);
+    const __m256d k = lane_min(_mm256_blendv_pd(inf, best_slot, _mm256_cmp_pd(best, m, _CMP_EQ_OQ)));
+    const double ks = _mm256_cvtsd_f64(k);
+    set.add(_mm256_cvtsd_f64(m), ks < std::numeric_limits<double>::infinity() ? static_cast<std::uint32_t>(ks) : a);
+  }
+
+  // Any other set: the points that could enter it (dist2 <= its worst at the vector's start, which only
+  // shrinks), in slot order; add() re-checks each against the worst as it is then, as the scalar scan does.
+  template <class Set>
+  static void each(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, Set& set) {
+    const Query q(qp);
+    alignas(32) double d[4];
+    for (std::uint32_t s = a; s < b; s += 4) {
+      const __m256d d2 = dist2(t, q, s);
+      const __m256d le = _mm256_and_pd(_mm256_cmp_pd(d2, _mm256_set1_pd(set.worst()), _CMP_LE_OQ), lanes(b - s));
+      unsigned bits = static_cast<unsigned>(_mm256_movemask_pd(le));
+      if (bits == 0) continue;
+      _mm256_store_pd(d, d2);
+      for (; bits != 0; bits &= bits - 1) {
+        const unsigned i = static_cast<unsigned>(__builtin_ctz(bits));
+        set.add(d[i], s + i);
+      }
+    }
+  }
+};
+
+}  // namespace
+
+const SearchFns* avx2_search() {
+  static const SearchFns fns = search_fns<Avx2Scan>();
+  return &fns;
+}
+#else
+const SearchFns* avx2_search() { return nullptr; }
+#endif
+
+}  // namespace surfeledit::kd
