@@ -183,6 +183,7 @@ struct DetectorRun {
     detector = make_detector(settings);
     detector->reset(CollisionScene{positions, scene.arrays.normals, scene.arrays.radii, regions});
   }
+  CollisionStats last;  // the last step's stats
   // Moves the ball by t (untimed by the caller), then detects; returns {thread CPU ms, re-tested}.
   std::pair<double, Index> step(const Vec3& t) {
     previous = positions;
@@ -192,12 +193,13 @@ struct DetectorRun {
                                                previous);
     const double cpu = thread_cpu_ms() - c0;
     benchmark::DoNotOptimize(r.colliding.data());
+    last = r.stats;
     return {cpu, r.stats.tested};
   }
 };
 
 void BM_DetectRun(benchmark::State& state) {
-  std::vector<double> cpu;
+  std::vector<double> cpu, nv, np, nu, queries;
   const Vec3 t(0.0, 0.0, -2.0 * Piercing::get().z0 / kSteps);
   for (auto _ : state) {
     state.PauseTiming();
@@ -207,10 +209,19 @@ void BM_DetectRun(benchmark::State& state) {
       // The move is timed too (a copy and 60k row updates, the same in A and B).
       cpu.push_back(run.step(t).first);
       state.PauseTiming();
+      nv.push_back(static_cast<double>(run.last.nv));
+      np.push_back(static_cast<double>(run.last.np));
+      nu.push_back(static_cast<double>(run.last.nu));
+      queries.push_back(static_cast<double>(run.last.queries));
     }
     state.ResumeTiming();
   }
   state.counters["detect_cpu_median_ms"] = median(cpu);
+  // Medians over the steps of the broad phase's counts (0 without a hierarchy) and the queries.
+  state.counters["nv_median"] = median(nv);
+  state.counters["np_median"] = median(np);
+  state.counters["nu_median"] = median(nu);
+  state.counters["queries_median"] = median(queries);
   state.counters["detect_cpu_max_ms"] = *std::max_element(cpu.begin(), cpu.end());
 }
 

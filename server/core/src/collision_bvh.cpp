@@ -127,8 +127,17 @@ class HierarchicalDetector final : public CollisionDetector {
     extended_ = std::move(extended);
     deformable_ = std::move(deformable);
     rows_ = rows;
-    reach_ = scene.radii;
+    bounded_ = def_ && def_->bounded();
+    if (bounded_) {
+      reach_ = Values();
+      prev_radius_.resize(deformable_.size());
+      for (std::size_t q = 0; q < deformable_.size(); ++q) prev_radius_[q] = scene.radii[deformable_[q]];
+    } else {
+      reach_ = scene.radii;
+      prev_radius_.clear();
+    }
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     inserted_nu_ = 0;
     rebuilds_adopted_ = 0;
     extended_bytes_ = extended_bytes;
@@ -141,19 +150,30 @@ class HierarchicalDetector final : public CollisionDetector {
     require_scene_rows(scene, rows_, "detect");
     if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
     adopt_rebuilt_tree();
-    // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
-    for (Index r : deformable_) {
-      const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
-      reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
-    }
-    std::fill(candidate_.begin(), candidate_.end(), 0);
+    for (Index r : marked_) candidate_[static_cast<std::size_t>(r)] = 0;  // last step's candidates
+    marked_.clear();
     bvh::BvhCounters counters;
     counters.nu = inserted_nu_;  // boxes grown by insertions since the last step
     inserted_nu_ = 0;
     Index candidates = 0;
+    if (!bounded_) {
+      // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
+      for (Index r : deformable_) {
+        const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
+        reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
+      }
+    }
     if (def_) {
-      counters += def_->refit(scene.positions, reach_);
-      auto mark = [&](Index row) { candidate_[static_cast<std::size_t>(row)] = 1; };
+      if (bounded_) {
+        const Shift sh = step_shift(scene, previous);
+        counters += def_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
+      } else {
+        counters += def_->refit(scene.positions, reach_);
+      }
+      auto mark = [&](Index row) {
+        candidate_[static_cast<std::size_t>(row)] = 1;
+        marked_.push_back(row);
+      };
       std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
       candidates = counters.np;
     } else {
@@ -163,6 +183,7 @@ class HierarchicalDetector final : public CollisionDetector {
               const bvh::Sphere ball{row3(scene.positions, r), reach_[r]};
               bvh::query_surfel(zero, ball, [&](std::int32_t) {
                 candidate_[static_cast<std::size_t>(r)] = 1;
+                marked_.push_back(r);
                 ++candidates;
                 return false;  // one overlapping leaf makes it a candidate
               }, counters, fifo_);
@@ -209,10 +230,17 @@ class HierarchicalDetector final : public CollisionDetector {
     const IndexList new_row = remap_rows(keep);
     std::visit([&](auto& zero) { zero.on_removed(keep); }, zero_);
     if (def_) def_->on_removed(keep);
+    if (bounded_) {
+      std::size_t w = 0;
+      for (std::size_t q = 0; q < deformable_.size(); ++q)
+        if (keep[static_cast<std::size_t>(deformable_[q])]) prev_radius_[w++] = prev_radius_[q];
+      prev_radius_.resize(w);
+    }
     deformable_ = remap_list(deformable_, keep, new_row);
-    compact(reach_, keep);
-    rows_ = static_cast<Index>(reach_.size());
+    if (!bounded_) compact(reach_, keep);
+    rows_ = static_cast<Index>(std::count(keep.begin(), keep.end(), true));
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     ++topology_;
   }
 
@@ -225,16 +253,18 @@ class HierarchicalDetector final : public CollisionDetector {
     } else {
       narrow_->on_inserted(scene, parents);  // validates the parents
     }
-    reach_.conservativeResize(rows_ + added);
+    if (!bounded_) reach_.conservativeResize(rows_ + added);
     for (Index k = 0; k < added; ++k) {
-      reach_[rows_ + k] = scene.radii[rows_ + k];
+      if (bounded_) prev_radius_.push_back(scene.radii[rows_ + k]);
+      else reach_[rows_ + k] = scene.radii[rows_ + k];
       deformable_.push_back(rows_ + k);
     }
     // Each child joins its parent's leaf (zero tree: ignored, the parents are deformable).
     std::visit([&](auto& zero) { zero.on_inserted(scene.positions, scene.radii, parents); }, zero_);
-    if (def_) inserted_nu_ += def_->on_inserted(scene.positions, reach_, parents).nu;
+    if (def_) inserted_nu_ += def_->on_inserted(scene.positions, bounded_ ? scene.radii : reach_, parents).nu;
     rows_ += added;
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     ++topology_;
   }
 
@@ -256,7 +286,8 @@ class HierarchicalDetector final : public CollisionDetector {
                      std::visit([](const auto& zero) { return zero.memory_bytes(); }, zero_));
     if (def_) out.emplace_back("bvh_deformable_aabb", def_->memory_bytes());
     out.emplace_back("bvh_scratch", static_cast<std::size_t>(reach_.size()) * sizeof(double) + candidate_.capacity() +
-                                        deformable_.capacity() * sizeof(Index));
+                                        deformable_.capacity() * sizeof(Index) +
+                                        (prev_radius_.capacity() + marked_.capacity()) * sizeof(double));
     return out;
   }
 
@@ -289,8 +320,12 @@ class HierarchicalDetector final : public CollisionDetector {
       if (!image->narrow) return nullptr;
     }
     if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
-    image->reach.reserve(deformable_.size());
-    for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    if (bounded_) {
+      image->reach = prev_radius_;  // the radii the next step's shift compares with
+    } else {
+      image->reach.reserve(deformable_.size());
+      for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    }
     image->rows = rows_;
     image->step = step_;
     image->evaluations = evaluations_;
@@ -307,7 +342,8 @@ class HierarchicalDetector final : public CollisionDetector {
     if (extended_) *extended_ = *mine->extended;
     else narrow_->restore_image(*mine->narrow);
     if (def_) *def_ = *mine->def;
-    for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
+    if (bounded_) prev_radius_ = mine->reach;
+    else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
     step_ = mine->step;
     evaluations_ = mine->evaluations;
     inserted_nu_ = mine->inserted_nu;
@@ -326,7 +362,10 @@ class HierarchicalDetector final : public CollisionDetector {
     out->deformable_ = deformable_;
     out->rows_ = rows_;
     out->reach_ = reach_;
+    out->bounded_ = bounded_;
+    out->prev_radius_ = prev_radius_;
     out->candidate_ = candidate_;
+    out->marked_ = marked_;
     out->topology_ = topology_;
     out->step_ = step_;
     out->evaluations_ = evaluations_;
@@ -345,7 +384,7 @@ class HierarchicalDetector final : public CollisionDetector {
     std::shared_ptr<const DetectorImage> narrow;             // narrow phase's image (without extended)
     std::shared_ptr<const bvh::ExtendedNarrow> extended;     // extended narrow phase (with it)
     std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;          // the deformable tree (with one)
-    std::vector<double> reach;                               // per deformable row
+    std::vector<double> reach;                               // per deformable row (bounded: its radius)
     Index rows = 0;
     std::int64_t step = 0, evaluations = 0;
     Index inserted_nu = 0, rebuilds_adopted = 0;
@@ -390,6 +429,43 @@ class HierarchicalDetector final : public CollisionDetector {
     return ZeroTree(std::in_place_index<0>, scene.positions, scene.radii, zero_rows, h_.tree);
   }
 
+  // One pass over the deformable rows for a bounded tree's step (bvh.hpp, step_bounded): the largest
+  // own displacement |p - previous| (reach) and that plus the largest radius growth since the last step
+  // (shift); prev_radius_ takes the new radii. Squared lengths in the loop, one square root.
+  struct Shift {
+    double shift = 0.0, reach = 0.0;  // model units
+  };
+  Shift step_shift(const CollisionScene& scene, const Points& previous) {
+    const double* p = scene.positions.data();
+    const double* q = previous.data();
+    const double* rad = scene.radii.data();
+    double t2a = 0.0, t2b = 0.0, grow = 0.0;
+    const std::size_t n = deformable_.size();
+    auto d2 = [&](Index r) {
+      const double* x = p + 3 * static_cast<std::ptrdiff_t>(r);
+      const double* y = q + 3 * static_cast<std::ptrdiff_t>(r);
+      const double a = x[0] - y[0], b = x[1] - y[1], c = x[2] - y[2];
+      return a * a + b * b + c * c;
+    };
+    std::size_t k = 0;
+    for (; k + 1 < n; k += 2) {  // two chains of maxima
+      t2a = std::max(t2a, d2(deformable_[k]));
+      t2b = std::max(t2b, d2(deformable_[k + 1]));
+    }
+    if (k < n) t2a = std::max(t2a, d2(deformable_[k]));
+    for (k = 0; k < n; ++k) {
+      const double r = rad[deformable_[k]];
+      if (r != prev_radius_[k]) {
+        grow = std::max(grow, r - prev_radius_[k]);
+        prev_radius_[k] = r;
+      }
+    }
+    Shift s;
+    s.reach = std::sqrt(std::max(t2a, t2b)) * (1.0 + 1e-12);
+    s.shift = (s.reach + grow) * (1.0 + 1e-12);
+    return s;
+  }
+
   // Swaps in a finished background rebuild (never waits); dropped when rows changed since it started.
   void adopt_rebuilt_tree() {
     if (!def_ || !rebuilder_.ready()) return;
@@ -399,6 +475,8 @@ class HierarchicalDetector final : public CollisionDetector {
     last_rebuild_ms_ = rebuilder_.last_build_ms();
     if (tag != topology_) return;
     def_ = std::move(tree);
+    // Its boxes are of the rows where they were when it started (an undo may have moved them since).
+    if (bounded_) def_->refit_all_next_step();
     ++rebuilds_adopted_;
   }
 
@@ -411,8 +489,11 @@ class HierarchicalDetector final : public CollisionDetector {
   bvh::BvhRebuilder<bvh::Aabb> rebuilder_;          // background rebuild of def_
   IndexList deformable_;                            // rows with region != Zero, ascending
   Index rows_ = 0;                                  // rows of the model the state refers to
-  Values reach_;                                    // #P: radius + own displacement this step (deformable rows)
+  Values reach_;                                    // #P: radius + own displacement this step (not bounded)
+  bool bounded_ = false;                            // def_ uses the bounded update (no reach_)
+  std::vector<double> prev_radius_;                 // bounded: by deformable_ index, its radius at the last step
   std::vector<std::uint8_t> candidate_;             // #P: 1 = candidate this step
+  IndexList marked_;                                // the rows candidate_ holds set (cleared at the next step)
   std::vector<std::int32_t> fifo_;                  // scratch of the surfel/tree queue
   std::uint64_t topology_ = 0;                      // bumped by reset, insertions and removals
   std::int64_t step_ = 0;                           // steps of the extended narrow phase
