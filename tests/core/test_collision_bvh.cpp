@@ -58,7 +58,8 @@ std::vector<HierarchyParams> every_configuration(bool extended) {
   std::vector<HierarchyParams> out;
   for (auto zero : {ZeroHierarchy::Aabb, ZeroHierarchy::Obb, ZeroHierarchy::Sphere})
     for (auto def : {DeformableHierarchy::None, DeformableHierarchy::Aabb})
-      for (auto update : {bvh::UpdateMode::BottomUp, bvh::UpdateMode::TopDown, bvh::UpdateMode::Hybrid})
+      for (auto update : {bvh::UpdateMode::BottomUp, bvh::UpdateMode::TopDown, bvh::UpdateMode::Hybrid,
+                          bvh::UpdateMode::Bounded})
         for (auto sat : {bvh::SatMode::Lite, bvh::SatMode::Full}) {
           HierarchyParams h;
           h.zero = zero;
