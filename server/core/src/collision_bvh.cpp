@@ -127,7 +127,9 @@ class HierarchicalDetector final : public CollisionDetector {
     extended_ = std::move(extended);
     deformable_ = std::move(deformable);
     rows_ = rows;
-    bounded_ = def_ && def_->bounded();
+    bounded_ = !def_ || def_->bounded();
+    zero_bounds_ = bvh::Aabb{};
+    for (Index r : zero_rows) zero_bounds_.expand(row3(scene.positions, r), scene.radii[r]);
     if (bounded_) {
       reach_ = Values();
       prev_radius_.resize(deformable_.size());
@@ -156,14 +158,19 @@ class HierarchicalDetector final : public CollisionDetector {
     counters.nu = inserted_nu_;  // boxes grown by insertions since the last step
     inserted_nu_ = 0;
     Index candidates = 0;
-    if (!bounded_) {
+    // Temporal tests every surfel that leaves its sphere whether a candidate or not (not_candidate() is
+    // update()): the broad phase cannot spare it anything, so it is skipped (exactly Temporal, nv = np = 0).
+    const bool broad = extended_ || params_.algorithm != CollisionAlgorithm::Temporal;
+    if (!broad) {
+    } else if (!bounded_) {
       // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
       for (Index r : deformable_) {
         const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
         reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
       }
     }
-    if (def_) {
+    if (!broad) {
+    } else if (def_) {
       if (bounded_) {
         const Shift sh = step_shift(scene, previous);
         counters += def_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
@@ -177,10 +184,22 @@ class HierarchicalDetector final : public CollisionDetector {
       std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
       candidates = counters.np;
     } else {
+      // Surfel/tree: each ball (p, r + the step's largest |t|) -- larger than (p, r + |t|), so no candidate
+      // is lost -- first against the box of all zero balls, then down the zero tree.
+      const double reach = step_shift(scene, previous).reach;
+      const double* pos = scene.positions.data();
+      const double* rad = scene.radii.data();
+      const bvh::Aabb& all = zero_bounds_;
       std::visit(
           [&](const auto& zero) {
             for (Index r : deformable_) {
-              const bvh::Sphere ball{row3(scene.positions, r), reach_[r]};
+              const double* x = pos + 3 * static_cast<std::ptrdiff_t>(r);
+              const double R = (rad[r] + reach) * (1.0 + 1e-9);
+              ++counters.nv;
+              if (x[0] + R < all.lo[0] || x[0] - R > all.hi[0] || x[1] + R < all.lo[1] || x[1] - R > all.hi[1] ||
+                  x[2] + R < all.lo[2] || x[2] - R > all.hi[2])
+                continue;
+              const bvh::Sphere ball{row3(scene.positions, r), R};
               bvh::query_surfel(zero, ball, [&](std::int32_t) {
                 candidate_[static_cast<std::size_t>(r)] = 1;
                 marked_.push_back(r);
@@ -210,7 +229,7 @@ class HierarchicalDetector final : public CollisionDetector {
           result, deformable_, [&](std::size_t, Index r) { return colliding[static_cast<std::size_t>(r)] != 0; },
           [](std::size_t, Index) { return 0.0; }, preprocess_ms_, start);
     } else {
-      result = narrow_->detect_candidates(scene, previous, &candidate_);
+      result = narrow_->detect_candidates(scene, previous, broad ? &candidate_ : nullptr);
     }
     result.stats.nv = counters.nv;
     result.stats.np = candidates;
@@ -363,6 +382,7 @@ class HierarchicalDetector final : public CollisionDetector {
     out->rows_ = rows_;
     out->reach_ = reach_;
     out->bounded_ = bounded_;
+    out->zero_bounds_ = zero_bounds_;
     out->prev_radius_ = prev_radius_;
     out->candidate_ = candidate_;
     out->marked_ = marked_;
@@ -489,8 +509,9 @@ class HierarchicalDetector final : public CollisionDetector {
   bvh::BvhRebuilder<bvh::Aabb> rebuilder_;          // background rebuild of def_
   IndexList deformable_;                            // rows with region != Zero, ascending
   Index rows_ = 0;                                  // rows of the model the state refers to
-  Values reach_;                                    // #P: radius + own displacement this step (not bounded)
-  bool bounded_ = false;                            // def_ uses the bounded update (no reach_)
+  Values reach_;                                    // #P: radius + own displacement this step (!bounded_)
+  bool bounded_ = false;                            // no reach_: def_ uses the bounded update, or there is no def_
+  bvh::Aabb zero_bounds_;                           // box of every zero ball (surfel/tree's first test)
   std::vector<double> prev_radius_;                 // bounded: by deformable_ index, its radius at the last step
   std::vector<std::uint8_t> candidate_;             // #P: 1 = candidate this step
   IndexList marked_;                                // the rows candidate_ holds set (cleared at the next step)
