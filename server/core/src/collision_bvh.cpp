@@ -8,13 +8,15 @@
 // zero tree bounds the balls (p2, r2) of the zero surfels. A surfel is a candidate when
 //  - surfel/tree (no deformable tree): its ball overlaps a zero leaf box (Code 7.6);
 //  - tree/tree: it lies in a deformable leaf whose box (refit each step over those balls, update =
-//    bottom_up | top_down | hybrid) overlaps a zero leaf box (Code 8.4).
+//    bottom_up | top_down | hybrid; or, bounded, its last fit grown by the steps' largest displacement and
+//    refit when it reaches a zero leaf, docs/algorithms.md §5) overlaps a zero leaf box (Code 8.4).
+// Larger balls or boxes only add candidates: surfel/tree takes (p, r + the step's largest |t|).
 // A non-candidate's ball misses every zero surfel ball: |p - p2| > r + |t| + r2 for all zero surfels,
 // which is the step bound of §4.1, so Simple leaves its state unchanged -- the same colliding set
 // as without a hierarchy, by construction. Temporal needs the nearest zero distance of every surfel
 // that leaves its sphere anyway (for the next sphere), so it ignores the candidates and is exactly
-// Temporal. Robust has no step bound; a non-candidate did not come within its step of the zero
-// surface, so its parity cannot have changed by crossing it (its inside state is re-derived once it
+// Temporal: detect() skips the broad phase for it. Robust has no step bound; a non-candidate did not
+// come within its step of the zero surface, so its parity cannot have changed by crossing it (its inside state is re-derived once it
 // is a candidate again, see RobustKernel::not_candidate in collision/robust_kernel.hpp); the tests
 // check the equality on every step of the scenario scenes.
 //
