@@ -16,9 +16,9 @@
 // as without a hierarchy, by construction. Temporal needs the nearest zero distance of every surfel
 // that leaves its sphere anyway (for the next sphere), so it ignores the candidates and is exactly
 // Temporal: detect() skips the broad phase for it. Robust has no step bound; a non-candidate did not
-// come within its step of the zero surface, so its parity cannot have changed by crossing it (its inside state is re-derived once it
-// is a candidate again, see RobustKernel::not_candidate in collision/robust_kernel.hpp); the tests
-// check the equality on every step of the scenario scenes.
+// come within its step of the zero surface, so its parity cannot have changed by crossing it (its
+// inside state is re-derived once it is a candidate again, see RobustKernel::not_candidate in
+// collision/robust_kernel.hpp); the tests check the equality on every step of the scenario scenes.
 //
 // Rebuild on idle (thesis §8.3.3): start_rebuild() builds a fresh deformable tree on a background
 // thread (bvh::BvhRebuilder); detect() adopts it at its start when it is finished and the rows were
@@ -163,16 +163,14 @@ class HierarchicalDetector final : public CollisionDetector {
     // Temporal tests every surfel that leaves its sphere whether a candidate or not (not_candidate() is
     // update()): the broad phase cannot spare it anything, so it is skipped (exactly Temporal, nv = np = 0).
     const bool broad = extended_ || params_.algorithm != CollisionAlgorithm::Temporal;
-    if (!broad) {
-    } else if (!bounded_) {
+    if (broad && !bounded_) {
       // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
       for (Index r : deformable_) {
         const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
         reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
       }
     }
-    if (!broad) {
-    } else if (def_) {
+    if (broad && def_) {
       if (bounded_) {
         const Shift sh = step_shift(scene, previous);
         counters += def_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
@@ -185,7 +183,7 @@ class HierarchicalDetector final : public CollisionDetector {
       };
       std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
       candidates = counters.np;
-    } else {
+    } else if (broad) {
       // Surfel/tree: each ball (p, r + the step's largest |t|) -- larger than (p, r + |t|), so no candidate
       // is lost -- first against the box of all zero balls, then down the zero tree.
       const double reach = step_shift(scene, previous).reach;
