@@ -14,10 +14,12 @@
 //   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
 // BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
-// BM_DetectRun/<hierarchy>, BM_DetectIdle/<hierarchy>: the detector alone (make_detector, reset, detect), the
+// BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
-//   session, no history). Counters: median / max thread CPU ms of one detect (detect_cpu_*), as the CPU
-//   column is of the whole iteration; use them on a loaded machine.
+//   session, no history). <config> indexes kConfigs below (0: Robust without a hierarchy, 1: Robust with
+//   zero + deformable AABB trees at the default update; BM_DetectIdle runs every one). Counters: median /
+//   max thread CPU ms of one detect (detect_cpu_*), as the CPU column is of the whole iteration; use them on
+//   a loaded machine; the broad phase's nv / np / nu and the queries (medians).
 #include <benchmark/benchmark.h>
 
 #include <time.h>
@@ -161,28 +163,59 @@ void BM_Preprocess(benchmark::State& state) {
   state.counters["preprocess_ms"] = preprocess;
 }
 
-// The detector of the piercing scene on its own: positions, regions and a Robust detector (one thread).
+// A detector configuration of BM_DetectRun / BM_DetectIdle: the algorithm and its hierarchy.
+struct Config {
+  const char* label;                 // printed in the benchmark's name
+  CollisionAlgorithm algorithm;
+  ZeroHierarchy zero;
+  DeformableHierarchy deformable;
+  bvh::UpdateMode update;            // of the deformable tree
+};
+constexpr bvh::UpdateMode kDefaultUpdate = bvh::BvhParams{}.update;
+const Config kConfigs[] = {
+    {"robust/none", CollisionAlgorithm::Robust, ZeroHierarchy::None, DeformableHierarchy::None, kDefaultUpdate},
+    {"robust/aabb-aabb", CollisionAlgorithm::Robust, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb, kDefaultUpdate},
+    {"robust/aabb", CollisionAlgorithm::Robust, ZeroHierarchy::Aabb, DeformableHierarchy::None, kDefaultUpdate},
+    {"robust/obb", CollisionAlgorithm::Robust, ZeroHierarchy::Obb, DeformableHierarchy::None, kDefaultUpdate},
+    {"robust/sphere", CollisionAlgorithm::Robust, ZeroHierarchy::Sphere, DeformableHierarchy::None, kDefaultUpdate},
+    {"robust/obb-aabb", CollisionAlgorithm::Robust, ZeroHierarchy::Obb, DeformableHierarchy::Aabb, kDefaultUpdate},
+    {"robust/sphere-aabb", CollisionAlgorithm::Robust, ZeroHierarchy::Sphere, DeformableHierarchy::Aabb, kDefaultUpdate},
+    {"robust/aabb-aabb/hybrid", CollisionAlgorithm::Robust, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb,
+     bvh::UpdateMode::Hybrid},
+    {"robust/aabb-aabb/bottom_up", CollisionAlgorithm::Robust, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb,
+     bvh::UpdateMode::BottomUp},
+    {"robust/aabb-aabb/top_down", CollisionAlgorithm::Robust, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb,
+     bvh::UpdateMode::TopDown},
+    {"simple/none", CollisionAlgorithm::Simple, ZeroHierarchy::None, DeformableHierarchy::None, kDefaultUpdate},
+    {"simple/aabb-aabb", CollisionAlgorithm::Simple, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb, kDefaultUpdate},
+    {"temporal/none", CollisionAlgorithm::Temporal, ZeroHierarchy::None, DeformableHierarchy::None, kDefaultUpdate},
+    {"temporal/aabb-aabb", CollisionAlgorithm::Temporal, ZeroHierarchy::Aabb, DeformableHierarchy::Aabb,
+     kDefaultUpdate},
+};
+constexpr int kConfigCount = static_cast<int>(sizeof(kConfigs) / sizeof(kConfigs[0]));
+
+// The detector of the piercing scene on its own: positions, regions and a detector (one thread).
 struct DetectorRun {
   Points positions, previous;
   std::vector<Region> regions;
   std::unique_ptr<CollisionDetector> detector;
   const Piercing& scene = Piercing::get();
 
-  explicit DetectorRun(bool hierarchy) {
+  explicit DetectorRun(const Config& config) {
     positions = scene.arrays.positions;
     previous = positions;
     regions.assign(static_cast<std::size_t>(positions.rows()), Region::Zero);
     for (SurfelId id : scene.one) regions[id] = Region::One;
     SessionSettings settings;
-    settings.collision.algorithm = CollisionAlgorithm::Robust;
+    settings.collision.algorithm = config.algorithm;
     settings.collision.threads = 1;
-    if (hierarchy) {
-      settings.hierarchy.zero = ZeroHierarchy::Aabb;
-      settings.hierarchy.deformable = DeformableHierarchy::Aabb;
-    }
+    settings.hierarchy.zero = config.zero;
+    settings.hierarchy.deformable = config.deformable;
+    settings.hierarchy.tree.update = config.update;
     detector = make_detector(settings);
     detector->reset(CollisionScene{positions, scene.arrays.normals, scene.arrays.radii, regions});
   }
+  CollisionStats last;  // the last step's stats
   // Moves the ball by t (untimed by the caller), then detects; returns {thread CPU ms, re-tested}.
   std::pair<double, Index> step(const Vec3& t) {
     previous = positions;
@@ -192,43 +225,64 @@ struct DetectorRun {
                                                previous);
     const double cpu = thread_cpu_ms() - c0;
     benchmark::DoNotOptimize(r.colliding.data());
+    last = r.stats;
     return {cpu, r.stats.tested};
   }
 };
 
 void BM_DetectRun(benchmark::State& state) {
-  std::vector<double> cpu;
+  std::vector<double> cpu, nv, np, nu, queries;
   const Vec3 t(0.0, 0.0, -2.0 * Piercing::get().z0 / kSteps);
   for (auto _ : state) {
     state.PauseTiming();
-    DetectorRun run(state.range(0) != 0);
+    DetectorRun run(kConfigs[state.range(0)]);
     for (int k = 0; k < kSteps; ++k) {
       state.ResumeTiming();
       // The move is timed too (a copy and 60k row updates, the same in A and B).
       cpu.push_back(run.step(t).first);
       state.PauseTiming();
+      nv.push_back(static_cast<double>(run.last.nv));
+      np.push_back(static_cast<double>(run.last.np));
+      nu.push_back(static_cast<double>(run.last.nu));
+      queries.push_back(static_cast<double>(run.last.queries));
     }
     state.ResumeTiming();
   }
   state.counters["detect_cpu_median_ms"] = median(cpu);
+  // Medians over the steps of the broad phase's counts (0 without a hierarchy) and the queries.
+  state.counters["nv_median"] = median(nv);
+  state.counters["np_median"] = median(np);
+  state.counters["nu_median"] = median(nu);
+  state.counters["queries_median"] = median(queries);
   state.counters["detect_cpu_max_ms"] = *std::max_element(cpu.begin(), cpu.end());
 }
 
 void BM_DetectIdle(benchmark::State& state) {
-  DetectorRun run(state.range(0) != 0);
+  const Config& config = kConfigs[state.range(0)];
+  state.SetLabel(config.label);
+  DetectorRun run(config);
   Vec3 t(1e-4, 0.0, 0.0);
-  std::vector<double> cpu;
+  std::vector<double> cpu, nv, np, nu, queries;
   for (auto _ : state) {
     const auto [ms, tested] = run.step(t);
-    if (tested != 0) throw std::runtime_error("idle step re-tested surfels");
+    // Robust: no point leaves its sphere (Simple tests its candidates each step, Temporal its own way).
+    if (tested != 0 && config.algorithm == CollisionAlgorithm::Robust) throw std::runtime_error("idle step re-tested surfels");
     cpu.push_back(ms);
+    nv.push_back(static_cast<double>(run.last.nv));
+    np.push_back(static_cast<double>(run.last.np));
+    nu.push_back(static_cast<double>(run.last.nu));
+    queries.push_back(static_cast<double>(run.last.queries));
     t = -t;
   }
   state.counters["detect_cpu_median_ms"] = median(cpu);
+  state.counters["nv_median"] = median(nv);
+  state.counters["np_median"] = median(np);
+  state.counters["nu_median"] = median(nu);
+  state.counters["queries_median"] = median(queries);
 }
 
 BENCHMARK(BM_DetectRun)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK(BM_DetectIdle)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Preprocess)->Unit(benchmark::kMillisecond);

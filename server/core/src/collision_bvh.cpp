@@ -8,15 +8,17 @@
 // zero tree bounds the balls (p2, r2) of the zero surfels. A surfel is a candidate when
 //  - surfel/tree (no deformable tree): its ball overlaps a zero leaf box (Code 7.6);
 //  - tree/tree: it lies in a deformable leaf whose box (refit each step over those balls, update =
-//    bottom_up | top_down | hybrid) overlaps a zero leaf box (Code 8.4).
+//    bottom_up | top_down | hybrid; or, bounded, its last fit grown by the steps' largest displacement and
+//    refit when it reaches a zero leaf, docs/algorithms.md §5) overlaps a zero leaf box (Code 8.4).
+// Larger balls or boxes only add candidates: surfel/tree takes (p, r + the step's largest |t|).
 // A non-candidate's ball misses every zero surfel ball: |p - p2| > r + |t| + r2 for all zero surfels,
 // which is the step bound of §4.1, so Simple leaves its state unchanged -- the same colliding set
 // as without a hierarchy, by construction. Temporal needs the nearest zero distance of every surfel
 // that leaves its sphere anyway (for the next sphere), so it ignores the candidates and is exactly
-// Temporal. Robust has no step bound; a non-candidate did not come within its step of the zero
-// surface, so its parity cannot have changed by crossing it (its inside state is re-derived once it
-// is a candidate again, see RobustKernel::not_candidate in collision/robust_kernel.hpp); the tests
-// check the equality on every step of the scenario scenes.
+// Temporal: detect() skips the broad phase for it. Robust has no step bound; a non-candidate did not
+// come within its step of the zero surface, so its parity cannot have changed by crossing it (its
+// inside state is re-derived once it is a candidate again, see RobustKernel::not_candidate in
+// collision/robust_kernel.hpp); the tests check the equality on every step of the scenario scenes.
 //
 // Rebuild on idle (thesis §8.3.3): start_rebuild() builds a fresh deformable tree on a background
 // thread (bvh::BvhRebuilder); detect() adopts it at its start when it is finished and the rows were
@@ -127,8 +129,19 @@ class HierarchicalDetector final : public CollisionDetector {
     extended_ = std::move(extended);
     deformable_ = std::move(deformable);
     rows_ = rows;
-    reach_ = scene.radii;
+    bounded_ = !def_ || def_->bounded();
+    zero_bounds_ = bvh::Aabb{};
+    for (Index r : zero_rows) zero_bounds_.expand(row3(scene.positions, r), scene.radii[r]);
+    if (bounded_) {
+      reach_ = Values();
+      prev_radius_.resize(deformable_.size());
+      for (std::size_t q = 0; q < deformable_.size(); ++q) prev_radius_[q] = scene.radii[deformable_[q]];
+    } else {
+      reach_ = scene.radii;
+      prev_radius_.clear();
+    }
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     inserted_nu_ = 0;
     rebuilds_adopted_ = 0;
     extended_bytes_ = extended_bytes;
@@ -141,28 +154,55 @@ class HierarchicalDetector final : public CollisionDetector {
     require_scene_rows(scene, rows_, "detect");
     if (previous.rows() != rows_) throw Error(ErrorCode::Internal, "previous", "row count differs from the scene");
     adopt_rebuilt_tree();
-    // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
-    for (Index r : deformable_) {
-      const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
-      reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
-    }
-    std::fill(candidate_.begin(), candidate_.end(), 0);
+    for (Index r : marked_) candidate_[static_cast<std::size_t>(r)] = 0;  // last step's candidates
+    marked_.clear();
     bvh::BvhCounters counters;
     counters.nu = inserted_nu_;  // boxes grown by insertions since the last step
     inserted_nu_ = 0;
     Index candidates = 0;
-    if (def_) {
-      counters += def_->refit(scene.positions, reach_);
-      auto mark = [&](Index row) { candidate_[static_cast<std::size_t>(row)] = 1; };
+    // Temporal tests every surfel that leaves its sphere whether a candidate or not (not_candidate() is
+    // update()): the broad phase cannot spare it anything, so it is skipped (exactly Temporal, nv = np = 0).
+    const bool broad = extended_ || params_.algorithm != CollisionAlgorithm::Temporal;
+    if (broad && !bounded_) {
+      // Balls of this step: radius + own displacement (deformable rows; zero rows keep their radius).
+      for (Index r : deformable_) {
+        const double t = (row3(scene.positions, r) - row3(previous, r)).norm();
+        reach_[r] = (scene.radii[r] + t) * (1.0 + 1e-9);
+      }
+    }
+    if (broad && def_) {
+      if (bounded_) {
+        const Shift sh = step_shift(scene, previous);
+        counters += def_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
+      } else {
+        counters += def_->refit(scene.positions, reach_);
+      }
+      auto mark = [&](Index row) {
+        candidate_[static_cast<std::size_t>(row)] = 1;
+        marked_.push_back(row);
+      };
       std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
       candidates = counters.np;
-    } else {
+    } else if (broad) {
+      // Surfel/tree: each ball (p, r + the step's largest |t|) -- larger than (p, r + |t|), so no candidate
+      // is lost -- first against the box of all zero balls, then down the zero tree.
+      const double reach = step_shift(scene, previous).reach;
+      const double* pos = scene.positions.data();
+      const double* rad = scene.radii.data();
+      const bvh::Aabb& all = zero_bounds_;
       std::visit(
           [&](const auto& zero) {
             for (Index r : deformable_) {
-              const bvh::Sphere ball{row3(scene.positions, r), reach_[r]};
+              const double* x = pos + 3 * static_cast<std::ptrdiff_t>(r);
+              const double R = (rad[r] + reach) * (1.0 + 1e-9);
+              ++counters.nv;
+              if (x[0] + R < all.lo[0] || x[0] - R > all.hi[0] || x[1] + R < all.lo[1] || x[1] - R > all.hi[1] ||
+                  x[2] + R < all.lo[2] || x[2] - R > all.hi[2])
+                continue;
+              const bvh::Sphere ball{row3(scene.positions, r), R};
               bvh::query_surfel(zero, ball, [&](std::int32_t) {
                 candidate_[static_cast<std::size_t>(r)] = 1;
+                marked_.push_back(r);
                 ++candidates;
                 return false;  // one overlapping leaf makes it a candidate
               }, counters, fifo_);
@@ -189,7 +229,7 @@ class HierarchicalDetector final : public CollisionDetector {
           result, deformable_, [&](std::size_t, Index r) { return colliding[static_cast<std::size_t>(r)] != 0; },
           [](std::size_t, Index) { return 0.0; }, preprocess_ms_, start);
     } else {
-      result = narrow_->detect_candidates(scene, previous, &candidate_);
+      result = narrow_->detect_candidates(scene, previous, broad ? &candidate_ : nullptr);
     }
     result.stats.nv = counters.nv;
     result.stats.np = candidates;
@@ -209,10 +249,17 @@ class HierarchicalDetector final : public CollisionDetector {
     const IndexList new_row = remap_rows(keep);
     std::visit([&](auto& zero) { zero.on_removed(keep); }, zero_);
     if (def_) def_->on_removed(keep);
+    if (bounded_) {
+      std::size_t w = 0;
+      for (std::size_t q = 0; q < deformable_.size(); ++q)
+        if (keep[static_cast<std::size_t>(deformable_[q])]) prev_radius_[w++] = prev_radius_[q];
+      prev_radius_.resize(w);
+    }
     deformable_ = remap_list(deformable_, keep, new_row);
-    compact(reach_, keep);
-    rows_ = static_cast<Index>(reach_.size());
+    if (!bounded_) compact(reach_, keep);
+    rows_ = static_cast<Index>(std::count(keep.begin(), keep.end(), true));
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     ++topology_;
   }
 
@@ -225,16 +272,18 @@ class HierarchicalDetector final : public CollisionDetector {
     } else {
       narrow_->on_inserted(scene, parents);  // validates the parents
     }
-    reach_.conservativeResize(rows_ + added);
+    if (!bounded_) reach_.conservativeResize(rows_ + added);
     for (Index k = 0; k < added; ++k) {
-      reach_[rows_ + k] = scene.radii[rows_ + k];
+      if (bounded_) prev_radius_.push_back(scene.radii[rows_ + k]);
+      else reach_[rows_ + k] = scene.radii[rows_ + k];
       deformable_.push_back(rows_ + k);
     }
     // Each child joins its parent's leaf (zero tree: ignored, the parents are deformable).
     std::visit([&](auto& zero) { zero.on_inserted(scene.positions, scene.radii, parents); }, zero_);
-    if (def_) inserted_nu_ += def_->on_inserted(scene.positions, reach_, parents).nu;
+    if (def_) inserted_nu_ += def_->on_inserted(scene.positions, bounded_ ? scene.radii : reach_, parents).nu;
     rows_ += added;
     candidate_.assign(static_cast<std::size_t>(rows_), 0);
+    marked_.clear();
     ++topology_;
   }
 
@@ -256,7 +305,8 @@ class HierarchicalDetector final : public CollisionDetector {
                      std::visit([](const auto& zero) { return zero.memory_bytes(); }, zero_));
     if (def_) out.emplace_back("bvh_deformable_aabb", def_->memory_bytes());
     out.emplace_back("bvh_scratch", static_cast<std::size_t>(reach_.size()) * sizeof(double) + candidate_.capacity() +
-                                        deformable_.capacity() * sizeof(Index));
+                                        deformable_.capacity() * sizeof(Index) +
+                                        (prev_radius_.capacity() + marked_.capacity()) * sizeof(double));
     return out;
   }
 
@@ -289,8 +339,12 @@ class HierarchicalDetector final : public CollisionDetector {
       if (!image->narrow) return nullptr;
     }
     if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
-    image->reach.reserve(deformable_.size());
-    for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    if (bounded_) {
+      image->reach = prev_radius_;  // the radii the next step's shift compares with
+    } else {
+      image->reach.reserve(deformable_.size());
+      for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    }
     image->rows = rows_;
     image->step = step_;
     image->evaluations = evaluations_;
@@ -307,7 +361,8 @@ class HierarchicalDetector final : public CollisionDetector {
     if (extended_) *extended_ = *mine->extended;
     else narrow_->restore_image(*mine->narrow);
     if (def_) *def_ = *mine->def;
-    for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
+    if (bounded_) prev_radius_ = mine->reach;
+    else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
     step_ = mine->step;
     evaluations_ = mine->evaluations;
     inserted_nu_ = mine->inserted_nu;
@@ -326,7 +381,11 @@ class HierarchicalDetector final : public CollisionDetector {
     out->deformable_ = deformable_;
     out->rows_ = rows_;
     out->reach_ = reach_;
+    out->bounded_ = bounded_;
+    out->zero_bounds_ = zero_bounds_;
+    out->prev_radius_ = prev_radius_;
     out->candidate_ = candidate_;
+    out->marked_ = marked_;
     out->topology_ = topology_;
     out->step_ = step_;
     out->evaluations_ = evaluations_;
@@ -345,7 +404,7 @@ class HierarchicalDetector final : public CollisionDetector {
     std::shared_ptr<const DetectorImage> narrow;             // narrow phase's image (without extended)
     std::shared_ptr<const bvh::ExtendedNarrow> extended;     // extended narrow phase (with it)
     std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;          // the deformable tree (with one)
-    std::vector<double> reach;                               // per deformable row
+    std::vector<double> reach;                               // per deformable row (bounded: its radius)
     Index rows = 0;
     std::int64_t step = 0, evaluations = 0;
     Index inserted_nu = 0, rebuilds_adopted = 0;
@@ -390,6 +449,43 @@ class HierarchicalDetector final : public CollisionDetector {
     return ZeroTree(std::in_place_index<0>, scene.positions, scene.radii, zero_rows, h_.tree);
   }
 
+  // One pass over the deformable rows for a bounded tree's step (bvh.hpp, step_bounded): the largest
+  // own displacement |p - previous| (reach) and that plus the largest radius growth since the last step
+  // (shift); prev_radius_ takes the new radii. Squared lengths in the loop, one square root.
+  struct Shift {
+    double shift = 0.0, reach = 0.0;  // model units
+  };
+  Shift step_shift(const CollisionScene& scene, const Points& previous) {
+    const double* p = scene.positions.data();
+    const double* q = previous.data();
+    const double* rad = scene.radii.data();
+    double t2a = 0.0, t2b = 0.0, grow = 0.0;
+    const std::size_t n = deformable_.size();
+    auto d2 = [&](Index r) {
+      const double* x = p + 3 * static_cast<std::ptrdiff_t>(r);
+      const double* y = q + 3 * static_cast<std::ptrdiff_t>(r);
+      const double a = x[0] - y[0], b = x[1] - y[1], c = x[2] - y[2];
+      return a * a + b * b + c * c;
+    };
+    std::size_t k = 0;
+    for (; k + 1 < n; k += 2) {  // two chains of maxima
+      t2a = std::max(t2a, d2(deformable_[k]));
+      t2b = std::max(t2b, d2(deformable_[k + 1]));
+    }
+    if (k < n) t2a = std::max(t2a, d2(deformable_[k]));
+    for (k = 0; k < n; ++k) {
+      const double r = rad[deformable_[k]];
+      if (r != prev_radius_[k]) {
+        grow = std::max(grow, r - prev_radius_[k]);
+        prev_radius_[k] = r;
+      }
+    }
+    Shift s;
+    s.reach = std::sqrt(std::max(t2a, t2b)) * (1.0 + 1e-12);
+    s.shift = (s.reach + grow) * (1.0 + 1e-12);
+    return s;
+  }
+
   // Swaps in a finished background rebuild (never waits); dropped when rows changed since it started.
   void adopt_rebuilt_tree() {
     if (!def_ || !rebuilder_.ready()) return;
@@ -399,6 +495,8 @@ class HierarchicalDetector final : public CollisionDetector {
     last_rebuild_ms_ = rebuilder_.last_build_ms();
     if (tag != topology_) return;
     def_ = std::move(tree);
+    // Its boxes are of the rows where they were when it started (an undo may have moved them since).
+    if (bounded_) def_->refit_all_next_step();
     ++rebuilds_adopted_;
   }
 
@@ -411,8 +509,12 @@ class HierarchicalDetector final : public CollisionDetector {
   bvh::BvhRebuilder<bvh::Aabb> rebuilder_;          // background rebuild of def_
   IndexList deformable_;                            // rows with region != Zero, ascending
   Index rows_ = 0;                                  // rows of the model the state refers to
-  Values reach_;                                    // #P: radius + own displacement this step (deformable rows)
+  Values reach_;                                    // #P: radius + own displacement this step (!bounded_)
+  bool bounded_ = false;                            // no reach_: def_ uses the bounded update, or there is no def_
+  bvh::Aabb zero_bounds_;                           // box of every zero ball (surfel/tree's first test)
+  std::vector<double> prev_radius_;                 // bounded: by deformable_ index, its radius at the last step
   std::vector<std::uint8_t> candidate_;             // #P: 1 = candidate this step
+  IndexList marked_;                                // the rows candidate_ holds set (cleared at the next step)
   std::vector<std::int32_t> fifo_;                  // scratch of the surfel/tree queue
   std::uint64_t topology_ = 0;                      // bumped by reset, insertions and removals
   std::int64_t step_ = 0;                           // steps of the extended narrow phase

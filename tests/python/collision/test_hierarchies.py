@@ -15,7 +15,7 @@ ALGS = ["simple", "temporal", "robust"]
 CONFIGS = (
     [dict(zero_hierarchy=z) for z in ("aabb", "obb", "sphere")]
     + [dict(zero_hierarchy=z, deformable_hierarchy="aabb", update=u)
-       for z in ("aabb", "obb", "sphere") for u in ("bottom_up", "top_down", "hybrid")]
+       for z in ("aabb", "obb", "sphere") for u in ("bottom_up", "top_down", "hybrid", "bounded")]
     + [dict(zero_hierarchy="obb", sat="full"), dict(zero_hierarchy="obb", deformable_hierarchy="aabb", sat="full"),
        dict(zero_hierarchy="aabb", deformable_hierarchy="aabb", update="hybrid", hybrid_f=0.75, leaf_max_surfels=8,
             leaf_min_surfels=1, inflation=0.001)]

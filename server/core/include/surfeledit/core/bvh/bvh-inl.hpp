@@ -29,6 +29,10 @@ void Bvh<Box>::reset_steps(const BvhParams& params) {
   cut_ = 0;
   positions_ = nullptr;
   radii_ = nullptr;
+  previous_ = nullptr;
+  shift_ = 0.0;
+  reach_ = 0.0;
+  refit_all_ = false;
 }
 
 template <class Box>
@@ -44,6 +48,7 @@ void Bvh<Box>::index_nodes() {
   masks_.assign(nodes_.size(), 0);
   marks_.assign(nodes_.size(), 0);
   mark_ = 1;
+  since_.assign(nodes_.size(), shift_);
 }
 
 template <class Box>
@@ -153,7 +158,8 @@ std::size_t Bvh<Box>::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(Index) +
          leaf_of_row_.capacity() * sizeof(std::int32_t) +
          (extra_head_.capacity() + extra_next_.capacity()) * sizeof(std::int32_t) + extra_row_.capacity() * sizeof(Index) +
-         stamp_.capacity() * sizeof(std::uint64_t) + masks_.capacity() + marks_.capacity() * sizeof(std::uint32_t);
+         stamp_.capacity() * sizeof(std::uint64_t) + masks_.capacity() + marks_.capacity() * sizeof(std::uint32_t) +
+         since_.capacity() * sizeof(double);
 }
 
 template <class Box>
@@ -235,7 +241,8 @@ void Bvh<Box>::grow_ancestors(std::int32_t node) {
 template <class Box>
 int Bvh<Box>::bottom_up_levels() const {
   switch (params_.update) {
-    case UpdateMode::BottomUp: return height_;
+    case UpdateMode::BottomUp:
+    case UpdateMode::Bounded: return height_;  // refit() of a bounded tree: every node (step_bounded() is its step)
     case UpdateMode::TopDown: return 0;
     case UpdateMode::Hybrid: break;
   }
@@ -358,7 +365,16 @@ BvhCounters Bvh<Box>::on_inserted(const Points& positions, const Values& radii, 
     const double r = radius_of(radii, row);
     Box& b = mut(leaf).box;
     if constexpr (Box::kContainsChildren) {
-      if (!b.contains(p, r)) {
+      if (std::is_same_v<Box, Aabb> && params_.update == UpdateMode::Bounded) {
+        // Bounded boxes are anchored at different steps: a parent need not contain its child's box, so
+        // every ancestor takes the ball (for boxes, a parent that contained its child still does).
+        for (std::int32_t a = leaf; a >= 0; a = nodes_[a].parent) {
+          if (!nodes_[a].box.contains(p, r)) {
+            mut(a).box.expand(p, r);
+            ++c.nu;
+          }
+        }
+      } else if (!b.contains(p, r)) {
         b.expand(p, r);
         ++c.nu;
         grow_ancestors(leaf);

@@ -105,7 +105,35 @@ class Bvh {
   // Refits every node now (a full top-down pass over what touch() would do), e.g. before inspecting boxes.
   template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
   void touch_all(BvhCounters& counters);
-  std::uint64_t step() const { return step_; }  // incremented by each refit()
+  std::uint64_t step() const { return step_; }  // incremented by each refit() / step_bounded()
+
+  // ---- bounded update (UpdateMode::Bounded; docs/algorithms.md §5 "Bounded update") -----------
+  // A node's box bounds its surfels' balls at the step its `since` value names; at a later step the
+  // balls lie in that box grown by (shift() - since) + reach: `shift` sums each step's largest
+  // displacement plus largest radius growth of any surfel of the tree, `reach` is this step's largest
+  // own displacement |t| (the balls are (p, r + |t|)). No per-row work: a traversal tests bound(node),
+  // refits a leaf from its rows when the bound reaches a zero leaf (refit_leaf) and narrows a parent to
+  // the union of its children's bounds (tighten). The caller guarantees that `previous` of every step
+  // holds the positions of the step before (as EditSession does; undo restores a copy of the tree).
+  // Starts a step: `shift` = max over the tree's rows of |p - previous| + max(0, r - r before), `reach` =
+  // max |p - previous| (model units, >= 0). The arrays must stay alive and unchanged until the next step.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  BvhCounters step_bounded(const Points& positions, const Points& previous, const Values& radii, double shift,
+                           double reach);
+  bool bounded() const { return params_.update == UpdateMode::Bounded; }
+  bool fitted(std::int32_t node) const { return stamp_[static_cast<std::size_t>(node)] == step_; }  // in this step
+  double shift() const { return shift_; }  // the running sum of the steps' shifts
+  // The box `node` has in this step: its box when fit or narrowed in this step, else the grown box.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  Aabb bound(std::int32_t node) const;
+  // Refits leaf `node` from its rows' balls (p, r + |p - previous|) unless it was in this step; true if it was refit now.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  bool refit_leaf(std::int32_t node, BvhCounters& counters);
+  // Narrows inner `node` to its bound intersected with the union of its children's bounds.
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  void tighten(std::int32_t node);
+  // The next step_bounded() refits every node from its rows (after adopting a tree built elsewhere).
+  void refit_all_next_step() { refit_all_ = true; }
 
   // The model dropped rows: `keep` has one flag per old row. Dropped surfels become dead slots
   // (boxes unchanged until their leaf's next refit); kept rows are renumbered.
@@ -141,6 +169,10 @@ class Bvh {
   unsigned refit_axes(Aabb& box, const Aabb& tight, unsigned axes) const;
   void grow_ancestors(std::int32_t node);
   int bottom_up_levels() const;
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  Aabb tight_reach(std::int32_t node) const;  // tight box over the balls (p, r + |p - previous|) of `node`
+  template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
+  void fit_all_bounded(BvhCounters& counters);  // every node from its rows, leaves up (step_bounded)
 
   BvhParams params_;
   std::vector<Node> nodes_;
@@ -162,6 +194,12 @@ class Bvh {
   int cut_ = 0;                            // nodes with level < cut_ are refit bottom-up
   const Points* positions_ = nullptr;      // arrays of the current step (for touch)
   const Values* radii_ = nullptr;
+  // Bounded update (step_bounded).
+  const Points* previous_ = nullptr;       // positions before the current step
+  std::vector<double> since_;              // by node: shift_ when its box was last fit or narrowed
+  double shift_ = 0.0;                     // running sum of the steps' shifts (model units)
+  double reach_ = 0.0;                     // this step's largest own displacement (model units)
+  bool refit_all_ = false;                 // the next step_bounded() fits every node
   // Marks of the tree/tree traversal.
   std::vector<std::uint32_t> marks_;
   std::uint32_t mark_ = 1;
@@ -207,5 +245,10 @@ extern template class Bvh<Sphere>;
 extern template BvhCounters Bvh<Aabb>::refit<Aabb, void>(const Points&, const Values&);
 extern template void Bvh<Aabb>::refit_touched<Aabb, void>(std::int32_t, BvhCounters&);
 extern template void Bvh<Aabb>::touch_all<Aabb, void>(BvhCounters&);
+extern template BvhCounters Bvh<Aabb>::step_bounded<Aabb, void>(const Points&, const Points&, const Values&, double,
+                                                                 double);
+extern template bool Bvh<Aabb>::refit_leaf<Aabb, void>(std::int32_t, BvhCounters&);
+extern template void Bvh<Aabb>::tighten<Aabb, void>(std::int32_t);
+extern template Aabb Bvh<Aabb>::bound<Aabb, void>(std::int32_t) const;
 
 }  // namespace surfeledit::bvh

@@ -66,22 +66,38 @@ struct TreeTree {
   SatMode sat;
   Narrow& narrow;
   BvhCounters& counters;
+  bool bounded;  // def.bounded(): bound() / refit_leaf() / tighten() instead of touch()
+  using ZeroNode = typename Bvh<ZeroBox>::Node;
 
-  // Descends the deformable node d (both children), marking d when both children are marked.
+  // Descends the deformable node d (both children), marking d when both children are marked; a
+  // bounded tree then narrows d to its children's bounds (they may have been refit on the way).
   void split_deformable(std::int32_t z, std::int32_t d) {
     const std::int32_t c = def.node(d).first_child;
     run(z, c);
     run(z, c + 1);
     if (def.marked(c) && def.marked(c + 1)) def.set_mark(d);
+    if (bounded) def.tighten(d);
+  }
+
+  // Whether d's box overlaps zero node z in this step. Bounded trees: the grown box first; a leaf it
+  // reaches is refit from its rows and tested again.
+  bool overlaps(const ZeroNode& zn, std::int32_t d) {
+    ++counters.nv;
+    if (!bounded) {
+      def.touch(d, counters);  // lazy top-down refit (no-op for bottom-up levels)
+      return overlap(zn.box, def.box(d), sat);
+    }
+    if (!overlap(zn.box, def.bound(d), sat)) return false;
+    if (!def.node(d).leaf() || !def.refit_leaf(d, counters)) return true;
+    ++counters.nv;
+    return overlap(zn.box, def.box(d), sat);
   }
 
   void run(std::int32_t z, std::int32_t d) {
     if (def.marked(d)) return;  // every surfel under d was already handed to the narrow phase
-    def.touch(d, counters);     // lazy top-down refit (no-op for bottom-up levels)
-    ++counters.nv;
     const auto& zn = zero.node(z);
+    if (!overlaps(zn, d)) return;
     const auto& dn = def.node(d);
-    if (!overlap(zn.box, dn.box, sat)) return;
     if (zn.leaf()) {
       if (dn.leaf()) {
         def.set_mark(d);
@@ -92,7 +108,8 @@ struct TreeTree {
         return;
       }
       split_deformable(z, d);
-    } else if (dn.leaf() || dn.size() <= zn.size()) {
+    } else if (dn.leaf() || (dn.size() <= zn.size() && (!bounded || def.fitted(d)))) {
+      // (A bounded node not fitted in this step is split first: its children's fits narrow it.)
       run(zn.first_child, d);
       run(zn.first_child + 1, d);
     } else {
@@ -105,12 +122,13 @@ struct TreeTree {
 
 // Tree/tree (Code 8.4): every deformable surfel in a deformable leaf whose box overlaps a zero leaf
 // box is passed once to `narrow`. Starts a new marking epoch of `deformable` (so one call = one
-// step's test); lazily refits its nodes (touch) as visited. Counts Nv, Np, Nu.
+// step's test); lazily refits its nodes (touch, or refit_leaf / tighten of a bounded tree, after its
+// step_bounded()) as visited. Counts Nv, Np, Nu.
 template <class ZeroBox, class Narrow>
 void collide(const Bvh<ZeroBox>& zero, Bvh<Aabb>& deformable, SatMode sat, Narrow& narrow, BvhCounters& counters) {
   if (zero.empty() || deformable.empty()) return;
   deformable.new_marks();
-  detail::TreeTree<ZeroBox, Narrow> t{zero, deformable, sat, narrow, counters};
+  detail::TreeTree<ZeroBox, Narrow> t{zero, deformable, sat, narrow, counters, deformable.bounded()};
   t.run(0, 0);
 }
 
