@@ -86,9 +86,7 @@ void Tool::hold_rigid(const SurfelModel& model, const IndexList& rows) {
   std::set_union(held_rows.begin(), held_rows.end(), rows.begin(), rows.end(), std::back_inserter(both));
   const Eigen::Index n = static_cast<Eigen::Index>(both.size());
   RigidRows out;
-  out.positions.resize(n, 3);
-  out.normals.resize(n, 3);
-  out.radii.resize(n);
+  out.resize(n);
   std::size_t h = 0;
   for (Eigen::Index k = 0; k < n; ++k) {
     const Index r = both[static_cast<std::size_t>(k)];
@@ -109,9 +107,7 @@ void Tool::hold_rigid(const SurfelModel& model, const IndexList& rows) {
 
 bool Tool::held_before(RigidRows& out) const {
   const Eigen::Index n = static_cast<Eigen::Index>(stale_rows.size());
-  out.positions.resize(n, 3);
-  out.normals.resize(n, 3);
-  out.radii.resize(n);
+  out.resize(n);
   std::size_t h = 0;
   for (Eigen::Index k = 0; k < n; ++k) {
     const Index r = stale_rows[static_cast<std::size_t>(k)];

@@ -106,6 +106,11 @@ struct RigidRows {
   Points positions;  // #rows by 3
   Points normals;    // #rows by 3, unit
   Values radii;      // #rows
+  void resize(Eigen::Index rows) {  // all three arrays to `rows` (values unset)
+    positions.resize(rows, 3);
+    normals.resize(rows, 3);
+    radii.resize(rows);
+  }
 };
 
 // What a detector's hierarchies look like now.
