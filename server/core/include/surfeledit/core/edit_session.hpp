@@ -280,6 +280,10 @@ class EditSession {
   // its detector's on_rigid_moved at that tool's next step.
   void hold_for_others(const IndexList& rows);
   void sync_tool();
+  // The model's arrays with `f`'s regions, as a detector sees them.
+  CollisionScene scene_of(const DeformationFields& f) const {
+    return CollisionScene{model_.positions(), model_.normals(), model_.radii(), f.regions};
+  }
   // Conflict (naming `field` and the other author) when a row with keep[r] false, or a row of
   // `parents` (rows that will get children), is in another tool's lock.
   void check_unlocked(const std::vector<bool>* keep, const IndexList* parents, const char* field) const;
