@@ -158,9 +158,12 @@ std::vector<std::string> matched_writer_partitions(const Entity& reader, dds_ins
 }
 
 std::uint32_t matched_readers(const Entity& writer) {
-  dds_publication_matched_status_t status{};
-  check(dds_get_publication_matched_status(writer.get(), &status), "dds_get_publication_matched_status");
-  return status.current_count;
+  // Not dds_get_publication_matched_status: reading that status resets its change counts, and
+  // new_matches() needs them to greet each new watcher (a publish between a match and the greeting
+  // would otherwise swallow the greeting).
+  const dds_return_t n = dds_get_matched_subscriptions(writer.get(), nullptr, 0);
+  check(n, "dds_get_matched_subscriptions");
+  return static_cast<std::uint32_t>(n);
 }
 
 void notify_matches(const Entity& writer) {
