@@ -58,9 +58,13 @@ class RobustKernel {
   double depth(const State& s, const Vec3& p) const {
     return std::max(0.0, std::sqrt(s.sphere.rho2) - (p - s.sphere.center).norm());
   }
+  // Whether update() will query: the point left its sphere (a sweep with a query order asks first).
+  [[gnu::always_inline]] bool may_query(const State& s, const TestPoint& pt) const {
+    return (pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2;
+  }
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
+    if (may_query(s, pt)) made = test(s, pt.p, pt.previous());
     finish(s, pt.p);
     return made;
   }
@@ -191,22 +195,26 @@ class RobustKernel {
     set_inside(s, pr.inside);
     return made;
   }
-  // The thesis's test against the original model (Code 6.8).
+  // The thesis's test against the original model (Code 6.8). A forgotten inside state (kFirstUpdate) is
+  // re-derived at old_position only when the nearest original surfel to p1 is a zero surfel: against a
+  // deformable one no change counts, and the state is overwritten by p1's, so that query cannot change the
+  // result (an exact skip: RESULTS §50).
   Index test_original(State& s, const Vec3& p1, double& r_near) const {
-    Index made = 0;
     const double w = params_.threshold;
-    if (s.flags & kFirstUpdate) {
-      s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
-      ++made;
-      set_inside(s, inside_original(s.old_position));
-    }
     const Ref k = ref(orig_.tree->nearest(p1));
-    ++made;
+    Index made = 1;
     const Vec3 d = p1 - k.p;
     r_near = k.radius;
     s.sphere = {p1, sphere_rho2(d.squaredNorm(), k.radius, params_.sphere_margin)};
     const bool inside_now = d.dot(k.n) < w;
-    if (k.zero && inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    if (k.zero) {
+      if (s.flags & kFirstUpdate) {
+        ++made;
+        set_inside(s, inside_original(s.old_position));
+      }
+      if (inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    }
+    s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
     set_inside(s, inside_now);
     return made;
   }
