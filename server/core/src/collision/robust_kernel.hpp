@@ -58,13 +58,9 @@ class RobustKernel {
   double depth(const State& s, const Vec3& p) const {
     return std::max(0.0, std::sqrt(s.sphere.rho2) - (p - s.sphere.center).norm());
   }
-  // Whether update() will query: the point left its sphere (a sweep with a query order asks first).
-  [[gnu::always_inline]] bool may_query(const State& s, const TestPoint& pt) const {
-    return (pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2;
-  }
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if (may_query(s, pt)) made = test(s, pt.p, pt.previous());
+    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
     finish(s, pt.p);
     return made;
   }

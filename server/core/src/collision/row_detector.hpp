@@ -12,7 +12,6 @@
 #include <type_traits>
 
 #include "kernel_rows.hpp"
-#include "query_order.hpp"
 #include "surfeledit/core/snapshot_io.hpp"
 
 namespace surfeledit::detail {
@@ -59,17 +58,6 @@ struct Journal {
   }
 };
 
-// Whether a kernel says before update() whether it will query (bool may_query(const State&, const
-// TestPoint&)), which a sweep with a query order needs.
-template <typename Kernel, typename = void>
-struct MayQuery : std::false_type {};
-template <typename Kernel>
-struct MayQuery<Kernel, std::void_t<decltype(std::declval<const Kernel&>().may_query(
-                            std::declval<const typename Kernel::State&>(), std::declval<const TestPoint&>()))>>
-    : std::true_type {};
-template <typename Kernel>
-inline constexpr bool has_may_query = MayQuery<Kernel>::value;
-
 // The points of a step are independent: each row goes through update() (not_candidate() when the
 // broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
 // large enough to pay for waking the other threads, else serially. Results do not depend on either.
@@ -97,55 +85,27 @@ struct ParallelSweep {
 
   // `journal` (may be null): notes each row's state before its update. `by_slot`: `rows` are exactly the
   // rows with a state, in order (the deformable list), so rows[q]'s state is the q-th stored one and the
-  // sweep walks the states in storage order without the row -> slot map (RESULTS §39). `order` (may be
-  // null; used with a kernel that has may_query() and a by-slot sweep of as many rows): the rows that
-  // need no query are settled first in storage order, then the others in that order (query_order.hpp).
+  // sweep walks the states in storage order without the row -> slot map (RESULTS §39).
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
             int threads, std::vector<std::uint8_t>& hit, bool by_slot,
-            Journal<typename Kernel::State>* journal = nullptr, const QueryOrder* order = nullptr) {
+            Journal<typename Kernel::State>* journal = nullptr) {
     const Index n = static_cast<Index>(rows.size());
     if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
-    if (!by_slot || !order || order->size() != rows.size()) order = nullptr;
-    static_assert(Kernel::kChunk % 64 == 0, "a chunk of rows spans whole words of the query bits");
     // One loop per combination of the three options, each compiled without their branches.
     auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
-      constexpr bool kBySlot = decltype(by_slot_c)::value, kJournal = decltype(journal_c)::value,
-                     kCandidate = decltype(candidate_c)::value;
-      std::vector<std::uint64_t> asks;  // with an order: bit q = rows[q] needs a query
-      if constexpr (kBySlot && has_may_query<Kernel>) {
-        if (order) asks.assign(static_cast<std::size_t>((n + 63) / 64), 0);
-      }
       auto range = [&](Index begin, Index end, Index& tested, Index& queries) {
-        if constexpr (kBySlot && has_may_query<Kernel>) {
-          if (order) {
-            settle_range<kJournal, kCandidate>(kernel, rows, states, scene, previous, candidate, hit, journal, begin,
-                                               end, asks.data(), tested, queries);
-            return;
-          }
-        }
-        rows_range<kBySlot, kJournal, kCandidate>(kernel, rows, states, scene, previous, candidate, hit, journal,
-                                                  begin, end, tested, queries);
-      };
-      auto asked = [&](Index begin, Index end, Index& tested, Index& queries) {
-        if constexpr (kBySlot && has_may_query<Kernel>) {
-          ordered_range<kJournal>(kernel, rows, states, scene, previous, hit, journal, *order, asks.data(), begin,
-                                  end, tested, queries);
-        }
+        rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
+            kernel, rows, states, scene, previous, candidate, hit, journal, begin, end, tested, queries);
       };
       Index tested = 0, queries = 0;
       if (!parallel(n, threads)) {
         range(0, n, tested, queries);
-        if (!asks.empty()) asked(0, n, tested, queries);
       } else {
         const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
         for (Index c = 0; c < chunks; ++c) range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), tested, queries);
-        if (!asks.empty()) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
-          for (Index c = 0; c < chunks; ++c) asked(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), tested, queries);
-        }
       }
       return Tally{tested, queries};
     };
@@ -172,70 +132,18 @@ struct ParallelSweep {
     Index t = 0, m_sum = 0;
     for (Index q = begin; q < end; ++q) {
       const Index r = rows[q];
-      const Index made = one_row<kJournal, kCandidate>(kernel, kBySlot ? stored[q] : states[r], r, q,
-                                                       row_point(scene, previous, r), candidate, hit, journal);
-      m_sum += made;
-      t += made > 0;
-    }
-    tested += t;
-    queries += m_sum;
-  }
-  // One row's step: update() or not_candidate(), the journal's note, the hit flag. Returns the queries made.
-  template <bool kJournal, bool kCandidate, typename Kernel>
-  [[gnu::always_inline]] static Index one_row(const Kernel& kernel, typename Kernel::State& s, Index r, Index q,
-                                              const TestPoint& pt, const std::vector<std::uint8_t>* candidate,
-                                              std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal) {
-    typename Kernel::State before;
-    if constexpr (kJournal) before = s;
-    Index made;
-    if (kCandidate && !(*candidate)[r]) {
-      made = kernel.not_candidate(s, pt);
-    } else {
-      made = kernel.update(s, pt);
-    }
-    if constexpr (kJournal) journal->note(r, before, s, made);
-    hit[q] = s.colliding();  // read while the state is in cache
-    return made;
-  }
-
-  // A by-slot sweep with an order, first pass over rows[begin..end): the rows that need no query are stepped,
-  // the others get their bit in `asks` (begin is a multiple of 64 or the only range: no word is shared).
-  template <bool kJournal, bool kCandidate, typename Kernel>
-  static void settle_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
-                           const CollisionScene& scene, const Points& previous,
-                           const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
-                           Journal<typename Kernel::State>* journal, Index begin, Index end, std::uint64_t* asks,
-                           Index& tested, Index& queries) {
-    typename Kernel::State* const stored = states.stored_data();
-    Index t = 0, m_sum = 0;
-    for (Index q = begin; q < end; ++q) {
-      const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
-      if (!(kCandidate && !(*candidate)[r]) && kernel.may_query(stored[q], pt)) {
-        asks[q >> 6] |= std::uint64_t{1} << (q & 63);
-        continue;
+      auto& s = kBySlot ? stored[q] : states[r];
+      typename Kernel::State before;
+      if constexpr (kJournal) before = s;
+      Index made;
+      if (kCandidate && !(*candidate)[r]) {
+        made = kernel.not_candidate(s, pt);
+      } else {
+        made = kernel.update(s, pt);
       }
-      const Index made = one_row<kJournal, kCandidate>(kernel, stored[q], r, q, pt, candidate, hit, journal);
-      m_sum += made;
-      t += made > 0;
-    }
-    tested += t;
-    queries += m_sum;
-  }
-  // Second pass: the rows with a bit in `asks`, taken in `order` from its position begin to end.
-  template <bool kJournal, typename Kernel>
-  static void ordered_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
-                            const CollisionScene& scene, const Points& previous, std::vector<std::uint8_t>& hit,
-                            Journal<typename Kernel::State>* journal, const QueryOrder& order,
-                            const std::uint64_t* asks, Index begin, Index end, Index& tested, Index& queries) {
-    typename Kernel::State* const stored = states.stored_data();
-    Index t = 0, m_sum = 0;
-    for (Index i = begin; i < end; ++i) {
-      const Index q = order[static_cast<std::size_t>(i)];
-      if (!((asks[q >> 6] >> (q & 63)) & 1u)) continue;
-      const Index r = rows[q];
-      const Index made = one_row<kJournal, false>(kernel, stored[q], r, q, row_point(scene, previous, r), nullptr,
-                                                  hit, journal);
+      if constexpr (kJournal) journal->note(r, before, s, made);
+      hit[q] = s.colliding();  // read while the state is in cache
       m_sum += made;
       t += made > 0;
     }
@@ -300,8 +208,6 @@ class RowDetector final : public NarrowDetector {
     rows_ = std::move(rows);
     sweep_.reset();
     journal_.on = false;
-    order_.reset();
-    make_order(scene);
     preprocess_ms_ = ms_since(start);
   }
 
@@ -310,7 +216,6 @@ class RowDetector final : public NarrowDetector {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
     rows_.kernel.bind(scene);
-    make_order(scene);
     hit_.resize(rows_.deformable.size());
     const Tally tally = sweep(rows_.deformable, scene, previous, candidate);
     CollisionResult result;
@@ -326,12 +231,10 @@ class RowDetector final : public NarrowDetector {
   // Rows renumbered or added: the journal (by row) ends.
   void on_removed(const std::vector<bool>& keep) override {
     journal_.on = false;
-    order_.reset();
     rows_.on_removed(keep);
   }
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     journal_.on = false;
-    order_.reset();
     rows_.on_inserted(scene, parents);
   }
   // Rigid rows moved (another tool's op): the kernel updates its references and the states that
@@ -348,7 +251,7 @@ class RowDetector final : public NarrowDetector {
                                        resolve_threads(params_.threads));
   }
   std::size_t memory_bytes() const override {
-    return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity() + (order_ ? order_->memory_bytes() : 0);
+    return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
   }
 
   // A step changes only the deformable rows' states and the sweep's tallies (hit_ is scratch); the
@@ -402,7 +305,6 @@ class RowDetector final : public NarrowDetector {
     auto out = std::make_unique<RowDetector>(params_);
     out->rows_ = rows_;
     out->sweep_ = sweep_;
-    out->order_ = order_;
     out->preprocess_ms_ = preprocess_ms_;
     return out;
   }
@@ -496,7 +398,6 @@ class RowDetector final : public NarrowDetector {
     const std::size_t saved_cap = in.capacity("journal capacity", 0, 1);
     rows_ = std::move(rows);
     sweep_.reset();
-    order_.reset();  // built at the next step
     preprocess_ms_ = preprocess;
     dense_skip_ = static_cast<int>(skip);
     journal_ = Journal<typename Kernel::State>();
@@ -529,23 +430,14 @@ class RowDetector final : public NarrowDetector {
       const bool by_slot = &rows == &rows_.deformable;
       const bool journal = journal_.on && journal_.tested.size() == rows_.states.size();
       return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, by_slot,
-                        journal ? &journal_ : nullptr, by_slot ? order_.get() : nullptr);
+                        journal ? &journal_ : nullptr);
     } else {
       return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
     }
   }
 
-  // The deformable rows' query order (query_order.hpp) for a kernel with may_query(), built from the positions
-  // at reset or, after the rows changed (insertion, removal, snapshot load), at the next step; speed only.
-  void make_order(const CollisionScene& scene) {
-    if constexpr (std::is_same_v<Sweep, ParallelSweep> && has_may_query<Kernel>) {
-      if (!order_ && !rows_.deformable.empty()) order_ = std::make_shared<const QueryOrder>(scene.positions, rows_.deformable);
-    }
-  }
-
   KernelRows<Kernel> rows_;
   Sweep sweep_;
-  std::shared_ptr<const QueryOrder> order_;  // null without may_query() or until built; immutable, shared by clones
   std::vector<std::uint8_t> hit_;  // #deformable: colliding after the last step (filled by the sweep)
   double preprocess_ms_ = 0.0;  // the last reset
   Journal<typename Kernel::State> journal_;  // states before the first change since start_journal()
