@@ -31,9 +31,8 @@ class RobustKernel {
   struct alignas(64) State {
     Sphere sphere;                     // holds no original surfel
     Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
-    std::uint32_t near = 0;            // 1 + the original row nearest at the last test, 0 = none (a prefetch hint only)
     std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
-    std::uint8_t pad[3] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint8_t pad[7] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
     bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
   };
   static_assert(sizeof(State) == 64, "State has padding bytes");
@@ -192,39 +191,13 @@ class RobustKernel {
     set_inside(s, pr.inside);
     return made;
   }
-  // Prefetches what ref(o) will read of original row o (its position, normal and radius).
-  void prefetch_ref(Index o) const {
-    const double *p, *n, *r;
-    if (orig_.deformable.test(o)) {
-      const Index d = orig_.deformable.rank(o);
-      p = orig_.positions.data() + 3 * static_cast<std::ptrdiff_t>(d);
-      n = orig_.normals.data() + 3 * static_cast<std::ptrdiff_t>(d);
-      r = orig_.radii.data() + d;
-    } else {
-      const Index m = row_of(o);
-      if (m < 0) return;
-      p = model_positions_ + 3 * static_cast<std::ptrdiff_t>(m);
-      n = model_normals_ + 3 * static_cast<std::ptrdiff_t>(m);
-      r = model_radii_ + m;
-    }
-    __builtin_prefetch(p);
-    __builtin_prefetch(p + 2);
-    __builtin_prefetch(n);
-    __builtin_prefetch(n + 2);
-    __builtin_prefetch(r);
-  }
   // The thesis's test against the original model (Code 6.8). A forgotten inside state (kFirstUpdate) is
   // re-derived at old_position only when the nearest original surfel to p1 is a zero surfel: against a
   // deformable one no change counts, and the state is overwritten by p1's, so that query cannot change the
   // result (an exact skip: RESULTS §50).
   Index test_original(State& s, const Vec3& p1, double& r_near) const {
     const double w = params_.threshold;
-    // The point's last nearest is likely its nearest again or close to it in row order: its data is fetched
-    // while the tree is searched.
-    if (s.near > 0 && static_cast<Index>(s.near) <= original_rows()) prefetch_ref(static_cast<Index>(s.near) - 1);
-    const Index o = orig_.tree->nearest(p1);
-    s.near = static_cast<std::uint32_t>(o + 1);
-    const Ref k = ref(o);
+    const Ref k = ref(orig_.tree->nearest(p1));
     Index made = 1;
     const Vec3 d = p1 - k.p;
     r_near = k.radius;
