@@ -9,7 +9,6 @@
 #include <thread>
 
 #include "collision_oracle.hpp"
-#include "surfeledit/core/settings.hpp"
 
 using namespace surfeledit;
 using namespace surfeledit::testing;
@@ -47,7 +46,7 @@ int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, co
     const CollisionResult got = det->detect(scene.view(), previous);
     if (got.colliding != want.colliding) ++differing;
     EXPECT_EQ(got.colliding, want.colliding) << describe(params, hierarchy) << " step " << k;
-    // Temporal skips the broad phase (collision_bvh.cpp): no overlap test.
+    // Temporal skips the broad phase (bvh/hierarchical_detector.hpp): no overlap test.
     if (params.algorithm == CollisionAlgorithm::Temporal) EXPECT_EQ(got.stats.nv, 0) << describe(params, hierarchy);
     else EXPECT_GT(got.stats.nv, 0) << describe(params, hierarchy) << " step " << k;
     EXPECT_LE(got.stats.np, got.stats.deformable);
@@ -176,44 +175,6 @@ TEST(CollisionBvh, ConcaveFoldSimpleAsWithoutExtendedAsRobust) {
     robust_max = std::max(robust_max, c.size());
   }
   EXPECT_GT(robust_max, 50u);  // the fold does collide
-}
-
-TEST(CollisionBvh, SettingsErrorsNameTheSetting) {
-  SessionSettings s;
-  auto fails = [&](std::vector<NamedSetting> changes, const std::string& field) {
-    try {
-      apply_settings(s, changes);
-      ADD_FAILURE() << "no error for " << field;
-    } catch (const Error& e) {
-      EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
-      EXPECT_EQ(e.field(), field) << e.what();
-    }
-  };
-  fails({{"zero_hierarchy", std::string("kdop")}}, "zero_hierarchy");
-  fails({{"deformable_hierarchy", std::string("obb")}}, "deformable_hierarchy");
-  fails({{"deformable_hierarchy", std::string("aabb")}}, "deformable_hierarchy");  // no zero tree
-  fails({{"zero_hierarchy", std::string("aabb")}, {"update", std::string("sideways")}}, "update");
-  fails({{"zero_hierarchy", std::string("aabb")}, {"hybrid_f", 1.5}}, "hybrid_f");
-  fails({{"zero_hierarchy", std::string("obb")}, {"sat", std::string("half")}}, "sat");
-  fails({{"extended", true}}, "extended");  // no zero tree
-  fails({{"zero_hierarchy", std::string("aabb")}, {"extended", true}, {"algorithm", std::string("simple")}}, "extended");
-  fails({{"zero_hierarchy", std::string("aabb")}, {"algorithm", std::string("improved")}}, "zero_hierarchy");
-  fails({{"zero_hierarchy", std::string("aabb")}, {"algorithm", std::string("simple")}, {"step_bound", false}},
-        "zero_hierarchy");
-  fails({{"leaf_max_surfels", 1.0}, {"leaf_min_surfels", 2.0}}, "leaf_max_surfels");
-  fails({{"leaf_min_surfels", 0.0}}, "leaf_min_surfels");
-  fails({{"leaf_max_surfels", 2.5}}, "leaf_max_surfels");
-  fails({{"inflation", -1.0}}, "inflation");
-  const SessionSettings ok = apply_settings(
-      s, {{"zero_hierarchy", std::string("obb")}, {"deformable_hierarchy", std::string("aabb")},
-          {"update", std::string("top_down")}, {"sat", std::string("full")}, {"leaf_max_surfels", 8.0}});
-  EXPECT_EQ(ok.hierarchy.zero, ZeroHierarchy::Obb);
-  EXPECT_EQ(ok.hierarchy.tree.update, bvh::UpdateMode::TopDown);
-  EXPECT_EQ(ok.hierarchy.tree.leaf_max_surfels, 8);
-  bool listed = false;
-  for (const auto& d : describe(ok))
-    if (d.name == "zero_hierarchy") listed = std::get<std::string>(d.value) == "obb";
-  EXPECT_TRUE(listed);
 }
 
 // Rebuild on idle: a background rebuild while steps keep arriving. Every step still equals the
