@@ -44,14 +44,28 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
     def = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, h_.tree);
     def_build_ms_ = ms_since(t_def);
   }
+  // Surfel/tree behind a broad phase: the filter tree and the zero hull (not for Temporal, which has none).
+  std::unique_ptr<bvh::Bvh<bvh::Aabb>> filter;
+  bvh::Aabb hull;
+  for (Index r : zero_rows) hull.expand(row3(scene.positions, r), scene.radii[r]);
+  if (!def && (h_.extended || params_.algorithm != CollisionAlgorithm::Temporal)) {
+    bvh::BvhParams fp = h_.tree;
+    fp.update = bvh::UpdateMode::Bounded;
+    filter = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, fp);
+    bvh::BvhNode<bvh::Aabb> leaf;
+    leaf.box = hull;
+    zero_hull_.adopt({leaf}, IndexList(), fp);
+  } else {
+    zero_hull_ = bvh::Bvh<bvh::Aabb>();
+  }
   zero_ = std::move(zero);
   def_ = std::move(def);
+  filter_ = std::move(filter);
   extended_ = std::move(extended);
   deformable_ = std::move(deformable);
   rows_ = rows;
   bounded_ = !def_ || def_->bounded();
-  zero_bounds_ = bvh::Aabb{};
-  for (Index r : zero_rows) zero_bounds_.expand(row3(scene.positions, r), scene.radii[r]);
+  zero_bounds_ = hull;
   if (bounded_) {
     reach_ = Values();
     prev_radius_.resize(deformable_.size());
@@ -92,7 +106,7 @@ CollisionResult HierarchicalDetector::detect(const CollisionScene& scene, const 
   }
   if (broad && def_) {
     if (bounded_) {
-      const StepShift sh = step_shift(scene, previous, deformable_, prev_radius_);
+      const StepShift sh = shift_of(scene, previous);
       counters += def_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
     } else {
       counters += def_->refit(scene.positions, reach_);
@@ -104,31 +118,7 @@ CollisionResult HierarchicalDetector::detect(const CollisionScene& scene, const 
     std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
     candidates = counters.np;
   } else if (broad) {
-    // Surfel/tree: each ball (p, r + the step's largest |t|) -- larger than (p, r + |t|), so no candidate
-    // is lost -- first against the box of all zero balls, then down the zero tree.
-    const double reach = step_shift(scene, previous, deformable_, prev_radius_).reach;
-    const double* pos = scene.positions.data();
-    const double* rad = scene.radii.data();
-    const bvh::Aabb& all = zero_bounds_;
-    std::visit(
-        [&](const auto& zero) {
-          for (Index r : deformable_) {
-            const double* x = pos + 3 * static_cast<std::ptrdiff_t>(r);
-            const double R = (rad[r] + reach) * (1.0 + 1e-9);
-            ++counters.nv;
-            if (x[0] + R < all.lo[0] || x[0] - R > all.hi[0] || x[1] + R < all.lo[1] || x[1] - R > all.hi[1] ||
-                x[2] + R < all.lo[2] || x[2] - R > all.hi[2])
-              continue;
-            const bvh::Sphere ball{row3(scene.positions, r), R};
-            bvh::query_surfel(zero, ball, [&](std::int32_t) {
-              candidate_[static_cast<std::size_t>(r)] = 1;
-              marked_.push_back(r);
-              ++candidates;
-              return false;  // one overlapping leaf makes it a candidate
-            }, counters, fifo_);
-          }
-        },
-        zero_);
+    candidates = surfel_tree(scene, previous, counters);
     counters.np = candidates;
   }
   CollisionResult result;
@@ -159,6 +149,64 @@ CollisionResult HierarchicalDetector::detect(const CollisionScene& scene, const 
   return result;
 }
 
+Index HierarchicalDetector::surfel_tree(const CollisionScene& scene, const Points& previous, bvh::BvhCounters& counters) {
+  // Each ball (p, r + the step's largest |t|) -- larger than (p, r + |t|), so no candidate is lost -- first
+  // against the box of all zero balls, then down the zero tree.
+  const StepShift sh = shift_of(scene, previous);
+  const double reach = sh.reach;
+  const double* pos = scene.positions.data();
+  const double* rad = scene.radii.data();
+  const bvh::Aabb& all = zero_bounds_;
+  Index candidates = 0;
+  std::visit(
+      [&](const auto& zero) {
+        auto test = [&](Index r) {
+          const double* x = pos + 3 * static_cast<std::ptrdiff_t>(r);
+          const double R = (rad[r] + reach) * (1.0 + 1e-9);
+          ++counters.nv;
+          if (x[0] + R < all.lo[0] || x[0] - R > all.hi[0] || x[1] + R < all.lo[1] || x[1] - R > all.hi[1] ||
+              x[2] + R < all.lo[2] || x[2] - R > all.hi[2])
+            return;
+          const bvh::Sphere ball{row3(scene.positions, r), R};
+          bvh::query_surfel(zero, ball, [&](std::int32_t) {
+            candidate_[static_cast<std::size_t>(r)] = 1;
+            marked_.push_back(r);
+            ++candidates;
+            return false;  // one overlapping leaf makes it a candidate
+          }, counters, fifo_);
+        };
+        if (!filter_) {
+          for (Index r : deformable_) test(r);
+          return;
+        }
+        // The filter's leaf boxes bound the balls (p, r + |t|) (bounded update, bvh_bounded-inl.hpp): a row
+        // outside every leaf that reaches the box of all zero balls has a ball (p, r + |t|) missing it, so it
+        // is no candidate by the argument above (the ball the test uses only adds candidates).
+        counters += filter_->step_bounded(scene.positions, previous, scene.radii, sh.shift, sh.reach);
+        bvh::collide(zero_hull_, *filter_, bvh::SatMode::Lite, test, counters);
+      },
+      zero_);
+  return candidates;
+}
+
+StepShift HierarchicalDetector::shift_of(const CollisionScene& scene, const Points& previous) {
+  if (!scene.displacement_bound) return step_shift(scene, previous, deformable_, prev_radius_);
+  const double bound = *scene.displacement_bound;
+  if (!(bound >= 0.0 && std::isfinite(bound))) {
+    throw Error(ErrorCode::InvalidArgument, "displacement_bound",
+                "must be finite and >= 0, got " + std::to_string(bound));
+  }
+#ifndef NDEBUG
+  // The measured values (the pass the bound spares) must not exceed it: displacement and radius growth.
+  const StepShift measured = step_shift(scene, previous, deformable_, prev_radius_);
+  if (measured.shift > bound * (1.0 + 1e-9)) {
+    throw Error(ErrorCode::Internal, "displacement_bound",
+                "handed-over bound " + std::to_string(bound) + " below the measured " + std::to_string(measured.shift));
+  }
+#endif
+  return StepShift{bound, bound};  // no radius changed: the shift is the displacement
+}
+
 void HierarchicalDetector::on_removed(const std::vector<bool>& keep) {
   if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
   if (extended_) {
@@ -169,6 +217,7 @@ void HierarchicalDetector::on_removed(const std::vector<bool>& keep) {
   const IndexList new_row = remap_rows(keep);
   std::visit([&](auto& zero) { zero.on_removed(keep); }, zero_);
   if (def_) def_->on_removed(keep);
+  if (filter_) filter_->on_removed(keep);
   if (bounded_) {
     std::size_t w = 0;
     for (std::size_t q = 0; q < deformable_.size(); ++q)
@@ -201,6 +250,7 @@ void HierarchicalDetector::on_inserted(const CollisionScene& scene, const IndexL
   // Each child joins its parent's leaf (zero tree: ignored, the parents are deformable).
   std::visit([&](auto& zero) { zero.on_inserted(scene.positions, scene.radii, parents); }, zero_);
   if (def_) inserted_nu_ += def_->on_inserted(scene.positions, bounded_ ? scene.radii : reach_, parents).nu;
+  if (filter_) inserted_nu_ += filter_->on_inserted(scene.positions, scene.radii, parents).nu;
   rows_ += added;
   candidate_.assign(static_cast<std::size_t>(rows_), 0);
   marked_.clear();
@@ -224,6 +274,7 @@ std::vector<std::pair<std::string, std::size_t>> HierarchicalDetector::structure
   out.emplace_back(std::string("bvh_zero_") + to_string(h_.zero),
                    std::visit([](const auto& zero) { return zero.memory_bytes(); }, zero_));
   if (def_) out.emplace_back("bvh_deformable_aabb", def_->memory_bytes());
+  if (filter_) out.emplace_back("bvh_surfel_filter", filter_->memory_bytes() + zero_hull_.memory_bytes());
   out.emplace_back("bvh_scratch", static_cast<std::size_t>(reach_.size()) * sizeof(double) + candidate_.capacity() +
                                       deformable_.capacity() * sizeof(Index) +
                                       (prev_radius_.capacity() + marked_.capacity()) * sizeof(double));

@@ -83,6 +83,12 @@ class HierarchicalDetector final : public CollisionDetector {
     }
   };
 
+  // Surfel/tree: marks the candidates among the deformable rows, each ball (p, r + reach) tested against
+  // zero_bounds_ and then down the zero tree; only the rows in filter_'s leaves that reach zero_hull_.
+  Index surfel_tree(const CollisionScene& scene, const Points& previous, bvh::BvhCounters& counters);
+  // The step's shift and reach (step_shift.hpp): the scene's displacement bound when it has one (validated;
+  // checked against the measured values in a debug build), else measured.
+  StepShift shift_of(const CollisionScene& scene, const Points& previous);
   // Swaps in a finished background rebuild (never waits); dropped when rows changed since it started.
   void adopt_rebuilt_tree();
 
@@ -98,6 +104,9 @@ class HierarchicalDetector final : public CollisionDetector {
   Values reach_;                                    // #P: radius + own displacement this step (!bounded_)
   bool bounded_ = false;                            // no reach_: def_ uses the bounded update, or there is no def_
   bvh::Aabb zero_bounds_;                           // box of every zero ball (surfel/tree's first test)
+  std::unique_ptr<bvh::Bvh<bvh::Aabb>> filter_;     // surfel/tree: bounded tree over the deformable rows, whose
+                                                    // leaves reaching zero_hull_ hold every row to test
+  bvh::Bvh<bvh::Aabb> zero_hull_;                   // surfel/tree: one leaf, the box zero_bounds_
   std::vector<double> prev_radius_;                 // bounded: by deformable_ index, its radius at the last step
   std::vector<std::uint8_t> candidate_;             // #P: 1 = candidate this step
   IndexList marked_;                                // the rows candidate_ holds set (cleared at the next step)

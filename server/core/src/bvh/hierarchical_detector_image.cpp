@@ -35,6 +35,8 @@ void HierarchicalDetector::restore_image(const DetectorImage& image) {
   if (extended_) *extended_ = *mine->extended;
   else narrow_->restore_image(*mine->narrow);
   if (def_) *def_ = *mine->def;
+  // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
+  if (filter_) filter_->refit_all_next_step();
   if (bounded_) prev_radius_ = mine->reach;
   else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
   step_ = mine->step;
@@ -52,6 +54,8 @@ std::unique_ptr<CollisionDetector> HierarchicalDetector::clone() const {
   out->extended_bytes_ = extended_bytes_;
   out->zero_ = zero_;
   if (def_) out->def_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*def_);
+  if (filter_) out->filter_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*filter_);
+  out->zero_hull_ = zero_hull_;
   out->deformable_ = deformable_;
   out->rows_ = rows_;
   out->reach_ = reach_;
