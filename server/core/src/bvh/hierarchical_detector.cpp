@@ -115,7 +115,9 @@ CollisionResult HierarchicalDetector::detect(const CollisionScene& scene, const 
       candidate_[static_cast<std::size_t>(row)] = 1;
       marked_.push_back(row);
     };
-    std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters); }, zero_);
+    // The hull of the zero balls prunes too where the zero boxes are looser than an AABB (OBB, sphere).
+    const bvh::Aabb* hull = std::holds_alternative<bvh::Bvh<bvh::Aabb>>(zero_) ? nullptr : &zero_bounds_;
+    std::visit([&](const auto& zero) { bvh::collide(zero, *def_, h_.sat, mark, counters, hull); }, zero_);
     candidates = counters.np;
   } else if (broad) {
     candidates = surfel_tree(scene, previous, counters);
