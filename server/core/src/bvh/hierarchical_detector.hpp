@@ -21,6 +21,11 @@
 // inside state is re-derived once it is a candidate again, see RobustKernel::not_candidate in
 // collision/robust_kernel.hpp); the tests check the equality on every step of the scenario scenes.
 //
+// The idle step (docs/algorithms.md §5): a displacement bound in the detect input replaces the pass for the
+// step's largest displacement (shift_of); surfel/tree tests only the rows of a bounded filter tree's leaves
+// that reach the box of all zero balls (surfel_tree); tree/tree with OBB or sphere zero trees prunes
+// deformable boxes missing that box too.
+//
 // Rebuild on idle (thesis §8.3.3): start_rebuild() builds a fresh deformable tree on a background
 // thread (bvh::BvhRebuilder); detect() adopts it at its start when it is finished and the rows were
 // neither inserted nor removed meanwhile (topology tag), then refits it as usual. No step waits.
