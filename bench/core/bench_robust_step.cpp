@@ -16,7 +16,7 @@
 // BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
-//   session, no history). <config> indexes kConfigs below (0: Robust without a hierarchy, 1: Robust with
+//   session, no history; the detect input carries the translation's displacement bound, as EditSession's). <config> indexes kConfigs below (0: Robust without a hierarchy, 1: Robust with
 //   zero + deformable AABB trees at the default update; BM_DetectIdle runs every one). Counters: median /
 //   max thread CPU ms of one detect (detect_cpu_*), as the CPU column is of the whole iteration; use them on
 //   a loaded machine; the broad phase's nv / np / nu and the queries (medians).
@@ -221,8 +221,12 @@ struct DetectorRun {
     previous = positions;
     for (SurfelId id : scene.one) positions.row(static_cast<Index>(id)) += t.transpose();
     const double c0 = thread_cpu_ms();
-    const CollisionResult r = detector->detect(CollisionScene{positions, scene.arrays.normals, scene.arrays.radii, regions},
-                                               previous);
+    // The session's displacement bound for a translation (CollisionScene::displacement_bound).
+    DeformParams move;
+    move.translation = t;
+    CollisionScene view{positions, scene.arrays.normals, scene.arrays.radii, regions};
+    view.displacement_bound = displacement_bound(move);
+    const CollisionResult r = detector->detect(view, previous);
     const double cpu = thread_cpu_ms() - c0;
     benchmark::DoNotOptimize(r.colliding.data());
     last = r.stats;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <optional>
 
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
@@ -532,6 +533,42 @@ TEST(Deformation, OnlyMovesTheListedRowsAsTheFullStepDoes) {
   }
   EXPECT_TRUE(m.positions == base.positions);
   EXPECT_TRUE(m.normals == base.normals);
+}
+
+// The step's displacement bound handed to the detector (displacement_bound): no row of a translation moves
+// farther than it, on every blend, at 1e6 offsets (where rounding p + s t is most of a tiny step) and at
+// 1e-4 / 1e4 scales, for steps from far below the coordinates' ulp to large; none with a rotation.
+TEST(Deformation, DisplacementBoundHoldsForEveryRow) {
+  const Model base = make_model();
+  std::size_t checked = 0;
+  for (const double scale : {1.0, 1e-4, 1e4}) {
+    for (const Vec3 offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
+      Points positions = base.positions * scale;
+      positions.rowwise() += (offset * scale).transpose();
+      const DeformationFields fields = compute_fields(positions, base.regions, 1);
+      for (const Blend blend : {Blend::Smooth, Blend::Quadratic, Blend::Linear}) {
+        for (const double length : {1e-13, 3e-11, 1e-7, 1e-3, 0.25}) {
+          DeformParams p;
+          p.blend = blend;
+          p.translation = Vec3(0.6, -0.48, 0.64) * (length * scale);
+          const std::optional<double> bound = displacement_bound(p);
+          ASSERT_TRUE(bound.has_value());
+          Points moved = positions, normals = base.normals;
+          apply_step(fields, p, moved, normals, nullptr, nullptr, 1);
+          double largest = 0.0;
+          for (Eigen::Index i = 0; i < moved.rows(); ++i)
+            largest = std::max(largest, (moved.row(i) - positions.row(i)).norm());
+          EXPECT_LE(largest, *bound) << "scale " << scale << " offset " << offset.x() << " length " << length;
+          if (length >= 1e-7) EXPECT_GT(largest, 0.0) << "the step moves rows (length " << length << ")";
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 90u);
+  DeformParams turn;
+  turn.angle = 0.1;
+  EXPECT_FALSE(displacement_bound(turn).has_value());
 }
 
 }  // namespace

@@ -17,7 +17,7 @@
 namespace surfeledit::detail {
 
 // A detector whose per-surfel test can be limited to candidate rows: the narrow phase of the
-// hierarchies (collision_bvh.cpp) runs the very same code as the detector without a hierarchy.
+// hierarchies (bvh/hierarchical_detector.hpp) runs the very same code as the detector without a hierarchy.
 class NarrowDetector : public CollisionDetector {
  public:
   // detect() where only rows with candidate[r] != 0 are tested (`candidate`: one flag per row;
@@ -40,7 +40,7 @@ class NarrowDetector : public CollisionDetector {
 // Defined in collision.cpp: the row detector (collision/row_detector.hpp) of `params.algorithm`'s kernel
 // (not None).
 std::unique_ptr<NarrowDetector> make_narrow_detector(const CollisionParams& params);
-// Defined in collision_bvh.cpp: `narrow` behind the broad phase of `hierarchy` (validated by the caller).
+// Defined in bvh/hierarchical_detector.cpp: `narrow` behind the broad phase of `hierarchy` (validated by the caller).
 std::unique_ptr<CollisionDetector> make_hierarchical_detector(const CollisionParams& params,
                                                               const HierarchyParams& hierarchy,
                                                               std::unique_ptr<NarrowDetector> narrow);

@@ -494,4 +494,10 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   return result;
 }
 
+std::optional<double> displacement_bound(const DeformParams& params) {
+  if (params.angle != 0.0) return std::nullopt;
+  // The margin covers the norm's rounding and blend values a few ulps above 1.
+  return 2.0 * params.translation.norm() * (1.0 + 1e-12);
+}
+
 }  // namespace surfeledit

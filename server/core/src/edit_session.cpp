@@ -209,9 +209,10 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     if (rest_radius_.size() != model_.size()) rest_radius_ = a.radii;
   }
   Points& previous = tool_->previous;  // positions before the step, for each surfel's own displacement
+  const bool from_last_step = tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows();
   if (!tool_->detector) {
     previous.resize(0, 3);
-  } else if (tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows()) {
+  } else if (from_last_step) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
     detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}});
@@ -276,7 +277,11 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
     out.resample_ms = ms_since(t_resample);
   }
   if (tool_->detector) {
-    CollisionResult c = tool_->detector->detect(scene_of(*tool_->fields), previous);
+    CollisionScene scene = scene_of(*tool_->fields);
+    // Nothing but this step moved rows since the detector's last detect, and no split resized one: the
+    // deformation's own bound spares the detector its pass over the rows (CollisionScene::displacement_bound).
+    if (from_last_step && out.inserted.empty()) scene.displacement_bound = displacement_bound(params);
+    CollisionResult c = tool_->detector->detect(scene, previous);
     out.detected = true;
     out.colliding.reserve(c.colliding.size());
     for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);

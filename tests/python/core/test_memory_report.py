@@ -15,9 +15,9 @@ CONFIGS = [
     ("simple", {}, {"collision_simple"}),
     ("temporal", {}, {"collision_temporal"}),
     ("robust", {}, {"collision_robust"}),
-    ("robust", {"zero_hierarchy": "aabb"}, {"collision_robust", "bvh_zero_aabb", "bvh_scratch"}),
-    ("robust", {"zero_hierarchy": "obb"}, {"collision_robust", "bvh_zero_obb", "bvh_scratch"}),
-    ("robust", {"zero_hierarchy": "sphere"}, {"collision_robust", "bvh_zero_sphere", "bvh_scratch"}),
+    ("robust", {"zero_hierarchy": "aabb"}, {"collision_robust", "bvh_zero_aabb", "bvh_surfel_filter", "bvh_scratch"}),
+    ("robust", {"zero_hierarchy": "obb"}, {"collision_robust", "bvh_zero_obb", "bvh_surfel_filter", "bvh_scratch"}),
+    ("robust", {"zero_hierarchy": "sphere"}, {"collision_robust", "bvh_zero_sphere", "bvh_surfel_filter", "bvh_scratch"}),
     ("robust", {"zero_hierarchy": "aabb", "deformable_hierarchy": "aabb"},
      {"collision_robust", "bvh_zero_aabb", "bvh_deformable_aabb", "bvh_scratch"}),
 ]

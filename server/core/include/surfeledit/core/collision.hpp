@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,6 +99,12 @@ struct CollisionScene {
   const Points& normals;               // #P by 3, current, unit
   const Values& radii;                 // #P
   const std::vector<Region>& regions;  // #P; deformable = not Zero
+  // For detect() only: an upper bound on |position - previous| of every deformable row (model units, finite,
+  // >= 0) together with the promise that no deformable radius changed since this detector's last detect()
+  // or reset(); the deformation step knows it (displacement_bound(DeformParams)). Empty: the detector
+  // measures both itself (a pass over the deformable rows). Only the hierarchies read it; a debug build
+  // checks it against the measured value.
+  std::optional<double> displacement_bound{};
 };
 
 // Rigid rows as a detector last saw them, before another tool's ops moved them (on_rigid_moved): one entry

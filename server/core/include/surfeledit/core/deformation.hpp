@@ -89,6 +89,12 @@ void validate(const DeformParams& params, const DeformationFields& fields);
 DeformationFields compute_fields(const Points& positions, const std::vector<Region>& regions,
                                  int threads = 0);
 
+// An upper bound (model units) on |p' - p| of every row a step of `params` moves, whatever the fields: a
+// pure translation moves a row by s * t with 0 <= s <= 1, and rounding p + s * t to a double moves it by at
+// most |s * t| more (p itself is a double no farther away), so 2 |t| with a margin. Empty with a rotation
+// (its displacement grows with the distance from the centre; not bounded without a pass over the rows).
+std::optional<double> displacement_bound(const DeformParams& params);
+
 // What one step changed.
 struct DeformResult {
   IndexList moved;   // rows whose position changed (s > 0), ascending

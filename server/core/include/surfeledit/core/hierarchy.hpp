@@ -7,7 +7,7 @@
 // configured algorithm's narrow test (the same code as without a hierarchy); the others keep their
 // collision state. A surfel whose ball reaches no zero surfel ball cannot have crossed the zero
 // surface this step, which is exactly the step bound of Simple/Temporal (§4.1), so those give the
-// same colliding set as without a hierarchy by construction; for Robust see collision_bvh.cpp.
+// same colliding set as without a hierarchy by construction; for Robust see src/bvh/hierarchical_detector.hpp.
 #pragma once
 
 #include <cstdint>

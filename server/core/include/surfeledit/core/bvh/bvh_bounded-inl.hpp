@@ -6,7 +6,7 @@
 // the step before's position) and its radius grew by at most the steps' radius growths, so its ball
 // (p_m, r_m + |t_m|) lies in the box grown by (shift_m - shift_s) + max |t_m|. Boxes may be larger than
 // a fresh fit: a larger deformable box only adds candidates, which get the same narrow test as without a
-// hierarchy (collision_bvh.cpp), so the colliding set does not change.
+// hierarchy (src/bvh/hierarchical_detector.hpp), so the colliding set does not change.
 #pragma once
 
 #include <cmath>

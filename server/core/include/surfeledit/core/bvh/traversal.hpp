@@ -67,7 +67,12 @@ struct TreeTree {
   Narrow& narrow;
   BvhCounters& counters;
   bool bounded;  // def.bounded(): bound() / refit_leaf() / tighten() instead of touch()
+  const Aabb* hull;  // box of every zero ball, or nullptr: a deformable box missing it reaches no zero leaf
   using ZeroNode = typename Bvh<ZeroBox>::Node;
+
+  // Whether deformable box b may reach a zero ball at all (the hull is tight where OBB and sphere nodes are
+  // loose, e.g. the spheres over a flat plate; an AABB root is the hull already).
+  bool in_hull(const Aabb& b) const { return !hull || overlap(*hull, b); }
 
   // Descends the deformable node d (both children), marking d when both children are marked; a
   // bounded tree then narrows d to its children's bounds (they may have been refit on the way).
@@ -85,12 +90,13 @@ struct TreeTree {
     ++counters.nv;
     if (!bounded) {
       def.touch(d, counters);  // lazy top-down refit (no-op for bottom-up levels)
-      return overlap(zn.box, def.box(d), sat);
+      return in_hull(def.box(d)) && overlap(zn.box, def.box(d), sat);
     }
-    if (!overlap(zn.box, def.bound(d), sat)) return false;
+    const Aabb grown = def.bound(d);
+    if (!in_hull(grown) || !overlap(zn.box, grown, sat)) return false;
     if (!def.node(d).leaf() || !def.refit_leaf(d, counters)) return true;
     ++counters.nv;
-    return overlap(zn.box, def.box(d), sat);
+    return in_hull(def.box(d)) && overlap(zn.box, def.box(d), sat);
   }
 
   void run(std::int32_t z, std::int32_t d) {
@@ -123,12 +129,14 @@ struct TreeTree {
 // Tree/tree (Code 8.4): every deformable surfel in a deformable leaf whose box overlaps a zero leaf
 // box is passed once to `narrow`. Starts a new marking epoch of `deformable` (so one call = one
 // step's test); lazily refits its nodes (touch, or refit_leaf / tighten of a bounded tree, after its
-// step_bounded()) as visited. Counts Nv, Np, Nu.
+// step_bounded()) as visited. `hull`, when given, bounds every zero ball: deformable boxes missing it are
+// pruned too (no candidate is lost). Counts Nv, Np, Nu.
 template <class ZeroBox, class Narrow>
-void collide(const Bvh<ZeroBox>& zero, Bvh<Aabb>& deformable, SatMode sat, Narrow& narrow, BvhCounters& counters) {
+void collide(const Bvh<ZeroBox>& zero, Bvh<Aabb>& deformable, SatMode sat, Narrow& narrow, BvhCounters& counters,
+             const Aabb* hull = nullptr) {
   if (zero.empty() || deformable.empty()) return;
   deformable.new_marks();
-  detail::TreeTree<ZeroBox, Narrow> t{zero, deformable, sat, narrow, counters, deformable.bounded()};
+  detail::TreeTree<ZeroBox, Narrow> t{zero, deformable, sat, narrow, counters, deformable.bounded(), hull};
   t.run(0, 0);
 }
 

@@ -1,0 +1,79 @@
+// The hierarchical detector's undo images and deep copies (hierarchical_detector.hpp).
+#include "hierarchical_detector.hpp"
+
+namespace surfeledit::detail {
+
+std::shared_ptr<const DetectorImage> HierarchicalDetector::save_image(const IndexList*) const {
+  auto image = std::make_shared<Image>();
+  if (extended_) {
+    image->extended = std::make_shared<const bvh::ExtendedNarrow>(*extended_);
+  } else {
+    image->narrow = narrow_->save_image(nullptr);
+    if (!image->narrow) return nullptr;
+  }
+  if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
+  if (bounded_) {
+    image->reach = prev_radius_;  // the radii the next step's shift compares with
+  } else {
+    image->reach.reserve(deformable_.size());
+    for (Index r : deformable_) image->reach.push_back(reach_[r]);
+  }
+  image->rows = rows_;
+  image->step = step_;
+  image->evaluations = evaluations_;
+  image->inserted_nu = inserted_nu_;
+  image->rebuilds_adopted = rebuilds_adopted_;
+  return image;
+}
+
+void HierarchicalDetector::restore_image(const DetectorImage& image) {
+  const auto* mine = dynamic_cast<const Image*>(&image);
+  if (!mine || mine->rows != rows_ || mine->reach.size() != deformable_.size() || !mine->extended != !extended_ ||
+      !mine->def != !def_) {
+    throw Error(ErrorCode::Internal, "history", "detector image does not fit this hierarchical detector");
+  }
+  if (extended_) *extended_ = *mine->extended;
+  else narrow_->restore_image(*mine->narrow);
+  if (def_) *def_ = *mine->def;
+  // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
+  if (filter_) filter_->refit_all_next_step();
+  if (bounded_) prev_radius_ = mine->reach;
+  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
+  step_ = mine->step;
+  evaluations_ = mine->evaluations;
+  inserted_nu_ = mine->inserted_nu;
+  rebuilds_adopted_ = mine->rebuilds_adopted;
+}
+
+std::unique_ptr<CollisionDetector> HierarchicalDetector::clone() const {
+  std::unique_ptr<CollisionDetector> narrow = narrow_->clone();
+  if (!narrow) return nullptr;
+  auto out = std::make_unique<HierarchicalDetector>(
+      params_, h_, std::unique_ptr<NarrowDetector>(static_cast<NarrowDetector*>(narrow.release())));
+  if (extended_) out->extended_ = std::make_unique<bvh::ExtendedNarrow>(*extended_);
+  out->extended_bytes_ = extended_bytes_;
+  out->zero_ = zero_;
+  if (def_) out->def_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*def_);
+  if (filter_) out->filter_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*filter_);
+  out->zero_hull_ = zero_hull_;
+  out->deformable_ = deformable_;
+  out->rows_ = rows_;
+  out->reach_ = reach_;
+  out->bounded_ = bounded_;
+  out->zero_bounds_ = zero_bounds_;
+  out->prev_radius_ = prev_radius_;
+  out->candidate_ = candidate_;
+  out->marked_ = marked_;
+  out->topology_ = topology_;
+  out->step_ = step_;
+  out->evaluations_ = evaluations_;
+  out->inserted_nu_ = inserted_nu_;
+  out->preprocess_ms_ = preprocess_ms_;
+  out->zero_build_ms_ = zero_build_ms_;
+  out->def_build_ms_ = def_build_ms_;
+  out->last_rebuild_ms_ = last_rebuild_ms_;
+  out->rebuilds_adopted_ = rebuilds_adopted_;
+  return out;
+}
+
+}  // namespace surfeledit::detail
