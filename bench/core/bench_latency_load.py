@@ -13,7 +13,9 @@ are interleaved over `--rounds`. With `--package DIR` an older build's surfeledi
 another checkout's client_py) runs the same script, for an A/B in one period.
 
     .venv/bin/python bench/core/bench_latency_load.py [--rounds 2] [--load 2] [--idle-steps 200]
-        [--package DIR]
+        [--package DIR] [--scale 1.0] [--algorithm robust] [--knn-eps 0]
+
+--scale 4.8 --algorithm temporal --knn-eps 2 is the ~1M-surfel drag of bench_drag_1m.py (the GUI setting).
 """
 
 from __future__ import annotations
@@ -45,12 +47,12 @@ def percentiles(v: List[float]) -> Tuple[float, float, float]:
     return float(np.percentile(a, 50)), float(np.percentile(a, 99)), float(a.max())
 
 
-def run_once(S, sc, threads: int, idle_steps: int) -> Dict[str, List[float]]:
+def run_once(S, sc, threads: int, idle_steps: int, algorithm: str, knn_eps: float) -> Dict[str, List[float]]:
     """One session: the drag's steps, then idle steps from the drag's start. Returns per-step ms lists."""
     out: Dict[str, List[float]] = {"drag": [], "drag_detect": [], "idle": [], "idle_detect": []}
     backend = S.LocalBackend(threads)
     backend.start(sc.scene)
-    backend.configure(algorithm="robust", threads=threads)
+    backend.configure(algorithm=algorithm, threads=threads, knn_eps=knn_eps)
     tiny = 1e-4 * sc.scene.spacing
     for k in range(idle_steps):
         r = backend.session.deform(translation=(tiny if k % 2 == 0 else -tiny, 0.0, 0.0))
@@ -71,15 +73,18 @@ def main() -> int:
     ap.add_argument("--load", type=int, default=os.cpu_count() or 2, help="busy processes of the loaded runs")
     ap.add_argument("--idle-steps", type=int, default=200)
     ap.add_argument("--threads", default="1,2", help="comma-separated thread counts")
+    ap.add_argument("--scale", type=float, default=1.0, help="piercing scale (4.8: about 1M surfels)")
+    ap.add_argument("--algorithm", default="robust")
+    ap.add_argument("--knn-eps", type=float, default=0.0)
     benchlib.add_package_arg(ap)
     args = ap.parse_args()
     surfeledit = benchlib.import_surfeledit(args.package)
     from surfeledit import scenario as S
 
     print(f"# surfeledit from {Path(surfeledit.__file__).parent}; {benchlib.machine_line()}", flush=True)
-    sc = S.make_scenario("piercing", scale=1.0, seed=1)
+    sc = S.make_scenario("piercing", scale=args.scale, seed=1)
     print(f"piercing: {len(sc.scene.positions):,} surfels, {len(sc.scene.deformable):,} deformable, {sc.steps} "
-          f"steps; robust; {args.idle_steps} idle steps; loaded runs beside {args.load} busy processes", flush=True)
+          f"steps; {args.algorithm} knn_eps {args.knn_eps}; {args.idle_steps} idle steps; loaded runs beside {args.load} busy processes", flush=True)
     results: Dict[Tuple[int, int], Dict[str, List[float]]] = {}
     thread_counts = [int(t) for t in args.threads.split(",")]
     for rnd in range(args.rounds):
@@ -90,7 +95,7 @@ def main() -> int:
                 p.start()
             try:
                 for threads in thread_counts:
-                    one = run_once(S, sc, threads, args.idle_steps)
+                    one = run_once(S, sc, threads, args.idle_steps, args.algorithm, args.knn_eps)
                     acc = results.setdefault((threads, load), {k: [] for k in one})
                     for k, v in one.items():
                         acc[k].extend(v)

@@ -1,6 +1,8 @@
 // Update events prepared for publishing and cut into samples.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <stdexcept>
 #include <vector>
 
@@ -81,4 +83,55 @@ TEST(Update, PreparedUpdatesCopyTheRowsAndChunkIntoSlices) {
   EXPECT_EQ(update_chunk(none, 0, 2).count, 0u);
   const UpdateView vc(update_chunk(none, 0, 2));
   EXPECT_EQ(vc.get()->ids._length, 0u);
+}
+
+// A step's moved rows come in runs of consecutive rows (copied run by run): every array of the prepared
+// update equals the model's row, read one row at a time here, for runs at the start, the middle and the end,
+// single rows between them, and with clip lines; a run reaching past the last row is refused.
+TEST(Update, PreparedUpdateOfRowRunsEqualsTheModelRowByRow) {
+  constexpr Index kRows = 40;
+  const ChunkArrays c = sphere_chunk(kRows);
+  SurfelArrays a;
+  a.positions = Eigen::Map<const Points>(c.positions.data(), kRows, 3);
+  a.normals = Eigen::Map<const Points>(c.normals.data(), kRows, 3);
+  a.radii = Eigen::Map<const Values>(c.radii.data(), kRows);
+  a.clip_points = a.positions;
+  a.clip_dirs = Points::Zero(kRows, 3);
+  for (Index r = 0; r < kRows; r += 3) a.clip_dirs.row(r) = a.normals.row((r + 1) % kRows).cross(a.normals.row(r)).normalized();
+  for (const bool clips : {false, true}) {
+    SurfelArrays arrays = a;
+    if (!clips) {
+      arrays.clip_points.resize(0, 3);
+      arrays.clip_dirs.resize(0, 3);
+    }
+    const SurfelModel model = SurfelModel::from_arrays(arrays);
+    ASSERT_EQ(model.has_clips(), clips);
+    UpdateEvent e;
+    e.cause = "deform";
+    e.rows = {0, 1, 2, 3, 7, 9, 10, 11, 20, 25, 26, 27, 28, 29, 35, 36, 37, 38, 39};
+    const PreparedUpdate p = prepare_update(e, &model);
+    ASSERT_EQ(p.surfels(), e.rows.size());
+    ASSERT_EQ(p.positions.size(), 3 * e.rows.size());
+    ASSERT_EQ(p.normals.size(), 3 * e.rows.size());
+    ASSERT_EQ(p.radii.size(), e.rows.size());
+    ASSERT_EQ(p.clip_points.size(), clips ? 3 * e.rows.size() : 0u);
+    ASSERT_EQ(p.clip_dirs.size(), p.clip_points.size());
+    for (std::size_t k = 0; k < e.rows.size(); ++k) {
+      const Index r = e.rows[k];
+      EXPECT_EQ(p.ids[k], model.ids()[static_cast<std::size_t>(r)]) << k;
+      EXPECT_EQ(p.radii[k], model.radii()(r)) << k;
+      for (int j = 0; j < 3; ++j) {
+        EXPECT_EQ(p.positions[3 * k + j], model.positions()(r, j)) << k;
+        EXPECT_EQ(p.normals[3 * k + j], model.normals()(r, j)) << k;
+        if (clips) {
+          EXPECT_EQ(p.clip_points[3 * k + j], model.clip_points()(r, j)) << k;
+          EXPECT_EQ(p.clip_dirs[3 * k + j], model.clip_dirs()(r, j)) << k;
+        }
+      }
+    }
+    e.rows = {37, 38, 39, 40};  // a run one row past the end
+    EXPECT_THROW(prepare_update(e, &model), std::out_of_range);
+    e.rows = {-1, 0, 1};
+    EXPECT_THROW(prepare_update(e, &model), std::out_of_range);
+  }
 }

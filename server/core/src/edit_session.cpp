@@ -13,16 +13,19 @@ namespace surfeledit {
 
 namespace {
 
-// The first k (in list order) whose row rows[k] has a non-finite position or normal; rows.size() when none.
-std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows) {
+// The first k (in list order) whose row rows[k] has a non-finite position or normal after a step; rows.size()
+// when none. `flat` (the fields' regions, or null): the step had no rotation, so the normals of F1 rows are
+// bit for bit what they were before it (deformation_kernel.hpp's flat path, as step_bent_rows relies on), and
+// finite as the model's are: only their positions are read.
+std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows, const std::vector<Region>* flat) {
   const double* P = a.positions.data();
   const double* N = a.normals.data();
+  // x - x is 0 for every finite x and NaN for an infinite or NaN one: one test for three values.
+  auto bad = [](const double* v) { return !((v[0] - v[0]) + (v[1] - v[1]) + (v[2] - v[2]) == 0.0); };
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    const double* p = P + 3 * rows[k];
-    const double* q = N + 3 * rows[k];
-    // x - x is 0 for every finite x and NaN for an infinite or NaN one: one test for the six values.
-    const double z = (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) + (q[0] - q[0]) + (q[1] - q[1]) + (q[2] - q[2]);
-    if (!(z == 0.0)) return k;
+    const Index r = rows[k];
+    if (bad(P + 3 * r)) return k;
+    if ((!flat || (*flat)[static_cast<std::size_t>(r)] != Region::One) && bad(N + 3 * r)) return k;
   }
   return rows.size();
 }
@@ -155,13 +158,17 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
       s.tool_->journaling = false;
     }
   } end_journal{*this};
+  // The rows image's pass over the deformable positions also brings `previous` up to date when only they
+  // differ (one read of the positions for both copies).
+  const bool fuse_previous = !none && !whole && previous_current();
   SessionImage before = none    ? SessionImage()
                         : whole ? capture_whole(true)
-                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling, step_bent_rows(params));
+                                : capture_rows(tool_->fields->deformable, false, !tool_->journaling, step_bent_rows(params),
+                                               fuse_previous ? &tool_->previous : nullptr);
   const double capture_ms = ms_since(t_capture);
   StepResult out;
   try {
-    step_once(params, out);
+    step_once(params, out, fuse_previous);
     respond(params, before, version_before, out);
   } catch (...) {
     // All or nothing: a step that fails part-way (a detector or allocation failure) leaves the session
@@ -200,7 +207,12 @@ void EditSession::roll_back(SessionImage& before, std::uint64_t version_before) 
   version_ = version_before;
 }
 
-void EditSession::step_once(const DeformParams& params, StepResult& out) {
+bool EditSession::previous_current() const {
+  return tool_->detector && tool_->previous_at != 0 && tool_->previous_at == version_ &&
+         tool_->previous.rows() == model_.arrays().positions.rows();
+}
+
+void EditSession::step_once(const DeformParams& params, StepResult& out, bool previous_done) {
   SurfelArrays& a = model_.arrays();
   const bool resample = tool_->settings.resample.enabled;
   if (resample) {
@@ -212,6 +224,8 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   const bool from_last_step = tool_->previous_at != 0 && tool_->previous_at == version_ && previous.rows() == a.positions.rows();
   if (!tool_->detector) {
     previous.resize(0, 3);
+  } else if (previous_done) {
+    // deform() copied the deformable rows in the before-image's pass (previous_current() held).
   } else if (from_last_step) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
@@ -228,7 +242,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out) {
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
   // else is refused here, before the detector sees it (deform() then rolls the rows back).
-  const std::size_t bad = first_non_finite(a, r.moved);
+  const std::size_t bad = first_non_finite(a, r.moved, params.angle == 0.0 ? &tool_->fields->regions : nullptr);
   if (bad < r.moved.size()) {
     throw Error(ErrorCode::InvalidArgument, "translation",
                 "the step would move surfel " + std::to_string(model_.ids()[r.moved[bad]]) + " to a non-finite position");

@@ -12,14 +12,15 @@ namespace surfeledit {
 namespace {
 
 // Sizes `out` for rows `rows` of `a` (#rows by 3, its buffer reused when the size fits; empty when `a` is
-// empty) and adds the copy that fills it.
-void take_rows(const Points& a, const IndexList& rows, Points& out, std::vector<detail::RowCopy>& copies) {
+// empty) and adds the copy that fills it (and row rows[k] of `also`, #P by 3, when given).
+void take_rows(const Points& a, const IndexList& rows, Points& out, std::vector<detail::RowCopy>& copies,
+               double* also = nullptr) {
   if (a.rows() == 0) {
     out.resize(0, 3);
     return;
   }
   out.resize(static_cast<Eigen::Index>(rows.size()), 3);
-  copies.push_back({a.data(), &rows, out.data(), false});
+  copies.push_back({a.data(), &rows, out.data(), false, also});
 }
 
 // Row versions of `rows` from their runs.
@@ -63,7 +64,7 @@ std::shared_ptr<const IndexList> EditSession::step_bent_rows(const DeformParams&
 }
 
 SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool detector,
-                                       std::shared_ptr<const IndexList> bent) {
+                                       std::shared_ptr<const IndexList> bent, Points* previous) {
   SessionImage image;
   RowsImage r = history_.take_spare();
   // The row list is shared while it does not change (the deformable rows, step after step).
@@ -73,7 +74,7 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
   const IndexList& turned = r.bent ? *r.bent : rows;  // rows whose normals and tangents are kept
   const SurfelArrays& a = model_.arrays();
   std::vector<detail::RowCopy> copies;
-  take_rows(a.positions, rows, r.positions, copies);
+  take_rows(a.positions, rows, r.positions, copies, previous ? previous->data() : nullptr);
   take_rows(a.normals, turned, r.normals, copies);
   static const Points none(0, 3);  // (both branches lvalues: no copy of the model's tangents)
   take_rows(model_.has_tangents() ? a.tangent_u : none, turned, r.tangent_u, copies);

@@ -66,31 +66,48 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   if (!has_surfels || (event.all_rows && !model)) return p;  // a full update without a model: it is empty
   if (!model) throw std::out_of_range("update of session '" + event.session + "' has surfels but no model");
   const std::size_t n = event.all_rows ? static_cast<std::size_t>(model->size()) : event.rows.size();
-  p.ids.resize(n);
-  p.positions.resize(3 * n);
-  p.normals.resize(3 * n);
-  p.radii.resize(n);
   const bool clips = model->has_clips();
+  // Appended run by run (no zero-filled buffers written twice): a run is consecutive rows, one range copy
+  // per array (a step's moved rows are mostly long runs of the model's rows).
+  p.ids.reserve(n);
+  p.positions.reserve(3 * n);
+  p.normals.reserve(3 * n);
+  p.radii.reserve(n);
   if (clips) {
-    p.clip_points.resize(3 * n);
-    p.clip_dirs.resize(3 * n);
+    p.clip_points.reserve(3 * n);
+    p.clip_dirs.reserve(3 * n);
   }
-  const Points& pos = model->positions();
-  const Points& nrm = model->normals();
-  const Values& rad = model->radii();
-  const IdList& ids = model->ids();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Index row = event.all_rows ? static_cast<Index>(k) : event.rows[k];
-    if (row < 0 || row >= model->size()) throw std::out_of_range("update row out of range");
-    p.ids[k] = ids[static_cast<std::size_t>(row)];
-    // Points are row-major: the three coordinates of a row are contiguous.
-    std::copy_n(pos.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.positions.data() + 3 * k);
-    std::copy_n(nrm.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.normals.data() + 3 * k);
-    p.radii[k] = rad(row);
-    if (clips) {
-      std::copy_n(model->clip_points().data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.clip_points.data() + 3 * k);
-      std::copy_n(model->clip_dirs().data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.clip_dirs.data() + 3 * k);
+  const double* pos = model->positions().data();  // row-major: a row's three coordinates are contiguous
+  const double* nrm = model->normals().data();
+  const double* rad = model->radii().data();
+  const SurfelId* ids = model->ids().data();
+  const Index rows = model->size();
+  auto append = [](auto& to, const auto* from, std::size_t begin, std::size_t count) {
+    to.insert(to.end(), from + begin, from + begin + count);
+  };
+  for (std::size_t k = 0; k < n;) {
+    std::size_t end = k + 1;
+    Index first = static_cast<Index>(k);
+    if (event.all_rows) {
+      end = n;
+    } else {
+      first = event.rows[k];
+      while (end < n && event.rows[end] == event.rows[end - 1] + 1) ++end;
     }
+    const std::size_t count = end - k;
+    if (first < 0 || first >= rows || static_cast<std::size_t>(rows - first) < count) {
+      throw std::out_of_range("update row out of range");
+    }
+    const auto row = static_cast<std::size_t>(first);
+    append(p.ids, ids, row, count);
+    append(p.positions, pos, 3 * row, 3 * count);
+    append(p.normals, nrm, 3 * row, 3 * count);
+    append(p.radii, rad, row, count);
+    if (clips) {
+      append(p.clip_points, model->clip_points().data(), 3 * row, 3 * count);
+      append(p.clip_dirs, model->clip_dirs().data(), 3 * row, 3 * count);
+    }
+    k = end;
   }
   return p;
 }

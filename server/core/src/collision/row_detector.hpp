@@ -5,6 +5,7 @@
 // points) or a kernel's own order-dependent sweep (Improved, improved_sweep.hpp).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <limits>
@@ -23,38 +24,78 @@ struct Tally {
 };
 
 // Undo support (history.hpp): the state every row had when the journal started, for the rows a sweep
-// changed since (first change wins). Rows are model rows; `old` is raw storage, so only the pages of
-// rows that changed are ever touched.
+// changed since (first change wins). Each sweep appends (row, state before) to one part per chunk of its
+// rows (Kernel::kChunk rows, one thread each; one part when it runs serially), so the saved states are
+// written and read back in sequence, and a single sweep's parts in order are in ascending row order
+// whatever the threads (its rows are ascending). Only from a journal's second sweep on are rows flagged
+// as saved (a row appears once in a sweep).
 template <typename State>
 struct Journal {
+  struct Saved {
+    Index row;    // model row
+    State state;  // its state when the journal started
+  };
   bool on = false;
-  bool save = false;                     // keep states (else only `tested`)
-  std::vector<std::uint8_t> saved;       // #P: 1 = old holds the row's state at the start
-  std::vector<std::uint8_t> tested;      // #P: 1 = the kernel made a query for the row since the start
-  std::unique_ptr<unsigned char[]> old;  // #P states' bytes (uninitialised until saved)
-  std::size_t capacity = 0;              // rows `old` can hold
+  bool save = false;                       // keep states (else only `tested`)
+  std::vector<std::uint8_t> tested;        // #P: 1 = the kernel made a query for the row since the start
+  // Parts [0, used): the sweeps' chunks in order. Step scratch (buffers reused), not in memory_bytes(), as
+  // the #P-state buffer they replace was not: about 56 bytes per changed row (the 1M drag: ~3 MB).
+  std::vector<std::vector<Saved>> parts;
+  std::size_t used = 0;                    // parts of this journal
+  int sweeps = 0;                          // sweeps since the start
+  std::vector<std::uint8_t> saved;         // #P, from the second sweep on: 1 = the row is in a part
 
   void start(std::size_t rows, bool save_states) {
     on = true;
     save = save_states;
     tested.assign(rows, 0);
-    if (!save) return;
-    if (rows > capacity) {
-      old.reset(new unsigned char[rows * sizeof(State)]);  // left uninitialised on purpose
-      capacity = rows;
+    used = 0;
+    sweeps = 0;
+  }
+  // A sweep in `chunks` parts begins; returns its first part.
+  std::size_t begin_sweep(std::size_t chunks) {
+    if (!save) return 0;
+    if (++sweeps == 2) {  // rows may repeat from now on: flag the rows saved so far
+      saved.assign(tested.size(), 0);
+      for_each([&](const Saved& e) { saved[static_cast<std::size_t>(e.row)] = 1; });
     }
-    saved.assign(rows, 0);
+    const std::size_t base = used;
+    used += chunks;
+    if (parts.size() < used) parts.resize(used);
+    for (std::size_t k = base; k < used; ++k) parts[k].clear();
+    return base;
   }
-  // Called with a row's state before and after one update that made `queries` queries; different bytes:
-  // the row changed.
-  void note(Index r, const State& before, const State& after, Index queries) {
+  // Called with a row's state before and after one update that made `queries` queries, in part `part` of
+  // the sweep; different bytes: the row changed.
+  void note(Index r, const State& before, const State& after, Index queries, std::size_t part) {
     if (queries > 0) tested[static_cast<std::size_t>(r)] = 1;
-    if (!save || saved[static_cast<std::size_t>(r)] || std::memcmp(&before, &after, sizeof(State)) == 0) return;
-    std::memcpy(old.get() + static_cast<std::size_t>(r) * sizeof(State), &before, sizeof(State));
-    saved[static_cast<std::size_t>(r)] = 1;
+    if (!save || std::memcmp(&before, &after, sizeof(State)) == 0) return;
+    if (sweeps > 1) {
+      if (saved[static_cast<std::size_t>(r)]) return;
+      saved[static_cast<std::size_t>(r)] = 1;
+    }
+    parts[part].push_back({r, before});
   }
-  const State& at(Index r) const {
-    return *reinterpret_cast<const State*>(old.get() + static_cast<std::size_t>(r) * sizeof(State));
+  std::size_t count() const {
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < used; ++k) n += parts[k].size();
+    return n;
+  }
+  // f(Saved) for every saved row, in the parts' order.
+  template <typename F>
+  void for_each(F f) const {
+    for (std::size_t k = 0; k < used; ++k)
+      for (const Saved& e : parts[k]) f(e);
+  }
+  // f(Saved) for every saved row, in ascending row order.
+  template <typename F>
+  void for_each_by_row(F f) const {
+    if (sweeps <= 1) return for_each(f);
+    std::vector<const Saved*> all;
+    all.reserve(count());
+    for_each([&](const Saved& e) { all.push_back(&e); });
+    std::sort(all.begin(), all.end(), [](const Saved* a, const Saved* b) { return a->row < b->row; });
+    for (const Saved* e : all) f(*e);
   }
 };
 
@@ -95,17 +136,20 @@ struct ParallelSweep {
     if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
     // One loop per combination of the three options, each compiled without their branches.
     auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
-      auto range = [&](Index begin, Index end, Index& tested, Index& queries) {
+      auto range = [&](Index begin, Index end, std::size_t part, Index& tested, Index& queries) {
         rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
-            kernel, rows, states, scene, previous, candidate, hit, journal, begin, end, tested, queries);
+            kernel, rows, states, scene, previous, candidate, hit, journal, part, begin, end, tested, queries);
       };
       Index tested = 0, queries = 0;
       if (!parallel(n, threads)) {
-        range(0, n, tested, queries);
+        const std::size_t part = journal ? journal->begin_sweep(1) : 0;
+        range(0, n, part, tested, queries);
       } else {
         const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
+        const std::size_t base = journal ? journal->begin_sweep(static_cast<std::size_t>(chunks)) : 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
-        for (Index c = 0; c < chunks; ++c) range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), tested, queries);
+        for (Index c = 0; c < chunks; ++c)
+          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), tested, queries);
       }
       return Tally{tested, queries};
     };
@@ -126,8 +170,8 @@ struct ParallelSweep {
   static void rows_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
                          const CollisionScene& scene, const Points& previous,
                          const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
-                         Journal<typename Kernel::State>* journal, Index begin, Index end, Index& tested,
-                         Index& queries) {
+                         Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
+                         Index& tested, Index& queries) {
     typename Kernel::State* const stored = states.stored_data();
     Index t = 0, m_sum = 0;
     for (Index q = begin; q < end; ++q) {
@@ -142,7 +186,7 @@ struct ParallelSweep {
       } else {
         made = kernel.update(s, pt);
       }
-      if constexpr (kJournal) journal->note(r, before, s, made);
+      if constexpr (kJournal) journal->note(r, before, s, made, part);
       hit[q] = s.colliding();  // read while the state is in cache
       m_sum += made;
       t += made > 0;
@@ -326,23 +370,20 @@ class RowDetector final : public NarrowDetector {
   std::shared_ptr<const DetectorImage> journal_image() const override {
     if (!journal_.on || !journal_.save) return nullptr;
     auto image = std::make_shared<Image>();
-    std::size_t n = 0;
-    for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
+    const std::size_t n = journal_.count();
     image->rows.reserve(n);
     image->states.reserve(n);
-    for (Index r : rows_.deformable) {
-      if (!journal_.saved[static_cast<std::size_t>(r)]) continue;
-      image->rows.push_back(r);
-      image->states.push_back(journal_.at(r));
-    }
+    journal_.for_each_by_row([&](const auto& e) {
+      image->rows.push_back(e.row);
+      image->states.push_back(e.state);
+    });
     image->sweep = journal_sweep_;
     image->listed = true;
     return image;
   }
   void restore_journal() override {
     if (!journal_.on || !journal_.save) throw Error(ErrorCode::Internal, "history", "no journal to restore");
-    for (Index r : rows_.deformable)
-      if (journal_.saved[static_cast<std::size_t>(r)]) rows_.states[r] = journal_.at(r);
+    journal_.for_each([&](const auto& e) { rows_.states[e.row] = e.state; });
     sweep_ = journal_sweep_;
   }
   bool journal_tested(std::vector<std::uint8_t>& flags) const override {
@@ -351,11 +392,7 @@ class RowDetector final : public NarrowDetector {
     return true;
   }
   void stop_journal() override {
-    if (journal_.on && journal_.save) {
-      std::size_t n = 0;
-      for (Index r : rows_.deformable) n += journal_.saved[static_cast<std::size_t>(r)];
-      dense_skip_ = 2 * n > rows_.deformable.size() ? kDenseSkip : 0;
-    }
+    if (journal_.on && journal_.save) dense_skip_ = 2 * journal_.count() > rows_.deformable.size() ? kDenseSkip : 0;
     journal_.on = false;
   }
 

@@ -292,8 +292,10 @@ class EditSession {
   // `subset`: the detector saves only `rows` too (else every deformable row).
   // `detector` false: no detector states (the step's journal holds them, see journaling_).
   // `bent`: the rows whose normals and tangents are kept (null: all; RowsImage::bent).
+  // `previous` (#P by 3, or null): the same pass copies the rows' positions into it too (a step's
+  // `previous`, step_once).
   SessionImage capture_rows(const IndexList& rows, bool subset = false, bool detector = true,
-                            std::shared_ptr<const IndexList> bent = nullptr);
+                            std::shared_ptr<const IndexList> bent = nullptr, Points* previous = nullptr);
   // The rows among the acting tool's deformable rows whose normals or tangents a step of `params` may
   // change; null when that may be all of them (a rotation, or no F1 row).
   std::shared_ptr<const IndexList> step_bent_rows(const DeformParams& params);
@@ -328,7 +330,12 @@ class EditSession {
   // A merge makes `before` a whole image.
   void respond(const DeformParams& params, SessionImage& before, std::uint64_t version_before, StepResult& out);
   // Applies `params` (restored state) and detects; the core of deform() and of back-off.
-  void step_once(const DeformParams& params, StepResult& out);
+  // `previous_done`: the caller has already copied the deformable rows into the tool's `previous`
+  // (only when previous_current(); deform() does it in the before-image's pass).
+  void step_once(const DeformParams& params, StepResult& out, bool previous_done = false);
+  // The acting tool's `previous` differs from the model on its deformable rows only (nothing but its
+  // last completed step changed the model since it was taken), so a step need copy only those rows.
+  bool previous_current() const;
   // Puts `before` back after a step failed part-way (an unsaved detector is rebuilt from the restored
   // model) and the version to `version_before`.
   void roll_back(SessionImage& before, std::uint64_t version_before);
