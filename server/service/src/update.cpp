@@ -78,11 +78,10 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   const Points& pos = model->positions();
   const Points& nrm = model->normals();
   const Values& rad = model->radii();
-  const IdList& ids = model->ids();
   for (std::size_t k = 0; k < n; ++k) {
     const Index row = event.all_rows ? static_cast<Index>(k) : event.rows[k];
     if (row < 0 || row >= model->size()) throw std::out_of_range("update row out of range");
-    p.ids[k] = ids[static_cast<std::size_t>(row)];
+    p.ids[k] = model->id_of(row);
     // Points are row-major: the three coordinates of a row are contiguous.
     std::copy_n(pos.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.positions.data() + 3 * k);
     std::copy_n(nrm.data() + 3 * static_cast<std::ptrdiff_t>(row), 3, p.normals.data() + 3 * k);
