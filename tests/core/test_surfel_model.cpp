@@ -30,7 +30,7 @@ TEST(SurfelModel, AssignsIdsInOrderAndNormalisesNormals) {
   const SurfelModel m = SurfelModel::from_arrays(random_arrays(50, 1));
   ASSERT_EQ(m.size(), 50);
   for (Index i = 0; i < 50; ++i) {
-    EXPECT_EQ(m.ids()[i], static_cast<SurfelId>(i));
+    EXPECT_EQ(m.id_of(i), static_cast<SurfelId>(i));
     EXPECT_EQ(m.row_of(i), i);
     EXPECT_NEAR(m.normals().row(i).norm(), 1.0, 1e-15);
   }
@@ -55,7 +55,8 @@ TEST(SurfelModel, IdsSurviveRemovalAndInsertion) {
   const IdList added = m.insert(random_arrays(4, 3));
   EXPECT_EQ(added, (IdList{20, 21, 22, 23}));  // fresh ids, never a removed one
   EXPECT_EQ(m.size(), 21);
-  EXPECT_TRUE(std::is_sorted(m.ids().begin(), m.ids().end()));
+  const IdList ids = m.ids();
+  EXPECT_TRUE(std::is_sorted(ids.begin(), ids.end()));
   EXPECT_EQ(m.row_of(2), 2);   // rows before the first removal keep their place
   EXPECT_EQ(m.row_of(5), 4);   // later rows shift down past removed 3
   EXPECT_EQ(m.row_of(8), 6);   // ... and past removed 7

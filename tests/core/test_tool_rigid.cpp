@@ -151,7 +151,7 @@ TEST(ToolRigid, SimpleEqualsAFreshDetectorAndTheReinitialisation) {
       fresh->reset(scene);
       const CollisionResult c = fresh->detect(scene, m.positions());
       IdList ids;
-      for (Index row : c.colliding) ids.push_back(m.ids()[row]);
+      for (Index row : c.colliding) ids.push_back(m.id_of(row));
       EXPECT_EQ(r.colliding, ids) << tool << " step " << k;
       reported += ids.size();
     }

@@ -248,7 +248,7 @@ TEST_F(CollisionHandlerTest, RemoveValidatesFirstThenPublishesTheRemovedIds) {
   const SurfelModel* model = handler.model_of("s");
   EXPECT_EQ(model->row_of(3), -1);
   EXPECT_GE(model->row_of(4), 0);
-  EXPECT_EQ(model->ids()[static_cast<std::size_t>(model->row_of(424))], 424u);
+  EXPECT_EQ(model->id_of(model->row_of(424)), 424u);
   // A repeat is answered from the cache.
   surfeledit_proto_Request req = rb.make(surfeledit_proto_OP_REMOVE, next_id - 1);
   req.remove._length = req.remove._maximum = 1;

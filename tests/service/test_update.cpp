@@ -49,7 +49,7 @@ TEST(Update, PreparedUpdatesCopyTheRowsAndChunkIntoSlices) {
   with_collision.colliding = {1, 3};
   const UpdateView v2(update_chunk(with_collision, 2, 2));
   ASSERT_EQ(v2.get()->ids._length, 1u);
-  EXPECT_EQ(v2.get()->ids._buffer[0], model.ids()[4]);
+  EXPECT_EQ(v2.get()->ids._buffer[0], model.id_of(4));
   ASSERT_EQ(v2.get()->positions._length, 3u);
   EXPECT_DOUBLE_EQ(v2.get()->positions._buffer[2], model.positions()(4, 2));
   EXPECT_EQ(v2.get()->removed._length, 0u);
@@ -71,7 +71,7 @@ TEST(Update, PreparedUpdatesCopyTheRowsAndChunkIntoSlices) {
   some.rows = {1, 3};
   const PreparedUpdate two = prepare_update(some, &model);
   ASSERT_EQ(update_parts(two, 65536), 1u);
-  EXPECT_EQ(two.ids, (std::vector<std::uint64_t>{model.ids()[1], model.ids()[3]}));
+  EXPECT_EQ(two.ids, (std::vector<std::uint64_t>{model.id_of(1), model.id_of(3)}));
   EXPECT_EQ(two.radii.size(), 2u);
   some.rows = {7};
   EXPECT_THROW(prepare_update(some, &model), std::out_of_range);

@@ -65,7 +65,8 @@ void EditSession::load(SurfelModel model, const std::string& author) {
   use(author);
   SessionImage before = capture_whole(false);
   IdList touched = model_.ids();
-  touched.insert(touched.end(), model.ids().begin(), model.ids().end());
+  const IdList incoming = model.ids();
+  touched.insert(touched.end(), incoming.begin(), incoming.end());
   ++version_;
   model_ = std::move(model);
   model_version_ = version_;
@@ -88,7 +89,7 @@ IdList EditSession::resolve(const RegionSpec& spec, const std::string& field) co
   }
   IdList ids;
   for (std::size_t r = 0; r < chosen.size(); ++r)
-    if (chosen[r]) ids.push_back(m.ids()[r]);
+    if (chosen[r]) ids.push_back(m.id_of(r));
   return ids;
 }
 
@@ -186,7 +187,7 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   if (out.response != "cancelled" && !none) {
     IdList touched;
     touched.reserve(out.moved.size());
-    for (Index r : out.moved) touched.push_back(model_.ids()[r]);
+    for (Index r : out.moved) touched.push_back(model_.id_of(r));
     if (out.response == "merged") {
       const IdList removed = changes_since(version_before).removed;
       touched.insert(touched.end(), removed.begin(), removed.end());
@@ -245,7 +246,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out, bool pr
   const std::size_t bad = first_non_finite(a, r.moved, params.angle == 0.0 ? &tool_->fields->regions : nullptr);
   if (bad < r.moved.size()) {
     throw Error(ErrorCode::InvalidArgument, "translation",
-                "the step would move surfel " + std::to_string(model_.ids()[r.moved[bad]]) + " to a non-finite position");
+                "the step would move surfel " + std::to_string(model_.id_of(r.moved[bad])) + " to a non-finite position");
   }
   ++version_;
   touch_rows(r.moved);
@@ -298,7 +299,7 @@ void EditSession::step_once(const DeformParams& params, StepResult& out, bool pr
     CollisionResult c = tool_->detector->detect(scene, previous);
     out.detected = true;
     out.colliding.reserve(c.colliding.size());
-    for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
+    for (Index row : c.colliding) out.colliding.push_back(model_.id_of(row));
     out.depths = std::move(c.depths);
     out.stats = c.stats;
     tool_->colliding = out.colliding;
@@ -331,7 +332,7 @@ void EditSession::remove(const IdList& ids, const std::string& author) {
 
 void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) {
   for (std::size_t r = 0; r < keep.size(); ++r)
-    if (!keep[r]) removed_log_.emplace_back(version_, model_.ids()[r]);
+    if (!keep[r]) removed_log_.emplace_back(version_, model_.id_of(r));
   model_.remove(ids);
   compact(row_version_, keep);
   if (rest_radius_.size() > 0) {
@@ -368,11 +369,10 @@ Changes EditSession::changes_since(std::uint64_t since, bool rows) const {
   if (model_.empty() || since >= version_) return c;
   c.full = since < model_version_;
   if (rows && c.full) return c;  // every row: none listed
-  const IdList& ids = model_.ids();
-  for (std::size_t r = 0; r < ids.size(); ++r) {
+  for (Index r = 0; r < model_.size(); ++r) {
     if (!c.full && row_version_[r] <= since) continue;
-    if (rows) c.rows.push_back(static_cast<Index>(r));
-    else c.changed.push_back(ids[r]);
+    if (rows) c.rows.push_back(r);
+    else c.changed.push_back(model_.id_of(r));
   }
   if (!c.full) {
     for (const auto& [v, id] : removed_log_)

@@ -99,7 +99,7 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
   IndexList rows;  // the particles' rows
   IdList removed;
   for (Index r : region.rows) {
-    if (is_copy[r]) removed.push_back(m.ids()[r]);
+    if (is_copy[r]) removed.push_back(m.id_of(r));
     else rows.push_back(r);
   }
   Points x(static_cast<Eigen::Index>(rows.size()), 3), n(x.rows(), 3);
@@ -139,8 +139,8 @@ BlendOutcome EditSession::blend(const BlendParams& requested, const std::optiona
     parents.push_back(rows[k]);
   }
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    if (particle_of[k] < 0) removed.push_back(m.ids()[rows[k]]);
-    else out.moved.push_back(m.ids()[rows[k]]);
+    if (particle_of[k] < 0) removed.push_back(m.id_of(rows[k]));
+    else out.moved.push_back(m.id_of(rows[k]));
   }
   std::sort(removed.begin(), removed.end());
   std::vector<bool> keep(static_cast<std::size_t>(m.size()), true);
@@ -239,7 +239,7 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   for (Index r = 0; r < m.size(); ++r) {
     keep[r] = c.keep_a[r];
     if (keep[r]) ++kept_a;
-    else out.removed.push_back(m.ids()[r]);
+    else out.removed.push_back(m.id_of(r));
   }
   IndexList b_rows;  // kept rows of B
   for (Index r = 0; r < bm.size(); ++r)
@@ -271,7 +271,7 @@ MergeOutcome EditSession::boolean(BooleanOp op, SurfelArrays b, const BooleanPar
   if (m.has_colors()) added.colors = Colors::Constant(nb, 3, 200);
 
   IdList features_a;  // A's ids stay (read before the model changes: `m` is the live model)
-  for (Index r : c.features_a) features_a.push_back(m.ids()[r]);
+  for (Index r : c.features_a) features_a.push_back(m.id_of(r));
 
   // Apply: B's surfels appended, A's dropped ones removed, regions cleared.
   use(author);
@@ -321,7 +321,7 @@ FillOutcome EditSession::fill_holes(const HoleParams& requested, const std::opti
     }
     const HoleFilling f = fill_hole(m, h, params);
     HoleOutcome ho;
-    for (Index r : h.boundary) ho.boundary.push_back(m.ids()[r]);
+    for (Index r : h.boundary) ho.boundary.push_back(m.id_of(r));
     ho.diameter = h.diameter;
     out.holes.push_back(std::move(ho));
     count.push_back(static_cast<std::size_t>(f.positions.rows()));

@@ -133,7 +133,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     const CollisionResult c = tool_->detector->detect_only(
         CollisionScene{model_.positions(), model_.normals(), model_.radii(), tool_->fields->regions}, previous, candidate);
     out.colliding.clear();
-    for (Index r : c.colliding) out.colliding.push_back(model_.ids()[r]);
+    for (Index r : c.colliding) out.colliding.push_back(model_.id_of(r));
     out.depths = c.depths;
     depth = largest(out.depths);
   };
@@ -184,7 +184,7 @@ void EditSession::respond(const DeformParams& params, SessionImage& before, std:
     const CollisionResult c = tool_->detector->detect_only(
         CollisionScene{model_.positions(), model_.normals(), model_.radii(), tool_->fields->regions}, previous, final_rows);
     out.colliding.clear();
-    for (Index row : c.colliding) out.colliding.push_back(model_.ids()[row]);
+    for (Index row : c.colliding) out.colliding.push_back(model_.id_of(row));
     out.depths = c.depths;
     out.stats = c.stats;
     tool_->colliding = out.colliding;

@@ -134,24 +134,28 @@ SurfelModel SurfelModel::from_arrays(SurfelArrays arrays) {
   SurfelModel m;
   const Index n = static_cast<Index>(arrays.positions.rows());
   m.a_ = std::move(arrays);
-  m.ids_.resize(n);
-  m.row_of_id_.resize(n);
-  for (Index i = 0; i < n; ++i) {
-    m.ids_[i] = static_cast<SurfelId>(i);
-    m.row_of_id_[i] = i;
-  }
-  m.next_id_ = static_cast<SurfelId>(n);
+  m.next_id_ = static_cast<SurfelId>(n);  // ids 0..n-1: ids_ stays empty (the identity)
   return m;
 }
 
-Index SurfelModel::row_of(SurfelId id) const {
-  return id < row_of_id_.size() ? row_of_id_[id] : -1;
+IdList SurfelModel::ids() const {
+  if (!ids_.empty()) return ids_;
+  IdList out(static_cast<std::size_t>(size()));
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<SurfelId>(i);
+  return out;
+}
+
+void SurfelModel::spell_out_ids() {
+  if (!ids_.empty()) return;
+  ids_ = ids();
+  IndexList set(ids_.begin(), ids_.end());
+  alive_.assign(static_cast<Index>(next_id_), set);
 }
 
 IndexList SurfelModel::rows_of(const IdList& ids, const std::string& field) const {
   IndexList rows;
   rows.reserve(ids.size());
-  std::vector<bool> seen(ids_.size(), false);
+  std::vector<bool> seen(static_cast<std::size_t>(size()), false);
   for (std::size_t k = 0; k < ids.size(); ++k) {
     const Index r = row_of(ids[k]);
     if (r < 0) {
@@ -223,7 +227,8 @@ IdList SurfelModel::insert(SurfelArrays added) {
   for (Index k = 0; k < n_add; ++k) {
     const SurfelId id = next_id_++;
     out[k] = id;
-    row_of_id_.push_back(static_cast<Index>(ids_.size()));
+    if (ids_.empty()) continue;  // the identity continues: the new rows' ids are their rows
+    alive_.push_back(true);
     ids_.push_back(id);
   }
   return out;
@@ -231,9 +236,10 @@ IdList SurfelModel::insert(SurfelArrays added) {
 
 void SurfelModel::remove(const IdList& ids) {
   const IndexList rows = rows_of(ids, "ids");  // validates before anything changes
-  if (rows.size() == ids_.size()) {
+  if (static_cast<Index>(rows.size()) == size()) {
     throw Error(ErrorCode::Conflict, "ids", "removing every surfel would leave an empty model");
   }
+  spell_out_ids();
   std::vector<bool> keep(ids_.size(), true);
   for (Index r : rows) keep[r] = false;
   const Eigen::Index kept = static_cast<Eigen::Index>(ids_.size() - rows.size());
@@ -249,22 +255,26 @@ void SurfelModel::remove(const IdList& ids) {
   IdList kept_ids;
   kept_ids.reserve(kept);
   for (std::size_t i = 0, j = 0; i < ids_.size(); ++i) {
-    if (!keep[i]) {
-      row_of_id_[ids_[i]] = -1;
-      continue;
-    }
+    if (!keep[i]) continue;
     radii[static_cast<Eigen::Index>(j)] = a_.radii[static_cast<Eigen::Index>(i)];
-    row_of_id_[ids_[i]] = static_cast<Index>(j);
     kept_ids.push_back(ids_[i]);
     ++j;
   }
   a_.radii = std::move(radii);
   ids_ = std::move(kept_ids);
+  alive_.assign(static_cast<Index>(next_id_), IndexList(ids_.begin(), ids_.end()));
 }
 
 std::uint64_t SurfelModel::hash() const {
   std::uint64_t h = 1469598103934665603ull;
-  hash_bytes(h, ids_.data(), ids_.size() * sizeof(SurfelId));
+  if (!ids_.empty()) {
+    hash_bytes(h, ids_.data(), ids_.size() * sizeof(SurfelId));
+  } else {  // the same bytes as the spelled-out list
+    for (Index r = 0; r < size(); ++r) {
+      const SurfelId id = static_cast<SurfelId>(r);
+      hash_bytes(h, &id, sizeof(id));
+    }
+  }
   hash_bytes(h, a_.positions.data(), a_.positions.size() * sizeof(double));
   hash_bytes(h, a_.normals.data(), a_.normals.size() * sizeof(double));
   hash_bytes(h, a_.radii.data(), a_.radii.size() * sizeof(double));
@@ -315,10 +325,13 @@ SurfelModel SurfelModel::from_parts(SurfelArrays arrays, IdList ids, SurfelId ne
   }
   SurfelModel m;
   m.a_ = std::move(arrays);
-  m.ids_ = std::move(ids);
   m.next_id_ = next_id;
-  m.row_of_id_.assign(static_cast<std::size_t>(next_id), -1);
-  for (std::size_t i = 0; i < m.ids_.size(); ++i) m.row_of_id_[m.ids_[i]] = static_cast<Index>(i);
+  // Ascending and below next_id: the identity exactly when there are next_id of them.
+  if (next_id != static_cast<SurfelId>(ids.size())) {
+    if (ids.empty()) throw Error(ErrorCode::InvalidArgument, "snapshot", "corrupt snapshot: an empty model with a next id");
+    m.ids_ = std::move(ids);
+    m.alive_.assign(static_cast<Index>(next_id), IndexList(m.ids_.begin(), m.ids_.end()));
+  }
   return m;
 }
 
@@ -326,7 +339,9 @@ std::size_t SurfelModel::memory_bytes() const {
   return sizeof(double) * (a_.positions.size() + a_.normals.size() + a_.radii.size() +
                            a_.tangent_u.size() + a_.tangent_v.size() + a_.clip_points.size() +
                            a_.clip_dirs.size()) +
-         a_.colors.size() + ids_.size() * sizeof(SurfelId) + row_of_id_.size() * sizeof(Index);
+         a_.colors.size() + ids_.size() * sizeof(SurfelId) +
+         // by size, not capacity (like the arrays): a restored model reports what the live one did
+         static_cast<std::size_t>((alive_.rows() + 63) / 64) * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
 }
 
 Vec3 SurfelModel::min_corner() const {

@@ -28,8 +28,7 @@ StatePage state_page(const EditSession& session, const GetStateArgs& args, std::
   }
   page.full = changes.full;
   // The answer's ids ascending: every id (full) or the changed ones.
-  const IdList& answer = changes.full ? model.ids() : changes.changed;
-  page.total = answer.size();
+  page.total = changes.full ? static_cast<std::uint64_t>(model.size()) : changes.changed.size();
   if (args.offset > page.total) {
     throw Error(ErrorCode::InvalidArgument, "get_state.offset",
                 "offset " + std::to_string(args.offset) + " beyond the answer's " + std::to_string(page.total) + " ids");
@@ -38,8 +37,9 @@ StatePage state_page(const EditSession& session, const GetStateArgs& args, std::
       (args.max_count == 0 || args.max_count > max_chunk_surfels) ? max_chunk_surfels : args.max_count;
   const std::uint64_t end = std::min<std::uint64_t>(page.total, args.offset + limit);
   const std::size_t n = static_cast<std::size_t>(end - args.offset);
-  page.ids.assign(answer.begin() + static_cast<std::ptrdiff_t>(args.offset),
-                  answer.begin() + static_cast<std::ptrdiff_t>(end));
+  page.ids.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    page.ids[k] = changes.full ? model.id_of(static_cast<Index>(args.offset + k)) : changes.changed[args.offset + k];
   page.positions.resize(3 * n);
   page.normals.resize(3 * n);
   page.radii.resize(n);

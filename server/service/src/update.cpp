@@ -80,7 +80,6 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
   const double* pos = model->positions().data();  // row-major: a row's three coordinates are contiguous
   const double* nrm = model->normals().data();
   const double* rad = model->radii().data();
-  const SurfelId* ids = model->ids().data();
   const Index rows = model->size();
   auto append = [](auto& to, const auto* from, std::size_t begin, std::size_t count) {
     to.insert(to.end(), from + begin, from + begin + count);
@@ -99,7 +98,7 @@ PreparedUpdate prepare_update(const UpdateEvent& event, const SurfelModel* model
       throw std::out_of_range("update row out of range");
     }
     const auto row = static_cast<std::size_t>(first);
-    append(p.ids, ids, row, count);
+    for (std::size_t j = 0; j < count; ++j) p.ids.push_back(model->id_of(static_cast<Index>(row + j)));
     append(p.positions, pos, 3 * row, 3 * count);
     append(p.normals, nrm, 3 * row, 3 * count);
     append(p.radii, rad, row, count);

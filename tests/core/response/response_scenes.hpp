@@ -106,7 +106,7 @@ inline ResponseScene build_from_samples(const SampledSurfels& zero, const Sample
   arrays.normals = all.normals;
   arrays.radii = all.radii;
   sc.model = SurfelModel::from_arrays(std::move(arrays));
-  for (Index r : hit.colliding) sc.colliding.push_back(sc.model.ids()[r]);
+  for (Index r : hit.colliding) sc.colliding.push_back(sc.model.id_of(r));
   return sc;
 }
 

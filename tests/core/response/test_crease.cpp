@@ -150,12 +150,12 @@ TEST(Crease, EndToEndOnTheModel) {
   for (Index r = 0; r < model.size(); ++r) {
     const Vec3 p = model.positions().row(r).transpose();
     // The side of a row: the deformable ids are those of the original model's deformable rows.
-    const Index original_row = sc.model.row_of(model.ids()[r]);
-    const SurfelId parent = original_row >= 0 ? model.ids()[r]
-                                              : c.inserted_parents[static_cast<std::size_t>(model.ids()[r] - copies.front())];
+    const Index original_row = sc.model.row_of(model.id_of(r));
+    const SurfelId parent = original_row >= 0 ? model.id_of(r)
+                                              : c.inserted_parents[static_cast<std::size_t>(model.id_of(r) - copies.front())];
     const bool zero = sc.regions[static_cast<std::size_t>(sc.model.row_of(parent))] == Region::Zero;
     const double other = zero ? sc.sdf_deformed(p) : sc.sdf_zero(p);
-    EXPECT_GE(other, -0.25 * sc.spacing) << "id " << model.ids()[r];
+    EXPECT_GE(other, -0.25 * sc.spacing) << "id " << model.id_of(r);
   }
 }
 

@@ -65,7 +65,7 @@
 #include <vector>
 
 #include "../collision_detail.hpp"
-#include "rank_bits.hpp"
+#include "surfeledit/core/rank_bits.hpp"
 
 namespace surfeledit::detail {
 

@@ -16,7 +16,7 @@
 
 #include "inside_model.hpp"
 #include "kernel.hpp"
-#include "rank_bits.hpp"
+#include "surfeledit/core/rank_bits.hpp"
 
 namespace surfeledit::detail {
 

@@ -111,7 +111,7 @@ CreaseResult crease(const SurfelModel& model, const IdList& features_a, const Id
   std::vector<Index> gaps;
   for (Eigen::Index k = 0; k < n; ++k) {
     const Move& m = moves[static_cast<std::size_t>(k)];
-    out.moved.push_back(model.ids()[m.row]);
+    out.moved.push_back(model.id_of(m.row));
     out.positions.row(k) = m.x.transpose();
     out.clip_dirs.row(k) = m.dir.transpose();
     const double gap = params.gap_factor * model.radii()[m.row];
@@ -129,7 +129,7 @@ CreaseResult crease(const SurfelModel& model, const IdList& features_a, const Id
   for (Eigen::Index k = 0; k < g; ++k) {
     const Move& m = moves[static_cast<std::size_t>(gaps[k])];
     add_gap_copy(model, m.row, m.x - model.positions().row(m.row).transpose(), ins, static_cast<Index>(k));
-    out.inserted_parents.push_back(model.ids()[m.row]);
+    out.inserted_parents.push_back(model.id_of(m.row));
   }
   return out;
 }

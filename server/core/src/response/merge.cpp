@@ -42,7 +42,7 @@ void check_inputs(const SurfelModel& model, const std::vector<Region>& regions,
 IdList ids_of(const SurfelModel& model, const std::vector<bool>& flag) {
   IdList out;
   for (std::size_t r = 0; r < flag.size(); ++r)
-    if (flag[r]) out.push_back(model.ids()[r]);
+    if (flag[r]) out.push_back(model.id_of(r));
   return out;
 }
 

@@ -6,6 +6,7 @@
 
 #include <optional>
 
+#include "surfeledit/core/rank_bits.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit {
@@ -37,8 +38,8 @@ class SurfelModel {
   // below `next_id`. Throws InvalidArgument ("snapshot") when shapes or ids do not fit.
   static SurfelModel from_parts(SurfelArrays arrays, IdList ids, SurfelId next_id);
 
-  Index size() const { return static_cast<Index>(ids_.size()); }
-  bool empty() const { return ids_.empty(); }
+  Index size() const { return static_cast<Index>(a_.positions.rows()); }
+  bool empty() const { return size() == 0; }
 
   const Points& positions() const { return a_.positions; }
   const Points& normals() const { return a_.normals; }
@@ -55,10 +56,15 @@ class SurfelModel {
   SurfelArrays& arrays() { return a_; }
   const SurfelArrays& arrays() const { return a_; }
 
-  // Row -> id (ascending).
-  const IdList& ids() const { return ids_; }
-  // Id -> row, or -1 if the id is unknown or removed.
-  Index row_of(SurfelId id) const;
+  // Row -> id (ascending), as a list (built when the ids are 0..size()-1; use id_of() for single rows).
+  IdList ids() const;
+  // The id of `row` (0 <= row < size()).
+  SurfelId id_of(Index row) const { return ids_.empty() ? static_cast<SurfelId>(row) : ids_[static_cast<std::size_t>(row)]; }
+  // Id -> row, or -1 if the id is unknown or removed. O(1).
+  Index row_of(SurfelId id) const {
+    if (ids_.empty()) return id < static_cast<SurfelId>(size()) ? static_cast<Index>(id) : -1;
+    return id < next_id_ && alive_.test(static_cast<Index>(id)) ? alive_.rank(static_cast<Index>(id)) : -1;
+  }
   // Rows of `ids`; throws NotFound naming `field` and the first unknown id,
   // InvalidArgument on a repeated id.
   IndexList rows_of(const IdList& ids, const std::string& field) const;
@@ -85,9 +91,16 @@ class SurfelModel {
   double diagonal() const;
 
  private:
+  // Builds ids_ and alive_ from the identity (before the first removal).
+  void spell_out_ids();
+
   SurfelArrays a_;
+  // Row -> id; empty while the ids are the rows (0..size()-1, next_id_ == size(): no surfel was ever removed),
+  // which saves 8 bytes per surfel, and 4 more of an id -> row map (issue 14, memory).
   IdList ids_;
-  std::vector<Index> row_of_id_;  // indexed by id, -1 when absent
+  // Once ids_ is spelled out: one bit per id below next_id_, set for the ids in the model; the row of an id is
+  // its rank (the ids are ascending), in O(1).
+  detail::RankBits alive_;
   SurfelId next_id_ = 0;
 };
 
