@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "service_test_support.hpp"
-#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/decode.hpp"
 #include "surfeledit/service/handler.hpp"
 
 namespace surfeledit::service::test {

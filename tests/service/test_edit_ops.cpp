@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "handler_fixture.hpp"
+#include "surfeledit/service/sample_views.hpp"
 
 using namespace surfeledit;
 using namespace surfeledit::service;

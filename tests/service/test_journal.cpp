@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "../../server/service/src/journal_records.hpp"
-#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/decode.hpp"
 #include "surfeledit/service/journal.hpp"
 
 namespace fs = std::filesystem;

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "handler_fixture.hpp"
+#include "surfeledit/service/sample_views.hpp"
 
 using namespace surfeledit;
 using namespace surfeledit::service;

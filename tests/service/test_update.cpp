@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "service_test_support.hpp"
-#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/sample_views.hpp"
 #include "surfeledit/service/update.hpp"
 
 using namespace surfeledit;

@@ -5,6 +5,7 @@
 
 #include "handler_ops.hpp"
 #include "surfeledit/core/util.hpp"
+#include "surfeledit/service/reply_values.hpp"
 
 namespace surfeledit::service {
 

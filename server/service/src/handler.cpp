@@ -7,6 +7,7 @@
 #include "handler_ops.hpp"
 #include "surfeledit/core/util.hpp"
 #include "surfeledit/service/log.hpp"
+#include "surfeledit/service/protocol_errors.hpp"
 
 namespace surfeledit::service {
 

@@ -14,8 +14,8 @@
 
 #include "surfeledit/service/client_registry.hpp"
 #include "surfeledit/service/command.hpp"
-#include "surfeledit/service/convert.hpp"
 #include "surfeledit/service/handler.hpp"
+#include "surfeledit/service/protocol_errors.hpp"
 #include "surfeledit/service/reply.hpp"
 #include "surfeledit/service/request_cache.hpp"
 #include "surfeledit/service/session_registry.hpp"

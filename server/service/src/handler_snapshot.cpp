@@ -8,7 +8,9 @@
 #include "handler_ops.hpp"
 #include "journal_records.hpp"
 #include "surfeledit/core/snapshot_io.hpp"
+#include "surfeledit/service/decode.hpp"
 #include "surfeledit/service/journal.hpp"
+#include "surfeledit/service/sample_views.hpp"
 
 namespace surfeledit::service {
 

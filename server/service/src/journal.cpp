@@ -7,7 +7,7 @@
 #include "journal_records.hpp"
 #include "journal_snapshot.hpp"
 #include "surfeledit/core/snapshot_io.hpp"
-#include "surfeledit/service/convert.hpp"
+#include "surfeledit/service/decode.hpp"
 #include "surfeledit/service/log.hpp"
 
 namespace surfeledit::service {

@@ -3,6 +3,7 @@
 
 #include "handler_ops.hpp"
 #include "surfeledit/service/log.hpp"
+#include "surfeledit/service/reply_values.hpp"
 
 #ifndef SURFELEDIT_VERSION
 #define SURFELEDIT_VERSION "unknown"

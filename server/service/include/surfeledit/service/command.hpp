@@ -1,5 +1,5 @@
 // A request as the handler sees it: the header of a proto Request and its op's argument as project
-// types, decoded and validated by convert.hpp's decode(). One argument struct per op that has one;
+// types, decoded and validated by decode.hpp's decode(). One argument struct per op that has one;
 // adding an op is its IDL argument, its decoding and one handler function (handler_ops.hpp).
 #pragma once
 
@@ -42,7 +42,7 @@ enum class Op : std::uint32_t {
   Blend = 19,
   Boolean = 20,
   FillHoles = 21,
-  Peers = FillHoles + 1,  // the IDL's ops after FillHoles (numbered there; convert.cpp checks them)
+  Peers = FillHoles + 1,  // the IDL's ops after FillHoles (numbered there; decode.cpp checks them)
   Release = Peers + 1,
 };
 constexpr std::size_t kOpCount = static_cast<std::size_t>(Op::Release) + 1;  // ops 0 .. kOpCount-1

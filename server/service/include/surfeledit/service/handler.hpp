@@ -1,6 +1,6 @@
 // The request handler: validates and serves one Command at a time (the caller serialises
 // calls), keeping sessions, uploads and the idempotence cache. No DDS I/O happens here:
-// the caller decodes the request (convert.hpp's decode), writes the returned reply and
+// the caller decodes the request (decode.hpp's decode), writes the returned reply and
 // publishes the returned update events. Each op is served by one function of the op table
 // (handler_ops.hpp, in src/); this header names project types only.
 #pragma once

@@ -1,6 +1,6 @@
 // The service's own form of a Reply (proto/surfeledit.idl): plain C++ values, so that replies
 // can be built, stored in the request cache and compared without touching DDS memory.
-// convert.hpp turns one into the generated C type for writing.
+// sample_views.hpp presents one as the generated C type for writing.
 #pragma once
 
 #include <array>
