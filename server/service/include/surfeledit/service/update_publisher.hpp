@@ -3,7 +3,7 @@
 //
 // The queue is bounded by payload bytes. push() never blocks: when an update does not fit, it
 // is refused and the caller decides (the service coalesces the session's queued updates into one,
-// see service.cpp). push_anyway() accepts an update beyond the bound (used for the coalesced
+// see service_updates.cpp). push_anyway() accepts an update beyond the bound (used for the coalesced
 // update and when nothing can be coalesced; logged by the caller). No DDS here: the writer is a
 // callback, so the queue is testable on its own.
 #pragma once
