@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit::py {
@@ -24,6 +25,14 @@ Values to_values(const pyb::handle& a, const char* field);
 DeformParams make_deform_params(const Vec3& translation, const Vec3& axis, double angle,
                                 const std::optional<Vec3>& center, const std::string& blend);
 
+// Keyword arguments -> settings: bool -> bool, int -> integer, float -> number, str -> text
+// (bind_settings.cpp).
+std::vector<NamedSetting> to_settings(const pyb::kwargs& kwargs);
+// A session's settings as {name: bool, int, float or str}.
+pyb::dict settings_dict(const SessionSettings& settings);
+// The docstring of EditSession.configure: one line per setting of the table.
+const char* configure_doc();
+
 void bind_errors(pyb::module_& m);
 void bind_kdtree(pyb::module_& m);
 void bind_inside_outside(pyb::module_& m);
@@ -31,6 +40,7 @@ void bind_winding(pyb::module_& m);
 void bind_scene(pyb::module_& m);
 void bind_deformation(pyb::module_& m);
 void bind_model_io(pyb::module_& m);
+void bind_settings(pyb::module_& m);
 void bind_edit_session(pyb::module_& m);
 
 }  // namespace surfeledit::py

@@ -34,6 +34,7 @@ PYBIND11_MODULE(core, m) {
   bind_scene(m);
   bind_deformation(m);
   bind_model_io(m);
+  bind_settings(m);
   bind_edit_session(m);
   bind_winding(m);
 }
