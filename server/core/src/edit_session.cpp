@@ -203,7 +203,10 @@ void EditSession::roll_back(SessionImage& before, std::uint64_t version_before) 
   before.complete = true;  // restore() puts back what the image holds; an unsaved detector is rebuilt below
   restore(before, true);
   before.complete = detector_saved;
-  if (!detector_saved && tool_->fields && !model_.empty()) tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
+  if (!detector_saved && tool_->fields && !model_.empty()) {
+    tool_->own_origins();  // the merge origins stay those of the last reset
+    tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
+  }
   while (!removed_log_.empty() && removed_log_.back().first > version_before) removed_log_.pop_back();
   version_ = version_before;
 }

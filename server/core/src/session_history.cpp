@@ -158,6 +158,7 @@ SessionImage EditSession::capture_tool(bool keep_fields) {
     o.tool.detector.reset();
     o.tool.merge.origin_positions.resize(0, 3);
     o.tool.merge.origin_normals.resize(0, 3);
+    o.tool.merge.origins_in_detector = false;
     o.tool.derive_detector = true;
   }
   o.history = history_params_;

@@ -1,4 +1,4 @@
-// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 2: tools keep their held rigid rows):
+// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 3; see kFormat):
 // magic, format version; the detector table (every detector object once, by identity: tools and
 // history images refer to it by index, 0 = none); the detector-image table (each with the index of
 // a detector that reads it); the table of shared row lists; then the session's scalars, model, row
@@ -17,7 +17,8 @@ using namespace snapshot_values;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
-constexpr std::uint32_t kFormat = 2;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows
+constexpr std::uint32_t kFormat = 3;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows;
+                                      // 3: merge origins may be the tool detector's (MergeMemo::origins_in_detector)
 
 // Pointer tables: index 0 is null, objects from 1 in first-seen order.
 template <typename T>
@@ -103,7 +104,7 @@ ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) 
   if (im.fields_kept && im.fields) in.fail("tool fields kept", "an image that keeps the fields holds none");
   im.settings = get_settings(in);
   im.detector = Loaded::pick(in, l.detectors, "tool detector");
-  im.merge = get_merge(in);
+  im.merge = get_merge(in, im.detector.get());
   im.colliding = in.vec<SurfelId>("tool colliding");
   im.steps = in.u64("tool steps");
   im.stale = in.boolean("tool stale");
@@ -354,7 +355,7 @@ void EditSession::restore(SnapshotReader& in) {
     tool.detector = Loaded::pick(in, l.detectors, "tool detector");
     tool.colliding = in.vec<SurfelId>("tool colliding");
     tool.steps = in.u64("tool steps");
-    tool.merge = get_merge(in);
+    tool.merge = get_merge(in, tool.detector.get());
     tool.stale = in.boolean("tool stale");
     tool.stale_rows_known = in.boolean("tool stale rows known");
     tool.stale_rows = in.vec<Index>("tool stale rows");

@@ -47,6 +47,6 @@ DeformationFields get_fields(SnapshotReader& in, std::size_t rows);
 void put_settings(SnapshotWriter& out, const SessionSettings& s);
 SessionSettings get_settings(SnapshotReader& in);
 void put_merge(SnapshotWriter& out, const MergeMemo& m);
-MergeMemo get_merge(SnapshotReader& in);
+MergeMemo get_merge(SnapshotReader& in, const CollisionDetector* detector);  // `detector`: the tool's, for origins_in_detector
 
 }  // namespace surfeledit::snapshot_values
