@@ -118,6 +118,19 @@ SessionSettings get_settings(SnapshotReader& in) {
   }
 }
 
+void put_row_versions(SnapshotWriter& out, const RowVersions& v) {
+  out.u64(v.floor());
+  out.vec(v.offsets());
+}
+
+RowVersions get_row_versions(SnapshotReader& in, std::size_t rows, std::uint64_t version, const char* what) {
+  const std::uint64_t floor = in.u64(what);
+  std::vector<std::uint32_t> offsets = in.vec<std::uint32_t>(what);
+  if (offsets.size() != rows) in.fail(what, "one per model row");
+  if (floor > version) in.fail(what, "a floor above the session's version");
+  return RowVersions::from_parts(floor, std::move(offsets));
+}
+
 void put_merge(SnapshotWriter& out, const MergeMemo& m) {
   out.boolean(m.origins_in_detector);
   out.mat(m.origin_positions);
