@@ -52,9 +52,8 @@ TEST(EditSession, BuildsFieldsOnlyWhenRegionsAreSet) {
   };
   EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "history"}));  // issue 9: the history is listed last
   f.session.set_regions({f.zero, {}}, {f.one, {}});
-  // The default settings run the Robust detector once regions are set.
-  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust",
-                                               "merge_origins", "history"}));
+  // The default settings run the Robust detector once regions are set; it keeps the merge origins.
+  EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "collision_robust", "history"}));
   f.session.configure({{"algorithm", std::string("none")}});
   EXPECT_EQ(names(), (std::vector<std::string>{"model", "versions", "deformation_fields", "merge_origins", "history"}));
   const SessionReport r = f.session.report();

@@ -203,7 +203,10 @@ void EditSession::roll_back(SessionImage& before, std::uint64_t version_before) 
   before.complete = true;  // restore() puts back what the image holds; an unsaved detector is rebuilt below
   restore(before, true);
   before.complete = detector_saved;
-  if (!detector_saved && tool_->fields && !model_.empty()) tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
+  if (!detector_saved && tool_->fields && !model_.empty()) {
+    tool_->own_origins();  // the merge origins stay those of the last reset
+    tool_->detector = fresh_detector(tool_->settings, *tool_->fields);
+  }
   while (!removed_log_.empty() && removed_log_.back().first > version_before) removed_log_.pop_back();
   version_ = version_before;
 }
@@ -334,7 +337,7 @@ void EditSession::remove_rows(const IdList& ids, const std::vector<bool>& keep) 
   for (std::size_t r = 0; r < keep.size(); ++r)
     if (!keep[r]) removed_log_.emplace_back(version_, model_.id_of(r));
   model_.remove(ids);
-  compact(row_version_, keep);
+  row_version_.compact(keep);
   if (rest_radius_.size() > 0) {
     Eigen::Index j = 0;
     for (Eigen::Index i = 0; i < rest_radius_.size(); ++i)
@@ -361,13 +364,13 @@ void EditSession::check_regions_kept(const std::vector<bool>& keep, const char* 
 }
 
 void EditSession::touch_rows(const IndexList& rows) {
-  for (Index r : rows) row_version_[r] = version_;
+  for (Index r : rows) row_version_.set(static_cast<std::size_t>(r), version_);
 }
 
 Changes EditSession::changes_since(std::uint64_t since, bool rows) const {
   Changes c;
   if (model_.empty() || since >= version_) return c;
-  c.full = since < model_version_;
+  c.full = since < model_version_ || since < row_version_.floor();  // below the floor: not known exactly
   if (rows && c.full) return c;  // every row: none listed
   for (Index r = 0; r < model_.size(); ++r) {
     if (!c.full && row_version_[r] <= since) continue;
@@ -385,7 +388,7 @@ SessionReport EditSession::report() const {
   SessionReport rep;
   rep.surfels = model_.size();
   rep.structures.push_back({"model", model_.memory_bytes()});
-  rep.structures.push_back({"versions", row_version_.size() * sizeof(std::uint64_t) +
+  rep.structures.push_back({"versions", row_version_.memory_bytes() +
                                             removed_log_.size() * sizeof(removed_log_[0])});
   // Every tool's (one entry per structure and tool; a single tool lists exactly what a session without tools did).
   for (const auto& [id, t] : tools_) {

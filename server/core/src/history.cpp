@@ -26,7 +26,7 @@ std::size_t SessionImage::bytes() const {
   }
   if (tool_only) b += tool_only->tool.bytes();
   if (whole) {
-    b += whole->model.memory_bytes() + whole->row_version.capacity() * sizeof(std::uint64_t) +
+    b += whole->model.memory_bytes() + whole->row_version.memory_bytes() +
          array_bytes(whole->rest_radius);
     for (const auto& [id, t] : whole->tools) b += id.capacity() + t.bytes();
   }

@@ -24,11 +24,11 @@ void take_rows(const Points& a, const IndexList& rows, Points& out, std::vector<
 }
 
 // Row versions of `rows` from their runs.
-void put_versions(std::vector<std::uint64_t>& row_version, const IndexList& rows,
+void put_versions(RowVersions& row_version, const IndexList& rows,
                   const std::vector<std::pair<std::uint64_t, std::uint32_t>>& runs) {
   std::size_t k = 0;
   for (const auto& [v, n] : runs)
-    for (std::uint32_t j = 0; j < n; ++j) row_version[rows[k++]] = v;
+    for (std::uint32_t j = 0; j < n; ++j) row_version.set(static_cast<std::size_t>(rows[k++]), v);
 }
 
 void put_rows(Points& a, const IndexList& rows, const Points& values) {
@@ -158,6 +158,7 @@ SessionImage EditSession::capture_tool(bool keep_fields) {
     o.tool.detector.reset();
     o.tool.merge.origin_positions.resize(0, 3);
     o.tool.merge.origin_normals.resize(0, 3);
+    o.tool.merge.origins_in_detector = false;
     o.tool.derive_detector = true;
   }
   o.history = history_params_;
@@ -246,7 +247,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   std::unordered_set<SurfelId> touched(entry.item.touched.begin(), entry.item.touched.end());
   const IdList& ids = model_.ids();
   for (std::size_t r = 0; r < ids.size(); ++r)
-    if (touched.count(ids[r])) row_version_[r] = version_;
+    if (touched.count(ids[r])) row_version_.set(r, version_);
   for (SurfelId id : ids_before)
     if (model_.row_of(id) < 0) removed_log_.emplace_back(version_, id);
   return version_;

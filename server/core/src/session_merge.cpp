@@ -22,8 +22,19 @@ Points gather(const Points& a, const IndexList& rows) {
 }  // namespace
 
 void EditSession::take_origins() {
-  tool_->merge.origin_positions = gather(model_.positions(), tool_->fields->deformable);
-  tool_->merge.origin_normals = gather(model_.normals(), tool_->fields->deformable);
+  // The detector was just reset from this model with these fields: when it keeps the deformable rows it saw,
+  // they are the origins (the same rows, in the same order).
+  const CollisionDetector::ResetRows kept = tool_->detector ? tool_->detector->reset_rows() : CollisionDetector::ResetRows{};
+  const auto d = static_cast<Eigen::Index>(tool_->fields->deformable.size());
+  MergeMemo& m = tool_->merge;
+  m.origins_in_detector = kept.positions && kept.normals && kept.positions->rows() == d && kept.normals->rows() == d;
+  if (m.origins_in_detector) {
+    m.origin_positions.resize(0, 3);
+    m.origin_normals.resize(0, 3);
+  } else {
+    m.origin_positions = gather(model_.positions(), tool_->fields->deformable);
+    m.origin_normals = gather(model_.normals(), tool_->fields->deformable);
+  }
 }
 
 void EditSession::extend_rows(const IndexList& parents, bool skip_acting) {
@@ -61,8 +72,8 @@ MergeOutcome EditSession::merge_now(bool crease_on) {
   if (tool_->colliding.empty()) return out;
   // Everything is computed and validated on the model as it is; only then does the session change.
   auto t = std::chrono::steady_clock::now();
-  const MergeResult m = merge_regions(model_, tool_->fields->regions, tool_->merge.origin_positions, tool_->merge.origin_normals,
-                                      tool_->colliding);
+  const CollisionDetector::ResetRows origins = tool_->merge_origins();
+  const MergeResult m = merge_regions(model_, tool_->fields->regions, *origins.positions, *origins.normals, tool_->colliding);
   out.merge_ms = ms_since(t);
   std::vector<bool> keep(static_cast<std::size_t>(model_.size()), true);
   for (Index r : model_.rows_of(m.removed, "removed")) keep[r] = false;

@@ -1,4 +1,4 @@
-// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 2: tools keep their held rigid rows):
+// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 3; see kFormat):
 // magic, format version; the detector table (every detector object once, by identity: tools and
 // history images refer to it by index, 0 = none); the detector-image table (each with the index of
 // a detector that reads it); the table of shared row lists; then the session's scalars, model, row
@@ -17,7 +17,9 @@ using namespace snapshot_values;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
-constexpr std::uint32_t kFormat = 2;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows
+constexpr std::uint32_t kFormat = 3;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows;
+                                      // 3: merge origins may be the tool detector's (MergeMemo::origins_in_detector),
+                                      // row versions as a floor and 32-bit offsets (RowVersions)
 
 // Pointer tables: index 0 is null, objects from 1 in first-seen order.
 template <typename T>
@@ -103,7 +105,7 @@ ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) 
   if (im.fields_kept && im.fields) in.fail("tool fields kept", "an image that keeps the fields holds none");
   im.settings = get_settings(in);
   im.detector = Loaded::pick(in, l.detectors, "tool detector");
-  im.merge = get_merge(in);
+  im.merge = get_merge(in, im.detector.get());
   im.colliding = in.vec<SurfelId>("tool colliding");
   im.steps = in.u64("tool steps");
   im.stale = in.boolean("tool stale");
@@ -134,7 +136,7 @@ void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
     const WholeImage& w = *im.whole;
     put_model(out, w.model);
     out.u64(w.model_version);
-    out.vec(w.row_version);
+    put_row_versions(out, w.row_version);
     out.mat(w.rest_radius);
     out.f64(w.history.history_mb);
     out.u64(w.tools.size());
@@ -186,11 +188,11 @@ SessionImage get_image(SnapshotReader& in, const Loaded& l) {
     WholeImage w;
     w.model = get_model(in);
     w.model_version = in.u64("image model version");
-    w.row_version = in.vec<std::uint64_t>("image row versions");
+    const std::size_t rows = static_cast<std::size_t>(w.model.size());
+    w.row_version = get_row_versions(in, rows, ~std::uint64_t{0}, "image row versions");
     w.rest_radius = in.mat<Values>("image rest radii");
     w.history.history_mb = in.f64("image history_mb");
-    const std::size_t rows = static_cast<std::size_t>(w.model.size());
-    if (w.row_version.size() != rows || (w.rest_radius.size() != 0 && static_cast<std::size_t>(w.rest_radius.size()) != rows))
+    if (w.rest_radius.size() != 0 && static_cast<std::size_t>(w.rest_radius.size()) != rows)
       in.fail("whole image", "per-row arrays do not match the model");
     const std::size_t n = in.count("image tools", 8);
     for (std::size_t k = 0; k < n; ++k) {
@@ -263,7 +265,7 @@ void EditSession::save(SnapshotWriter& out) const {
   out.u64(version_);
   out.u64(model_version_);
   put_model(out, model_);
-  out.vec(row_version_);
+  put_row_versions(out, row_version_);
   put_pairs_of(out, removed_log_);
   out.mat(rest_radius_);
   out.f64(history_params_.history_mb);
@@ -337,13 +339,13 @@ void EditSession::restore(SnapshotReader& in) {
   const std::uint64_t model_version = in.u64("model version");
   SurfelModel model = get_model(in);
   const std::size_t rows = static_cast<std::size_t>(model.size());
-  std::vector<std::uint64_t> row_version = in.vec<std::uint64_t>("row versions");
+  RowVersions row_version = get_row_versions(in, rows, version, "row versions");
   auto removed_log = get_pairs<std::uint64_t, SurfelId>(in, "removal log");
   Values rest_radius = in.mat<Values>("rest radii");
   HistoryParams history_params;
   history_params.history_mb = in.f64("history_mb");
-  if (row_version.size() != rows || (rest_radius.size() != 0 && static_cast<std::size_t>(rest_radius.size()) != rows))
-    in.fail("row versions", "per-row arrays do not match the model");
+  if (rest_radius.size() != 0 && static_cast<std::size_t>(rest_radius.size()) != rows)
+    in.fail("rest radii", "per-row arrays do not match the model");
   std::map<std::string, Tool> tools;
   const std::size_t n_tools = in.count("tools", 8);
   for (std::size_t k = 0; k < n_tools; ++k) {
@@ -354,7 +356,7 @@ void EditSession::restore(SnapshotReader& in) {
     tool.detector = Loaded::pick(in, l.detectors, "tool detector");
     tool.colliding = in.vec<SurfelId>("tool colliding");
     tool.steps = in.u64("tool steps");
-    tool.merge = get_merge(in);
+    tool.merge = get_merge(in, tool.detector.get());
     tool.stale = in.boolean("tool stale");
     tool.stale_rows_known = in.boolean("tool stale rows known");
     tool.stale_rows = in.vec<Index>("tool stale rows");

@@ -118,7 +118,21 @@ SessionSettings get_settings(SnapshotReader& in) {
   }
 }
 
+void put_row_versions(SnapshotWriter& out, const RowVersions& v) {
+  out.u64(v.floor());
+  out.vec(v.offsets());
+}
+
+RowVersions get_row_versions(SnapshotReader& in, std::size_t rows, std::uint64_t version, const char* what) {
+  const std::uint64_t floor = in.u64(what);
+  std::vector<std::uint32_t> offsets = in.vec<std::uint32_t>(what);
+  if (offsets.size() != rows) in.fail(what, "one per model row");
+  if (floor > version) in.fail(what, "a floor above the session's version");
+  return RowVersions::from_parts(floor, std::move(offsets));
+}
+
 void put_merge(SnapshotWriter& out, const MergeMemo& m) {
+  out.boolean(m.origins_in_detector);
   out.mat(m.origin_positions);
   out.mat(m.origin_normals);
   out.mat(m.crease_positions);
@@ -130,8 +144,9 @@ void put_merge(SnapshotWriter& out, const MergeMemo& m) {
   out.boolean(m.open_region);
 }
 
-MergeMemo get_merge(SnapshotReader& in) {
+MergeMemo get_merge(SnapshotReader& in, const CollisionDetector* detector) {
   MergeMemo m;
+  m.origins_in_detector = in.boolean("merge origins in detector");
   m.origin_positions = in.mat<Points>("merge origins");
   m.origin_normals = in.mat<Points>("merge origin normals");
   m.crease_positions = in.mat<Points>("crease positions");
@@ -142,6 +157,11 @@ MergeMemo get_merge(SnapshotReader& in) {
   m.crease_copies = in.vec<SurfelId>("crease copies");
   m.open_region = in.boolean("open region");
   if (static_cast<std::size_t>(m.crease_from.rows()) != m.crease_moved.size()) in.fail("crease from", "one row per moved id");
+  if (m.origin_positions.rows() != m.origin_normals.rows()) in.fail("merge origins", "positions and normals differ in length");
+  if (m.origins_in_detector) {
+    if (m.origin_positions.rows() != 0) in.fail("merge origins", "held twice (in the detector and copied)");
+    if (!detector || !detector->reset_rows().positions) in.fail("merge origins", "in a detector that keeps none");
+  }
   return m;
 }
 

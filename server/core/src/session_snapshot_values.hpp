@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/row_versions.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/snapshot_io.hpp"
 #include "surfeledit/core/surfel_model.hpp"
@@ -47,6 +48,10 @@ DeformationFields get_fields(SnapshotReader& in, std::size_t rows);
 void put_settings(SnapshotWriter& out, const SessionSettings& s);
 SessionSettings get_settings(SnapshotReader& in);
 void put_merge(SnapshotWriter& out, const MergeMemo& m);
-MergeMemo get_merge(SnapshotReader& in);
+// Row versions: the floor, then the offsets. get_ fails ("row versions") with another row count or a floor
+// above `version` (the session's).
+void put_row_versions(SnapshotWriter& out, const RowVersions& v);
+RowVersions get_row_versions(SnapshotReader& in, std::size_t rows, std::uint64_t version, const char* what);
+MergeMemo get_merge(SnapshotReader& in, const CollisionDetector* detector);  // `detector`: the tool's, for origins_in_detector
 
 }  // namespace surfeledit::snapshot_values

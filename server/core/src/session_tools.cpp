@@ -81,6 +81,7 @@ void EditSession::sync_tool() {
   // Otherwise it starts again from the model as it is now (the zero region where it is now; Robust's
   // original model is now).
   if (!followed) {
+    t.own_origins();  // the merge origins stay those of the last reset
     if (t.fields) t.detector = fresh_detector(t.settings, *t.fields);
     t.colliding.clear();
   }

@@ -121,6 +121,21 @@ bool Tool::held_before(RigidRows& out) const {
   return true;
 }
 
+CollisionDetector::ResetRows Tool::merge_origins() const {
+  if (!merge.origins_in_detector) return {&merge.origin_positions, &merge.origin_normals};
+  const CollisionDetector::ResetRows rows = detector ? detector->reset_rows() : CollisionDetector::ResetRows{};
+  if (!rows.positions || !rows.normals) throw Error(ErrorCode::Internal, "merge", "the detector lost the merge origins");
+  return rows;
+}
+
+void Tool::own_origins() {
+  if (!merge.origins_in_detector) return;
+  const CollisionDetector::ResetRows rows = merge_origins();
+  merge.origin_positions = *rows.positions;
+  merge.origin_normals = *rows.normals;
+  merge.origins_in_detector = false;
+}
+
 void Tool::clear_regions() {
   fields.reset();
   detector.reset();

@@ -1,6 +1,7 @@
 """Memory report (issue 14): every configuration of bench/core/memory_report.py lists exactly the
 structures it uses -- one it does not use is absent (not listed, 0 bytes), not empty-but-allocated --
-and the history's split by image kind adds up to the history; tool ops hold no model-sized image."""
+and the history's split by image kind adds up to the history; tool ops hold no model-sized image. Robust
+keeps the merge origins in its original model (no `merge_origins` of the session's own)."""
 
 from __future__ import annotations
 
@@ -8,12 +9,12 @@ import pytest
 
 from surfeledit import scenario as S
 
-BASE = {"model", "versions", "deformation_fields", "merge_origins", "history"}
+BASE = {"model", "versions", "deformation_fields", "history"}
 
 # (algorithm, hierarchy settings, the structures the configuration needs beyond BASE)
 CONFIGS = [
-    ("simple", {}, {"collision_simple"}),
-    ("temporal", {}, {"collision_temporal"}),
+    ("simple", {}, {"collision_simple", "merge_origins"}),
+    ("temporal", {}, {"collision_temporal", "merge_origins"}),
     ("robust", {}, {"collision_robust"}),
     ("robust", {"zero_hierarchy": "aabb"}, {"collision_robust", "bvh_zero_aabb", "bvh_surfel_filter", "bvh_scratch"}),
     ("robust", {"zero_hierarchy": "obb"}, {"collision_robust", "bvh_zero_obb", "bvh_surfel_filter", "bvh_scratch"}),

@@ -57,6 +57,8 @@ class HierarchicalDetector final : public CollisionDetector {
   CollisionResult detect(const CollisionScene& scene, const Points& previous) override;
   void on_removed(const std::vector<bool>& keep) override;
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override;
+  // The narrow phase's (none with the extended narrow phase).
+  ResetRows reset_rows() const override { return extended_ ? ResetRows{} : narrow_->reset_rows(); }
   std::size_t memory_bytes() const override;
   std::vector<std::pair<std::string, std::size_t>> structures() const override;
   bool start_rebuild(const CollisionScene& scene) override;

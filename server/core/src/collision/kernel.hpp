@@ -52,6 +52,9 @@
 //     void bind(const CollisionScene& scene);
 //     // The zero region's copy with its k-d tree, when the kernel has one (nullptr otherwise).
 //     const ZeroSet* zero_set() const;
+//     // Optional: the deformable rows at reset, when the kernel keeps them unchanged until its next reset
+//     // (CollisionDetector::reset_rows; Robust). The driver answers none for a kernel without it.
+//     CollisionDetector::ResetRows reset_rows() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
 //   };
 //

@@ -105,6 +105,8 @@ class RobustKernel {
   // this detector's zero rows are while its tool is not stale).
   void bind(const CollisionScene& scene);
   const ZeroSet* zero_set() const { return nullptr; }
+  // The deformable rows at reset (CollisionDetector::reset_rows): the original model's copy.
+  CollisionDetector::ResetRows reset_rows() const { return {&orig_.positions, &orig_.normals}; }
   std::size_t memory_bytes() const;
   // Snapshots (collision_snapshot.cpp): the references as they are (trees rebuilt from the same points in the
   // same order, which gives the same tree); load() checks them against `rows` model rows.

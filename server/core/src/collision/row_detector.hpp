@@ -237,6 +237,16 @@ RowStates<State> get_row_states(SnapshotReader& in) {
 // Rows of a snapshot: ascending, in [0, rows).
 void check_rows(SnapshotReader& in, const IndexList& list, Index rows, const char* what);
 
+// A kernel's reset_rows() when it has one (Robust), none otherwise.
+template <typename K>
+auto kernel_reset_rows(const K& kernel, int) -> decltype(kernel.reset_rows()) {
+  return kernel.reset_rows();
+}
+template <typename K>
+CollisionDetector::ResetRows kernel_reset_rows(const K&, long) {
+  return {};
+}
+
 template <typename Kernel, typename Sweep = ParallelSweep>
 class RowDetector final : public NarrowDetector {
  public:
@@ -297,6 +307,7 @@ class RowDetector final : public NarrowDetector {
   std::size_t memory_bytes() const override {
     return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
   }
+  ResetRows reset_rows() const override { return kernel_reset_rows(rows_.kernel, 0); }
 
   // A step changes only the deformable rows' states and the sweep's tallies (hit_ is scratch); the
   // kernel's references change at reset, removal and insertion only (clone() copies them; their

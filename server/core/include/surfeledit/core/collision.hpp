@@ -180,6 +180,16 @@ class CollisionDetector {
   // detectors (Simple, Improved, Temporal, Robust) with the nearest inside test can; hierarchies, approximate
   // detection, inside modes winding and vote, and the swept test cannot (the default).
   virtual bool on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before);
+  // The deformable rows' positions and normals as the last reset() saw them (#D by 3 each, in ascending row
+  // order), when this detector keeps them unchanged until its next reset (Robust's original model; removals,
+  // insertions, rigid moves, detections and image restores leave them as they are; clones and snapshots hold
+  // the same values). Both null otherwise (the default). The session's merge origins read them instead of a
+  // copy of their own (MergeMemo::origins_in_detector).
+  struct ResetRows {
+    const Points* positions = nullptr;
+    const Points* normals = nullptr;
+  };
+  virtual ResetRows reset_rows() const { return {}; }
   // Bytes held (trees, per-surfel state).
   virtual std::size_t memory_bytes() const = 0;
   // What it holds, by name, for a session report (default: one entry "collision_<algorithm>").

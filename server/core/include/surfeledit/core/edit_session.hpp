@@ -17,6 +17,7 @@
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/boolean.hpp"
 #include "surfeledit/core/history.hpp"
+#include "surfeledit/core/row_versions.hpp"
 #include "surfeledit/core/holes.hpp"
 #include "surfeledit/core/response/curves.hpp"
 #include "surfeledit/core/selector.hpp"
@@ -35,7 +36,8 @@ struct SessionParams {
 
 // What changed since a given version.
 struct Changes {
-  bool full = false;  // the model was replaced since then: `changed` lists every surfel
+  bool full = false;  // the model was replaced since then, or `since` is below the row versions' floor (a
+                      // session past 2^32 versions, row_versions.hpp): `changed` lists every surfel
   IdList changed;     // ids whose attributes changed (or that were inserted), ascending
   IndexList rows;     // instead of `changed` when asked for (changes_since(since, true)): their rows,
                       // ascending (none when `full`)
@@ -360,7 +362,7 @@ class EditSession {
   std::uint64_t version_ = 0;
   std::uint64_t model_version_ = 0;         // version at which the current model was loaded
   SurfelModel model_;
-  std::vector<std::uint64_t> row_version_;  // per row: version of its last change
+  RowVersions row_version_;                 // per row: version of its last change (4 B, row_versions.hpp)
   std::vector<std::pair<std::uint64_t, SurfelId>> removed_log_;
   Values rest_radius_;  // per row, for resampling (built when a tool enables resampling)
   std::map<std::string, Tool> tools_;  // by author ("" the default tool); nodes are stable

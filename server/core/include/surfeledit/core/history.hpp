@@ -37,8 +37,10 @@
 
 #include "surfeledit/core/collision.hpp"
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/row_versions.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/surfel_model.hpp"
+#include "surfeledit/core/row_versions.hpp"
 #include "surfeledit/core/tool.hpp"
 
 namespace surfeledit {
@@ -63,7 +65,7 @@ struct RowsImage {
 struct WholeImage {
   SurfelModel model;
   std::uint64_t model_version = 0;
-  std::vector<std::uint64_t> row_version;              // #P
+  RowVersions row_version;                             // #P
   Values rest_radius;                                  // resampling's rest radii (empty when unused)
   HistoryParams history;                               // the session's history bound
   std::map<std::string, ToolImage> tools;              // every tool, by author (detectors: the objects

@@ -28,9 +28,14 @@ namespace surfeledit {
 
 // What a tool keeps for merges: its deformable surfels when its detector was last reset (the
 // "original" surfaces of merge_regions), and the crease points of its last merge (intersection_curves).
+// The origins are the detector's own copy when it keeps one from that very reset (Robust's original model,
+// CollisionDetector::reset_rows): `origins_in_detector`, and the two arrays here are empty. Before the tool's
+// detector is replaced by one reset at another time (a stale tool re-initialised, a step rolled back without
+// its detector states), Tool::own_origins copies them here.
 struct MergeMemo {
   Points origin_positions;  // #D by 3: deformable surfels at the last reset (set_regions, configure, merge)
   Points origin_normals;    // #D by 3, unit
+  bool origins_in_detector = false;  // the origins are the tool's detector's reset_rows() (both arrays empty)
   Points crease_positions;  // #K by 3: surfels the last merge's crease moved, on the intersection
   Values crease_radii;      // #K: their radii
   // The blend tool's inputs (session_blend.cpp): what blend() starts from and what it restores.
@@ -104,6 +109,10 @@ struct Tool {
     fresh_at = version;
     fresh_object = detector.get();
   }
+  // The merge origins (MergeMemo): the memo's arrays, or the detector's reset rows (origins_in_detector).
+  CollisionDetector::ResetRows merge_origins() const;
+  // Before the detector is replaced by one not reset now from the same model: the origins move into the memo.
+  void own_origins();
   // Frees the regions, the detector and what they found (the settings stay).
   void clear_regions();
   // Another tool's op changed rows this tool treats as rigid: `moved` (ascending model rows, the row
