@@ -72,8 +72,8 @@ class KdTree {
   // nearest(q), searched from a leaf up (for a caller whose queries move little between calls): `leaf` is a leaf
   // to start from, in (any value: a stale, wrong or unset one costs time, never exactness; pass the value a
   // previous call left), and the leaf holding the answer, out (unchanged when there is none). The same row and
-  // dist2 as nearest(q), ties included. A tree without `cells`, or with eps > 0, answers nearest(q) (and still
-  // sets `leaf`, which it does not use).
+  // dist2 as nearest(q), ties included. A tree without `cells` answers by the root descent (and still sets
+  // `leaf`); one with eps > 0 answers nearest(q) and leaves `leaf` as it was.
   Index nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2 = nullptr) const;
   // k nearest to q (fewer if the tree holds fewer), ascending by distance.
   void knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const;
