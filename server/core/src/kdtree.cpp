@@ -145,6 +145,7 @@ struct KdTree::Impl {
       hi[d] -= origin[d];
     }
     kd::build(tree, P, std::move(rows), origin.data(), lo, hi, static_cast<std::uint32_t>(params.leaf_size));
+    if (params.cells) kd::build_cells(tree);
   }
 
   double eps_factor() const { return 1.0 + params.eps; }
@@ -210,6 +211,18 @@ Index KdTree::nearest_within(const Vec3& q, double max_dist2, double* dist2) con
   impl.local(q, x);
   kd::NearestSet set(max_dist2);
   impl.search->nearest(impl.tree, x, set, impl.eps_factor());
+  if (dist2) *dist2 = set.slot == kd::NearestSet::kNone ? std::numeric_limits<double>::infinity() : set.best;
+  return set.slot == kd::NearestSet::kNone ? -1 : static_cast<Index>(impl.tree.rows[set.slot]);
+}
+
+Index KdTree::nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2) const {
+  const Impl& impl = *impl_;
+  if (impl.params.eps != 0.0) return nearest(q, dist2);
+  check_query(q);
+  double x[3];
+  impl.local(q, x);
+  kd::NearestSet set;
+  impl.search->nearest_from(impl.tree, x, set, leaf);
   if (dist2) *dist2 = set.slot == kd::NearestSet::kNone ? std::numeric_limits<double>::infinity() : set.best;
   return set.slot == kd::NearestSet::kNone ? -1 : static_cast<Index>(impl.tree.rows[set.slot]);
 }
@@ -351,7 +364,7 @@ RadiusResult KdTree::radius(const Points& queries, double radius) const {
 std::size_t KdTree::memory_bytes() const {
   const kd::Tree& t = impl_->tree;
   return sizeof(Impl) + t.coords.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
-         t.nodes.capacity() * sizeof(kd::Node);
+         t.nodes.capacity() * sizeof(kd::Node) + t.cells.capacity() * sizeof(kd::Cell);
 }
 
 }  // namespace surfeledit

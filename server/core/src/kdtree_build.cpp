@@ -201,4 +201,33 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
   t.nodes.shrink_to_fit();
 }
 
+// Pre-order: a node's parent comes before it, so one pass hands each inner node's box, narrowed by its cut, to
+// its children (left: the cut's lo as its upper face, right: its hi as its lower face); a leaf then clips its own.
+void build_cells(Tree& t) {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  t.cells.assign(t.nodes.size(), Cell{{-inf, -inf, -inf}, {inf, inf, inf}, 0});
+  for (std::uint32_t i = 0; i < t.nodes.size(); ++i) {
+    const Node& nd = t.nodes[i];
+    if (nd.leaf()) {  // clipped to its points' box, rounded outward (empty: lo = +inf, hi = -inf, never searched)
+      Cell& c = t.cells[i];
+      const Box box = box_of(t, nd.a, nd.b);
+      for (int d = 0; d < 3; ++d) {
+        c.lo[d] = std::max(c.lo[d], round_down(box.lo[d]));
+        c.hi[d] = std::min(c.hi[d], round_up(box.hi[d]));
+      }
+      c.parent |= Cell::kNoStop;
+      continue;
+    }
+    const Cell& c = t.cells[i];
+    const std::uint32_t d = nd.b & 3u;
+    const std::uint32_t overlap = (c.parent & Cell::kNoStop) | (nd.lo > nd.hi ? Cell::kNoStop : 0u);
+    Cell left = c, right = c;
+    left.hi[d] = std::min(c.hi[d], nd.lo);
+    right.lo[d] = std::max(c.lo[d], nd.hi);
+    left.parent = right.parent = i | overlap;
+    t.cells[i + 1] = left;
+    t.cells[nd.a] = right;
+  }
+}
+
 }  // namespace surfeledit::kd

@@ -88,6 +88,18 @@ struct RadiusSet {
   void push(std::uint32_t s, double d2);
 };
 
+// A node's cell for the search that starts from a leaf (nearest_from below; only in trees built with cells): a
+// box holding every point of the node, and its parent. An inner node's box is the one its ancestors' cuts bound
+// it to (the near side of each cut; +-inf where no cut bounds it); a leaf's is also clipped to its points' box.
+struct Cell {
+  float lo[3], hi[3];    // box, local frame
+  std::uint32_t parent;  // parent node (the root: itself) | kNoStop
+  // Flag in `parent`: the box's faces are not all beyond the points outside the node (a leaf's clipped box, or
+  // an inner node under a cut with lo > hi, both children reaching into one float interval), so the search
+  // from a leaf cannot stop at this node.
+  static constexpr std::uint32_t kNoStop = 0x80000000u;
+};
+
 struct Tree {
   // Points in leaf order, local frame (minus `origin` of the owner), stored by coordinate: x of every slot, then
   // y, then z, each run `stride` = #N + kTail long; the kTail entries past the last slot are zero and only ever
@@ -98,6 +110,7 @@ struct Tree {
   std::vector<std::uint32_t> rows;  // slot -> caller's row
   std::vector<Node> nodes;          // pre-order; nodes[0] is the root when non-empty
   double box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};  // bounding box of all points, local frame
+  std::vector<Cell> cells;          // per node when built with cells (build_cells), else empty
 
   std::size_t size() const { return rows.size(); }
   [[gnu::always_inline]] const double* xs() const { return coords.data(); }
@@ -149,11 +162,14 @@ class Descent {
 
   void run() {
     if (t_.nodes.empty()) return;
-    Far cell{0, 0.0, {0.0, 0.0, 0.0}};
-    for (int d = 0; d < 3; ++d) {
-      const double below = t_.box_lo[d] - q_[d], above = q_[d] - t_.box_hi[d];
-      cell.off[d] = below > 0.0 ? below * below : (above > 0.0 ? above * above : 0.0);
-    }
+    double off[3];
+    box_offsets(t_, q_, off);
+    run_from(0, off);
+  }
+
+  // The subtree of node `start`, whose points' per-axis squared offsets from q are at least off[0..2].
+  void run_from(std::uint32_t start, const double* off) {
+    Far cell{start, 0.0, {off[0], off[1], off[2]}};
     cell.d2 = cell.off[0] + cell.off[1] + cell.off[2];
     const Node* nodes = t_.nodes.data();
     std::size_t depth = 0;
@@ -184,7 +200,11 @@ class Descent {
       }
       const Node& leaf = nodes[ni];
       if constexpr (std::is_same_v<Set, NearestSet>) {
-        if (leaf.a != leaf.b) Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
+        if (leaf.a != leaf.b && (t_.cells.empty() || cell_bound(t_.cells[ni]) <= set_.worst())) {
+          const std::uint32_t before = set_.slot;
+          Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
+          won_ = set_.slot != before ? ni : won_;
+        }
       } else {
         Scan::each(t_, q_, leaf.a, leaf.b, set_);
       }
@@ -192,6 +212,27 @@ class Descent {
         if (depth == 0) return;
         cell = stack_[--depth];
       } while (!(cell.d2 * eps_ <= set_.worst()));
+    }
+  }
+
+  // k = 1: the leaf whose scan last changed the winner (the winner's leaf), else kNone.
+  std::uint32_t won() const { return won_; }
+
+  // A lower bound of the squared distance from q to the points in a cell's box (their tight box for a leaf).
+  double cell_bound(const Cell& c) const {
+    double d2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+      const double g = std::max(std::max(static_cast<double>(c.lo[d]) - q_[d], q_[d] - static_cast<double>(c.hi[d])), 0.0);
+      d2 += g * g;
+    }
+    return d2;
+  }
+
+  // Per axis, the squared offset of q from the tree's box (0 inside it).
+  static void box_offsets(const Tree& t, const double* q, double* off) {
+    for (int d = 0; d < 3; ++d) {
+      const double below = t.box_lo[d] - q[d], above = q[d] - t.box_hi[d];
+      off[d] = below > 0.0 ? below * below : (above > 0.0 ? above * above : 0.0);
     }
   }
 
@@ -209,14 +250,73 @@ class Descent {
   const double* q_;
   Set& set_;
   double eps_;
+  std::uint32_t won_ = NearestSet::kNone;
   Far stack_[kMaxDepth];
 };
+
+// The exact nearest search that starts from a leaf (a tree with cells): `leaf` (any value; one that is not a
+// leaf's node index starts at the root) is scanned first, then the walk goes up through its ancestors: at each,
+// the other child's subtree is searched (the descent above) when its cell, clipped to the tree's box, is within
+// the best distance (inclusive), and the walk stops at the first node N whose box holds the ball strictly.
+// Exactness, ties included: every point outside the leaf lies in the other child of exactly one node on the
+// walk's path, and that subtree is either searched (the descent feeds the set every point whose dist2 is <= the
+// best, which only shrinks) or skipped because its lower bound exceeds the best then (hence also every later
+// best); the points outside N lie beyond one of N's faces f on some axis (each face is the near-side cut of an
+// ancestor, and without kNoStop that cut is at or below / above the far side's), so for such a point P,
+// |q - P| >= |f - q| per axis; rounding is monotonic, so its computed dist2 >= fl(g * g) for the smallest face
+// gap g, and g * g > best means P cannot beat or tie the winner. NearestSet keeps the (dist2, slot)-smallest of
+// what it is fed, whatever the order, so the answer is the root descent's bit for bit. `leaf` gets the winner's
+// leaf (unchanged when there is no winner).
+template <class Scan>
+void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t& leaf) {
+  using D = Descent<Scan, NearestSet>;
+  D descent(t, q, set, 1.0);
+  if (t.cells.empty() || leaf >= t.nodes.size() || !t.nodes[leaf].leaf()) {
+    descent.run();
+    if (descent.won() != NearestSet::kNone) leaf = descent.won();
+    return;
+  }
+  double box[3];
+  D::box_offsets(t, q, box);
+  std::uint32_t won = NearestSet::kNone;
+  std::uint32_t n = leaf;
+  const Node& start = t.nodes[n];
+  if (start.a != start.b) {
+    Scan::nearest(t, q, start.a, start.b, set);
+    won = n;
+  }
+  while (n != 0) {
+    const Cell& c = t.cells[n];
+    if (!(c.parent & Cell::kNoStop)) {
+      double gap = std::numeric_limits<double>::infinity();
+      for (int d = 0; d < 3; ++d)
+        gap = std::min(gap, std::min(q[d] - static_cast<double>(c.lo[d]), static_cast<double>(c.hi[d]) - q[d]));
+      if (gap > 0.0 && gap * gap > set.best) break;
+    }
+    const std::uint32_t p = c.parent & ~Cell::kNoStop;
+    const std::uint32_t s = n == p + 1 ? t.nodes[p].a : p + 1;
+    const Cell& sc = t.cells[s];
+    double off[3];
+    for (int d = 0; d < 3; ++d) {
+      const double below = static_cast<double>(sc.lo[d]) - q[d], above = q[d] - static_cast<double>(sc.hi[d]);
+      const double g = std::max(std::max(below, above), 0.0);
+      off[d] = std::max(g * g, box[d]);
+    }
+    if (off[0] + off[1] + off[2] <= set.best) {
+      descent.run_from(s, off);
+      if (descent.won() != NearestSet::kNone) won = descent.won();
+    }
+    n = p;
+  }
+  if (set.slot != NearestSet::kNone) leaf = won;
+}
 
 // One search entry per set type, for one leaf scan; a tree's owner picks the table once (kdtree.cpp).
 struct SearchFns {
   void (*nearest)(const Tree&, const double* q, NearestSet&, double eps_factor);
   void (*knn)(const Tree&, const double* q, KnnSet&, double eps_factor);
   void (*radius)(const Tree&, const double* q, RadiusSet&, double eps_factor);
+  void (*nearest_from)(const Tree&, const double* q, NearestSet&, std::uint32_t& leaf);  // exact only
 };
 
 template <class Scan, class Set>
@@ -226,7 +326,8 @@ void search_with(const Tree& t, const double* q, Set& set, double eps_factor) {
 
 template <class Scan>
 constexpr SearchFns search_fns() {
-  return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>};
+  return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>,
+          &nearest_from<Scan>};
 }
 
 // The AVX2 leaf scans' table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then never
@@ -252,5 +353,7 @@ void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val
 // only when all of them coincide).
 void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const double* origin, const double* lo,
            const double* hi, std::uint32_t leaf);
+// Fills t.cells (one per node) for nearest_from (kdtree_build.cpp).
+void build_cells(Tree& t);
 
 }  // namespace surfeledit::kd

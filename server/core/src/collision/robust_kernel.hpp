@@ -32,7 +32,9 @@ class RobustKernel {
     Sphere sphere;                     // holds no original surfel
     Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
     std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
-    std::uint8_t pad[7] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint8_t pad[3] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint32_t leaf = 0;            // the original tree's leaf that held the last nearest: where the next test's
+                                       // search starts (KdTree::nearest_from; a stale one costs time, not exactness)
     bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
   };
   static_assert(sizeof(State) == 64, "State has padding bytes");
@@ -199,7 +201,7 @@ class RobustKernel {
   // result (an exact skip: RESULTS §50).
   Index test_original(State& s, const Vec3& p1, double& r_near) const {
     const double w = params_.threshold;
-    const Ref k = ref(orig_.tree->nearest(p1));
+    const Ref k = ref(orig_.tree->nearest_from(p1, s.leaf));
     Index made = 1;
     const Vec3 d = p1 - k.p;
     r_near = k.radius;

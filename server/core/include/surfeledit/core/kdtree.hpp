@@ -31,6 +31,7 @@ struct KdTreeParams {
   double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
+  bool cells = false;  // keep each node's cell and parent (28 B per node) so nearest_from() can start at a leaf
 };
 
 // kNN result for #Q queries: #Q by k, row-major. Rows with fewer than k hits
@@ -68,6 +69,12 @@ class KdTree {
   // step's nearest) passes D and gets the same answer as nearest(q), with less of the tree visited.
   // Throws InvalidArgument for a NaN or negative max_dist2.
   Index nearest_within(const Vec3& q, double max_dist2, double* dist2 = nullptr) const;
+  // nearest(q), searched from a leaf up (for a caller whose queries move little between calls): `leaf` is a leaf
+  // to start from, in (any value: a stale, wrong or unset one costs time, never exactness; pass the value a
+  // previous call left), and the leaf holding the answer, out (unchanged when there is none). The same row and
+  // dist2 as nearest(q), ties included. A tree without `cells` answers by the root descent (and still sets
+  // `leaf`); one with eps > 0 answers nearest(q) and leaves `leaf` as it was.
+  Index nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2 = nullptr) const;
   // k nearest to q (fewer if the tree holds fewer), ascending by distance.
   void knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const;
   // All points within real distance `radius` (inclusive) of q, ascending by distance.
@@ -79,7 +86,7 @@ class KdTree {
   KnnResult knn(const Points& queries, int k) const;
   RadiusResult radius(const Points& queries, double radius) const;
 
-  // Bytes held by the tree (points copy 24 B and row map 4 B per point, nodes 16 B each).
+  // Bytes held by the tree (points copy 24 B and row map 4 B per point, nodes 16 B each, cells 28 B each).
   std::size_t memory_bytes() const;
 
  private:
