@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 
+#include "random_data.hpp"
 #include "surfeledit/core/kdtree.hpp"
 
 namespace surfeledit {
@@ -23,14 +24,6 @@ KdTreeParams with_cells(int leaf_size, KdScan scan = KdScan::Auto) {
   return p;
 }
 
-Points uniform_cloud(int n, std::uint64_t seed, double scale, const Vec3& offset) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Points p(n, 3);
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) p(i, d) = offset[d] + scale * u(rng);
-  return p;
-}
 
 // The rows at the smallest squared distance from q (brute force over every row; `offset` is subtracted from
 // both sides first, as the tree works relative to its points' centroid, so far from the origin the comparison
@@ -86,9 +79,9 @@ std::vector<std::uint32_t> every_start(const KdTree& tree) {
 
 TEST(KdTreeFromLeaf, EveryStartGivesTheRootAnswerOnRandomClouds) {
   for (int leaf_size : {1, 4, 10, 48}) {
-    const Points pts = uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
+    const Points pts = test::uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
     const KdTree tree(pts, with_cells(leaf_size));
-    const Points queries = uniform_cloud(20, 12, 1.3, Vec3::Zero());
+    const Points queries = test::uniform_cloud(20, 12, 1.3, Vec3::Zero());
     for (Eigen::Index i = 0; i < queries.rows(); ++i)
       for (std::uint32_t s : every_start(tree))
         expect_same_as_root(tree, pts, queries.row(i).transpose(), s, Vec3::Zero(), 1e-12);
@@ -98,9 +91,9 @@ TEST(KdTreeFromLeaf, EveryStartGivesTheRootAnswerOnRandomClouds) {
 // Queries that move a little each call, each starting at the previous answer's leaf (the Robust detector's
 // use), and starts left by a far query or by another tree (stale or wrong leaves).
 TEST(KdTreeFromLeaf, WalkingQueriesAndStaleStarts) {
-  const Points pts = uniform_cloud(5000, 21, 1.0, Vec3::Zero());
+  const Points pts = test::uniform_cloud(5000, 21, 1.0, Vec3::Zero());
   const KdTree tree(pts, with_cells(48));
-  const KdTree other(uniform_cloud(900, 22, 1.0, Vec3::Zero()), with_cells(4));
+  const KdTree other(test::uniform_cloud(900, 22, 1.0, Vec3::Zero()), with_cells(4));
   std::mt19937_64 rng(23);
   std::normal_distribution<double> step(0.0, 0.02);
   Vec3 q(0.3, -0.2, 0.1);
@@ -142,9 +135,9 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
 TEST(KdTreeFromLeaf, OffsetsAndScales) {
   for (const double scale : {1e-4, 1.0, 1e4}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
-      const Points pts = uniform_cloud(2000, 41, scale, offset);
+      const Points pts = test::uniform_cloud(2000, 41, scale, offset);
       const KdTree tree(pts, with_cells(24));
-      const Points queries = uniform_cloud(60, 42, 1.2 * scale, offset);
+      const Points queries = test::uniform_cloud(60, 42, 1.2 * scale, offset);
       std::uint32_t leaf = 0;
       for (Eigen::Index i = 0; i < queries.rows(); ++i) {
         const Vec3 q = queries.row(i).transpose();
@@ -200,7 +193,7 @@ TEST(KdTreeFromLeaf, TiesAcrossCutsThroughEqualCoordinates) {
 
 // Without cells (or with eps > 0) nearest_from answers nearest(q) and leaves the start alone or sets a leaf.
 TEST(KdTreeFromLeaf, TreesWithoutCellsAndScans) {
-  const Points pts = uniform_cloud(800, 61, 1.0, Vec3::Zero());
+  const Points pts = test::uniform_cloud(800, 61, 1.0, Vec3::Zero());
   KdTreeParams plain;
   plain.threads = 1;
   const KdTree no_cells(pts, plain);
@@ -209,7 +202,7 @@ TEST(KdTreeFromLeaf, TreesWithoutCellsAndScans) {
   const KdTree eps_tree(pts, approx);
   const KdTree scalar(pts, with_cells(10, KdScan::Scalar));
   const KdTree vector(pts, with_cells(10));
-  const Points queries = uniform_cloud(50, 62, 1.1, Vec3::Zero());
+  const Points queries = test::uniform_cloud(50, 62, 1.1, Vec3::Zero());
   for (Eigen::Index i = 0; i < queries.rows(); ++i) {
     const Vec3 q = queries.row(i).transpose();
     std::uint32_t leaf = 5;

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "random_data.hpp"
 #include "surfeledit/core/kdtree.hpp"
 
 namespace surfeledit {
@@ -21,14 +22,6 @@ std::vector<KdScan> vector_scans() {
   return out;
 }
 
-Points cloud(int n, std::uint64_t seed, double scale, const Vec3& offset) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Points p(n, 3);
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) p(i, d) = offset[d] + scale * u(rng);
-  return p;
-}
 
 // Points on an integer lattice (spacing `h`): queries at cell centres and lattice points meet many ties.
 Points lattice(int side, double h, const Vec3& offset) {
@@ -104,8 +97,8 @@ TEST(KdTreeScan, VectorScansEqualScalarOnRandomCloudsOffsetsAndScales) {
     int seed = 1;
     for (double scale : {1e-4, 1.0, 1e4}) {
       for (const Vec3& off : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
-        const Points pts = cloud(700, seed, scale, off);
-        const Points queries = cloud(60, seed + 100, 1.3 * scale, off);
+        const Points pts = test::uniform_cloud(700, seed, scale, off);
+        const Points queries = test::uniform_cloud(60, seed + 100, 1.3 * scale, off);
         for (int leaf : {1, 3, 4, 5, 8, 10, 24, 33}) expect_same_as_scalar(pts, queries, leaf, scan, 0.3 * scale);
         ++seed;
       }
@@ -161,7 +154,7 @@ TEST(KdTreeScan, LanesPastALeafNeverWin) {
         tree.radius(centroid, 1e9, idx, dd);
         ASSERT_EQ(static_cast<int>(idx.size()), n);
       }
-      const Points queries = cloud(20, 7 + n, 12.0, Vec3::Zero());
+      const Points queries = test::uniform_cloud(20, 7 + n, 12.0, Vec3::Zero());
       expect_same_as_scalar(pts, queries, 4, scan, 5.0);
     }
   }
@@ -171,8 +164,8 @@ TEST(KdTreeScan, LanesPastALeafNeverWin) {
 // point and every scan must return the same row.
 TEST(KdTreeScan, OverflowingDistancesGiveTheScalarRow) {
   for (KdScan scan : vector_scans()) {
-    const Points pts = cloud(50, 3, 1e200, Vec3::Zero());
-    const Points queries = cloud(10, 4, 1e200, Vec3::Zero());
+    const Points pts = test::uniform_cloud(50, 3, 1e200, Vec3::Zero());
+    const Points queries = test::uniform_cloud(10, 4, 1e200, Vec3::Zero());
     for (int leaf : {1, 6, 24}) expect_same_as_scalar(pts, queries, leaf, scan, 1e150);
   }
 }
@@ -180,8 +173,8 @@ TEST(KdTreeScan, OverflowingDistancesGiveTheScalarRow) {
 // The scalar scan (and so every scan) against brute force: the nearest distance is the true minimum, and
 // duplicates of one point all tie (any of them may win, the same one in every scan).
 TEST(KdTreeScan, ScalarScanMatchesBruteForce) {
-  const Points pts = cloud(2000, 11, 1.0, Vec3(1e6, 2e6, -3e6));
-  const Points queries = cloud(200, 12, 1.1, Vec3(1e6, 2e6, -3e6));
+  const Points pts = test::uniform_cloud(2000, 11, 1.0, Vec3(1e6, 2e6, -3e6));
+  const Points queries = test::uniform_cloud(200, 12, 1.1, Vec3(1e6, 2e6, -3e6));
   for (int leaf : {1, 10, 24}) {
     const KdTree tree = make(pts, leaf, KdScan::Scalar);
     for (Eigen::Index i = 0; i < queries.rows(); ++i) {
@@ -208,7 +201,7 @@ TEST(KdTreeScan, EmptyAndSinglePointTrees) {
     double d2 = -1.0;
     EXPECT_EQ(single.nearest(Vec3(0, 0, 0), &d2), 0);
     EXPECT_GT(d2, 0.0);
-    expect_same_as_scalar(one, cloud(5, 9, 3.0, Vec3(1e6, -1e6, 5.0)), 1, scan, 2.0);
+    expect_same_as_scalar(one, test::uniform_cloud(5, 9, 3.0, Vec3(1e6, -1e6, 5.0)), 1, scan, 2.0);
   }
 }
 

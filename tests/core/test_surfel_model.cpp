@@ -6,28 +6,15 @@
 #include <limits>
 #include <random>
 
+#include "random_data.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 
 namespace surfeledit {
 namespace {
 
-SurfelArrays random_arrays(Index n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  SurfelArrays a;
-  a.positions.resize(n, 3);
-  a.normals.resize(n, 3);
-  a.radii.resize(n);
-  for (Index i = 0; i < n; ++i) {
-    a.positions.row(i) << u(rng), u(rng), u(rng);
-    a.normals.row(i) << u(rng), u(rng), 2.0;  // never zero
-    a.radii[i] = 0.01 + 0.01 * (u(rng) + 1.0);
-  }
-  return a;
-}
 
 TEST(SurfelModel, AssignsIdsInOrderAndNormalisesNormals) {
-  const SurfelModel m = SurfelModel::from_arrays(random_arrays(50, 1));
+  const SurfelModel m = SurfelModel::from_arrays(test::random_arrays(50, 1));
   ASSERT_EQ(m.size(), 50);
   for (Index i = 0; i < 50; ++i) {
     EXPECT_EQ(m.id_of(i), static_cast<SurfelId>(i));
@@ -39,7 +26,7 @@ TEST(SurfelModel, AssignsIdsInOrderAndNormalisesNormals) {
 }
 
 TEST(SurfelModel, IdsSurviveRemovalAndInsertion) {
-  const SurfelArrays original = random_arrays(20, 2);
+  const SurfelArrays original = test::random_arrays(20, 2);
   SurfelModel m = SurfelModel::from_arrays(original);
   m.remove({3, 7, 19});
   ASSERT_EQ(m.size(), 17);
@@ -52,7 +39,7 @@ TEST(SurfelModel, IdsSurviveRemovalAndInsertion) {
     EXPECT_EQ(m.positions().row(r), original.positions.row(static_cast<Index>(id)));
     EXPECT_EQ(m.radii()[r], original.radii[static_cast<Index>(id)]);
   }
-  const IdList added = m.insert(random_arrays(4, 3));
+  const IdList added = m.insert(test::random_arrays(4, 3));
   EXPECT_EQ(added, (IdList{20, 21, 22, 23}));  // fresh ids, never a removed one
   EXPECT_EQ(m.size(), 21);
   const IdList ids = m.ids();
@@ -61,18 +48,18 @@ TEST(SurfelModel, IdsSurviveRemovalAndInsertion) {
   EXPECT_EQ(m.row_of(5), 4);   // later rows shift down past removed 3
   EXPECT_EQ(m.row_of(8), 6);   // ... and past removed 7
   m.remove({20});
-  EXPECT_EQ(m.insert(random_arrays(1, 4)), (IdList{24}));
+  EXPECT_EQ(m.insert(test::random_arrays(1, 4)), (IdList{24}));
 }
 
 TEST(SurfelModel, FailedChangesLeaveTheModelAsItWas) {
-  SurfelModel m = SurfelModel::from_arrays(random_arrays(10, 5));
+  SurfelModel m = SurfelModel::from_arrays(test::random_arrays(10, 5));
   const std::uint64_t h = m.hash();
   EXPECT_THROW(m.remove({2, 99}), Error);  // 99 unknown: nothing removed
   EXPECT_THROW(m.remove({2, 2}), Error);   // repeated id
   IdList all;
   for (SurfelId i = 0; i < 10; ++i) all.push_back(i);
   EXPECT_THROW(m.remove(all), Error);  // would empty the model
-  SurfelArrays bad = random_arrays(3, 6);
+  SurfelArrays bad = test::random_arrays(3, 6);
   bad.positions(1, 2) = std::numeric_limits<double>::infinity();
   EXPECT_THROW(m.insert(bad), Error);
   EXPECT_EQ(m.hash(), h);
@@ -89,16 +76,16 @@ TEST(SurfelModel, ValidationNamesFieldAndRow) {
       EXPECT_EQ(e.code(), code) << e.what();
     }
   };
-  SurfelArrays a = random_arrays(5, 7);
+  SurfelArrays a = test::random_arrays(5, 7);
   a.normals.row(2).setZero();
   expect_field(a, "normals", ErrorCode::InvalidArgument);
-  a = random_arrays(5, 7);
+  a = test::random_arrays(5, 7);
   a.radii[4] = -1.0;
   expect_field(a, "radii", ErrorCode::InvalidArgument);
-  a = random_arrays(5, 7);
+  a = test::random_arrays(5, 7);
   a.positions(0, 0) = std::nan("");
   expect_field(a, "positions", ErrorCode::InvalidArgument);
-  a = random_arrays(5, 7);
+  a = test::random_arrays(5, 7);
   a.normals.conservativeResize(4, 3);
   expect_field(a, "normals", ErrorCode::InvalidArgument);
   expect_field(SurfelArrays{}, "positions", ErrorCode::InvalidArgument);

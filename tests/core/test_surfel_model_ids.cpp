@@ -7,25 +7,12 @@
 #include <map>
 #include <random>
 
+#include "random_data.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 
 namespace surfeledit {
 namespace {
 
-SurfelArrays arrays(Index n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  SurfelArrays a;
-  a.positions.resize(n, 3);
-  a.normals.resize(n, 3);
-  a.radii.resize(n);
-  for (Index i = 0; i < n; ++i) {
-    a.positions.row(i) << u(rng), u(rng), u(rng);
-    a.normals.row(i) << u(rng), u(rng), 2.0;
-    a.radii[i] = 0.01;
-  }
-  return a;
-}
 
 // Every id below next_id() against `rows` (id -> row, the test's own map), and id_of / ids() for every row.
 void expect_maps(const SurfelModel& m, const std::map<SurfelId, Index>& rows) {
@@ -44,12 +31,12 @@ void expect_maps(const SurfelModel& m, const std::map<SurfelId, Index>& rows) {
 
 TEST(SurfelModelIds, RandomRemovalsAndInsertionsAgreeWithAPlainMap) {
   std::mt19937_64 rng(7);
-  SurfelModel m = SurfelModel::from_arrays(arrays(300, 1));
+  SurfelModel m = SurfelModel::from_arrays(test::random_arrays(300, 1));
   std::vector<SurfelId> order;  // the test's row -> id
   for (SurfelId id = 0; id < 300; ++id) order.push_back(id);
   for (int round = 0; round < 30; ++round) {
     if (round % 3 == 2) {
-      const IdList added = m.insert(arrays(1 + static_cast<Index>(rng() % 40), 100 + static_cast<std::uint64_t>(round)));
+      const IdList added = m.insert(test::random_arrays(1 + static_cast<Index>(rng() % 40), 100 + static_cast<std::uint64_t>(round)));
       order.insert(order.end(), added.begin(), added.end());
     } else {
       IdList gone;
@@ -69,10 +56,10 @@ TEST(SurfelModelIds, RandomRemovalsAndInsertionsAgreeWithAPlainMap) {
 }
 
 TEST(SurfelModelIds, NoIdListWhileTheIdsAreTheRows) {
-  SurfelModel m = SurfelModel::from_arrays(arrays(1000, 2));
+  SurfelModel m = SurfelModel::from_arrays(test::random_arrays(1000, 2));
   const std::size_t arrays_only = 1000 * 7 * sizeof(double);  // positions, normals (3 each), radii
   EXPECT_EQ(m.memory_bytes(), arrays_only);
-  m.insert(arrays(24, 3));  // insertions continue the identity
+  m.insert(test::random_arrays(24, 3));  // insertions continue the identity
   EXPECT_EQ(m.memory_bytes(), 1024 * 7 * sizeof(double));
   std::map<SurfelId, Index> rows;
   for (Index r = 0; r < 1024; ++r) rows[static_cast<SurfelId>(r)] = r;
@@ -86,7 +73,7 @@ TEST(SurfelModelIds, NoIdListWhileTheIdsAreTheRows) {
 }
 
 TEST(SurfelModelIds, TheHashAndPartsDoNotDependOnTheRepresentation) {
-  const SurfelModel identity = SurfelModel::from_arrays(arrays(200, 4));
+  const SurfelModel identity = SurfelModel::from_arrays(test::random_arrays(200, 4));
   // The same model through from_parts with the ids spelled out: the identity again, the same hash.
   const SurfelModel parts = SurfelModel::from_parts(identity.arrays(), identity.ids(), identity.next_id());
   EXPECT_EQ(parts.hash(), identity.hash());
