@@ -117,21 +117,21 @@ void validate(const DeformParams& params, const DeformationFields& fields) {
 
 Values DeformationFields::lambda() const {
   Values out = Values::Zero(static_cast<Eigen::Index>(regions.size()));
-  for (std::size_t k = 0; k < deformable.size(); ++k) out[deformable[k]] = blend(static_cast<Eigen::Index>(k), 0);
+  for (std::size_t k = 0; k < deformable.size(); ++k) out[deformable[k]] = blend_row(k)[0];
   return out;
 }
 
 Points DeformationFields::grad_lambda() const {
   Points out = Points::Zero(static_cast<Eigen::Index>(regions.size()), 3);
   for (std::size_t k = 0; k < deformable.size(); ++k)
-    out.row(deformable[k]) = blend.block<1, 3>(static_cast<Eigen::Index>(k), 1);
+    out.row(deformable[k]) = Eigen::Map<const Eigen::RowVector3d>(blend_row(k) + 1);
   return out;
 }
 
 double DeformationFields::lambda_of(Index row) const {
   const auto it = std::lower_bound(deformable.begin(), deformable.end(), row);
   if (it == deformable.end() || *it != row) return 0.0;
-  return blend(static_cast<Eigen::Index>(it - deformable.begin()), 0);
+  return blend_row(static_cast<std::size_t>(it - deformable.begin()))[0];
 }
 
 std::size_t DeformationFields::memory_bytes() const {
@@ -183,7 +183,10 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   const KdTree tree1(positions, f1, tp);
 
   const Eigen::Index nd = static_cast<Eigen::Index>(fields.deformable.size());
-  fields.blend.setZero(nd, 4);
+  // Every deformable row in F1 (a rigid tool): all blend rows are kF1Blend, none is stored.
+  const bool all_one = std::all_of(fields.deformable.begin(), fields.deformable.end(),
+                                   [&](Index i) { return regions[static_cast<std::size_t>(i)] == Region::One; });
+  fields.blend.setZero(all_one ? 0 : nd, 4);
   Index conflict = std::numeric_limits<Index>::max();
   // Every row is checked against the region it is not in (F0 rows against F1 too), so a surfel
   // lying in both (d0 + d1 == 0) is reported whatever its label.
@@ -209,7 +212,7 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
       continue;
     }
     if (one) {
-      fields.blend(k, 0) = 1.0;  // lambda 1, gradient 0
+      if (!all_one) fields.blend(k, 0) = 1.0;  // lambda 1, gradient 0
       continue;
     }
     const double sum = d0 + d1;
@@ -270,8 +273,8 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
     }
     prev = i;
     const Region region = fields.regions[static_cast<std::size_t>(i)];
-    const double l = fields.blend(static_cast<Eigen::Index>(k), 0);
-    if (region == Region::Zero || !(l >= 0.0 && l <= 1.0)) {
+    const double l = fields.blend_row(k)[0];
+    if (region == Region::Zero || !(l >= 0.0 && l <= 1.0) || (fields.blend.rows() == 0 && region != Region::One)) {
       throw Error(ErrorCode::InvalidArgument, "fields",
                   "row " + std::to_string(i) + " is listed as deformable with region " +
                       std::to_string(static_cast<int>(region)) + " and lambda " + fmt(l));
@@ -300,7 +303,9 @@ bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, const doub
   const std::size_t count = fields.deformable.size();
   const Index* rows = fields.deformable.data();
   const Region* regions = fields.regions.data();
-  const double* F = fields.blend.data();
+  const double* F = fields.blend_row(0);
+  const std::ptrdiff_t fs = fields.blend_stride();
+  const bool stored = fs != 0;  // without stored rows every row must be F1
   if constexpr (need_centroid) {  // the reference: the first F1 row
     std::size_t k = 0;
     while (k < count && !(rows[k] >= 0 && rows[k] < n && regions[rows[k]] == Region::One)) ++k;
@@ -319,8 +324,9 @@ bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, const doub
     prev = i;
     const Index j = in ? i : 0;  // a row that may be read
     const Region region = regions[j];
-    const double l = F[4 * k];
-    ok &= in & (region != Region::Zero) & (l >= 0.0) & (l <= 1.0) & (beta<B>(l) > 0.0);
+    const double l = F[fs * static_cast<std::ptrdiff_t>(k)];
+    ok &= in & (region != Region::Zero) & (stored | (region == Region::One)) & (l >= 0.0) & (l <= 1.0) &
+          (beta<B>(l) > 0.0);
     if constexpr (need_centroid) {
       const bool one = region == Region::One;
       const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);
@@ -370,10 +376,10 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
     }
   };
   require_rows(static_cast<Eigen::Index>(fields.regions.size()), "fields.regions");
-  if (fields.blend.rows() != static_cast<Eigen::Index>(fields.deformable.size())) {
+  if (fields.blend.rows() != 0 && fields.blend.rows() != static_cast<Eigen::Index>(fields.deformable.size())) {
     throw Error(ErrorCode::InvalidArgument, "fields.blend",
                 "has " + std::to_string(fields.blend.rows()) + " rows but fields.deformable lists " +
-                    std::to_string(fields.deformable.size()));
+                    std::to_string(fields.deformable.size()) + " (0 rows: every deformable row in F1)");
   }
   require_rows(normals.rows(), "normals");
   const bool has_u = tangent_u && tangent_u->rows() > 0;
@@ -471,7 +477,8 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   const Eigen::Index n_moved = static_cast<Eigen::Index>(all_moving ? fields.deformable.size() : ks.size());
   const Eigen::Index n_blocks = (n_moved + detail::kStepBlock - 1) / detail::kStepBlock;
   const Index* rows = fields.deformable.data();
-  const double* F = fields.blend.data();
+  const double* F = fields.blend_row(0);
+  const std::ptrdiff_t fs = fields.blend_stride();
   double* P = positions.data();
   double* N = normals.data();
   double* U = has_u ? tangent_u->data() : nullptr;
@@ -479,7 +486,7 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   auto run = [&](Eigen::Index b) {
     const Eigen::Index k0 = b * detail::kStepBlock;
     const int count = static_cast<int>(std::min<Eigen::Index>(detail::kStepBlock, n_moved - k0));
-    block(sc, rows, F, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
+    block(sc, rows, F, fs, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
   };
   // Several threads only for about a millisecond of one-thread work or more (~20 ns a row with a
   // rotation, RESULTS §24): below that, on a busy machine, waking a descheduled worker costs a scheduler

@@ -28,10 +28,11 @@ struct StepConstants {
 };
 
 // One block: `count` (<= kStepBlock) rows at positions ks[0..count) of fields.deformable (`rows`), or, when
-// `ks` is null, at k0, k0 + 1, ...; F = fields.blend's data; P, N, U, V = positions, normals, tangents (U and
-// V null without tangents).
-using BlockFn = void (*)(const StepConstants&, const Index* rows, const double* F, const Index* ks, Eigen::Index k0,
-                         int count, double* P, double* N, double* U, double* V);
+// `ks` is null, at k0, k0 + 1, ...; F = the first blend row (fields.blend_row(0)), fs = the doubles between
+// blend rows (4, or 0 when one constant row stands for all: DeformationFields::blend_stride); P, N, U, V =
+// positions, normals, tangents (U and V null without tangents).
+using BlockFn = void (*)(const StepConstants&, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
+                         Eigen::Index k0, int count, double* P, double* N, double* U, double* V);
 
 // The AVX2 kernel's block function (deformation_avx2.cpp); null when this build has none.
 BlockFn avx2_block(Blend blend, bool rotate, bool tangents);
@@ -248,12 +249,12 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
 // The rows ks[j], ks[j + 1], ... of a list of `count`, kLanes<T> at a time from `j` on while there are that
 // many left; returns the first row not done.
 template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
-int step_lanes(const StepConstants& sc, const Index* rows, const double* F, const std::ptrdiff_t* ks, int j, int count,
-               double* P, double* N, double* U, double* V) {
+int step_lanes(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const std::ptrdiff_t* ks,
+               int j, int count, double* P, double* N, double* U, double* V) {
   constexpr int L = kLanes<T>;
   for (; j + L <= count; j += L) {
     std::ptrdiff_t o[L], f[L];
-    for (int i = 0; i < L; ++i) o[i] = 3 * static_cast<std::ptrdiff_t>(rows[ks[j + i]]), f[i] = 4 * ks[j + i];
+    for (int i = 0; i < L; ++i) o[i] = 3 * static_cast<std::ptrdiff_t>(rows[ks[j + i]]), f[i] = fs * ks[j + i];
     step_rows<T, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
   }
   return j;
@@ -262,30 +263,30 @@ int step_lanes(const StepConstants& sc, const Index* rows, const double* F, cons
 // One block of `count` (<= kStepBlock) rows, W (2 or 4) at a time, then pairs, then single rows. `ks` lists
 // the rows' positions in fields.deformable.
 template <class W, Blend B, bool Rotate, bool Tangents, bool Rigid>
-void step_list(const StepConstants& sc, const Index* rows, const double* F, const std::ptrdiff_t* ks, int count,
-               double* P, double* N, double* U, double* V) {
-  int j = step_lanes<W, B, Rotate, Tangents, Rigid>(sc, rows, F, ks, 0, count, P, N, U, V);
-  if constexpr (kLanes<W> > 2) j = step_lanes<D2, B, Rotate, Tangents, Rigid>(sc, rows, F, ks, j, count, P, N, U, V);
-  step_lanes<double, B, Rotate, Tangents, Rigid>(sc, rows, F, ks, j, count, P, N, U, V);
+void step_list(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const std::ptrdiff_t* ks,
+               int count, double* P, double* N, double* U, double* V) {
+  int j = step_lanes<W, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, 0, count, P, N, U, V);
+  if constexpr (kLanes<W> > 2) j = step_lanes<D2, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V);
+  step_lanes<double, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V);
 }
 
 // One block of `count` (<= kStepBlock) rows, W at a time; with rotation, F1 rows (lambda 1, gradient 0) and
 // the others in separate lists. `ks` lists the rows' positions in fields.deformable, or is null for the
 // consecutive positions k0, k0 + 1, ...
 template <class W, Blend B, bool Rotate, bool Tangents>
-void step_block(const StepConstants& sc, const Index* rows, const double* F, const Index* ks, Eigen::Index k0,
-                int count, double* P, double* N, double* U, double* V) {
+void step_block(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
+                Eigen::Index k0, int count, double* P, double* N, double* U, double* V) {
   std::ptrdiff_t general[kStepBlock], rigid[kStepBlock];
   int ng = 0, nr = 0;
   for (int j = 0; j < count; ++j) {
     const std::ptrdiff_t k = ks ? ks[j] : k0 + j;
-    const double* f = F + 4 * k;
+    const double* f = F + fs * k;
     const bool one = Rotate && f[0] == 1.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0;
     if (one) rigid[nr++] = k;
     else general[ng++] = k;
   }
-  step_list<W, B, Rotate, Tangents, false>(sc, rows, F, general, ng, P, N, U, V);
-  if (nr > 0) step_list<W, B, Rotate, Tangents, true>(sc, rows, F, rigid, nr, P, N, U, V);
+  step_list<W, B, Rotate, Tangents, false>(sc, rows, F, fs, general, ng, P, N, U, V);
+  if (nr > 0) step_list<W, B, Rotate, Tangents, true>(sc, rows, F, fs, rigid, nr, P, N, U, V);
 }
 
 template <class W, Blend B>

@@ -78,8 +78,12 @@ DeformationFields get_fields(SnapshotReader& in, std::size_t rows) {
       in.fail("fields deformable rows", "not the ascending deformable rows");
     last = r;
   }
-  if (f.deformable.size() != deformable || static_cast<std::size_t>(f.blend.rows()) != deformable)
+  const bool stored = f.blend.rows() != 0;  // none: every deformable row is F1 (DeformationFields::blend)
+  if (f.deformable.size() != deformable || (stored && static_cast<std::size_t>(f.blend.rows()) != deformable))
     in.fail("fields", "not one blend row per deformable row");
+  if (!stored)
+    for (Index r : f.deformable)
+      if (f.regions[static_cast<std::size_t>(r)] != Region::One) in.fail("fields", "no blend rows but a row not in F1");
   return f;
 }
 

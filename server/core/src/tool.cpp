@@ -158,12 +158,13 @@ void extend_fields(DeformationFields& f, const IndexList& parents) {
     ++added;
   }
   Eigen::Index d = static_cast<Eigen::Index>(f.deformable.size());
-  f.blend.conservativeResize(d + static_cast<Eigen::Index>(added), 4);
+  const bool stored = f.blend.rows() != 0;  // none stored: every deformable row, and so every child, is F1
+  if (stored) f.blend.conservativeResize(d + static_cast<Eigen::Index>(added), 4);
   for (std::size_t k = 0; k < parents.size(); ++k) {
     const Index child = first + static_cast<Index>(k);
     f.regions.push_back(f.regions[static_cast<std::size_t>(parents[k])]);
     if (at[k] < 0) continue;
-    f.blend.row(d++) = f.blend.row(at[k]);  // children come after every row: `deformable` stays ascending
+    if (stored) f.blend.row(d++) = f.blend.row(at[k]);  // children come after every row: `deformable` stays ascending
     f.deformable.push_back(child);
   }
 }
@@ -178,11 +179,11 @@ void compact_fields(DeformationFields& f, const std::vector<bool>& keep) {
   for (std::size_t k = 0; k < f.deformable.size(); ++k) {
     const Index r = f.deformable[k];
     if (!keep[static_cast<std::size_t>(r)]) continue;
-    f.blend.row(static_cast<Eigen::Index>(w)) = f.blend.row(static_cast<Eigen::Index>(k));
+    if (f.blend.rows() != 0) f.blend.row(static_cast<Eigen::Index>(w)) = f.blend.row(static_cast<Eigen::Index>(k));
     f.deformable[w++] = new_row[static_cast<std::size_t>(r)];
   }
   f.deformable.resize(w);
-  f.blend.conservativeResize(static_cast<Eigen::Index>(w), 4);
+  if (f.blend.rows() != 0) f.blend.conservativeResize(static_cast<Eigen::Index>(w), 4);
   w = 0;
   for (std::size_t r = 0; r < f.regions.size(); ++r)
     if (keep[r]) f.regions[w++] = f.regions[r];

@@ -66,10 +66,17 @@ struct DeformationFields {
   std::vector<Region> regions;  // #P
   IndexList deformable;         // #D rows with region != Zero, ascending
   BlendRows blend;              // #D by 4: lambda (0 < lambda <= 1; 1 on F1) and grad lambda (0 on F1) of
-                                // deformable[k]
+                                // deformable[k]; 0 rows when every deformable row is F1 (all rows are then
+                                // kF1Blend, not stored: 32 bytes per deformable row saved)
   Vec3 box_centre = Vec3::Zero();  // centre of the positions' bounding box when the fields were computed
   double box_extent = std::numeric_limits<double>::infinity();  // its diagonal, model units (inf: unknown,
                                                                 // no reach check)
+
+  // The blend row (lambda, grad lambda) of deformable[k]: 4 doubles.
+  const double* blend_row(std::size_t k) const { return blend.rows() == 0 ? kF1Blend : blend.data() + 4 * k; }
+  // Doubles between consecutive blend rows: 4, or 0 when no row is stored (every row is kF1Blend).
+  std::ptrdiff_t blend_stride() const { return blend.rows() == 0 ? 0 : 4; }
+  static constexpr double kF1Blend[4] = {1.0, 0.0, 0.0, 0.0};  // an F1 row's blend: lambda 1, gradient 0
 
   // Dense views (#P, and #P by 3; zero on F0), for tests and inspection -- not used by the step.
   Values lambda() const;
