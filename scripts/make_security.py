@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import List, Sequence, Tuple
 
 TOPICS_SERVER_PUBLISHES = ("surfeledit_reply", "surfeledit_update")
-TOPICS_SERVER_SUBSCRIBES = ("surfeledit_request",)
+TOPICS_SERVER_SUBSCRIBES = ("surfeledit_request", "surfeledit_reply")  # replies: the one-server-per-domain probe
 TOPICS_CLIENT_PUBLISHES = ("surfeledit_request",)
 TOPICS_CLIENT_SUBSCRIBES = ("surfeledit_reply", "surfeledit_update")
 ORGANISATION = "surfeledit"
@@ -247,7 +247,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         rgov = rogue_dir / "governance.xml"
         rgov.write_text(governance_xml(domains))
         rgov_p7s = sign(rgov, *rca)
-        everything = TOPICS_SERVER_PUBLISHES + TOPICS_SERVER_SUBSCRIBES
+        everything = tuple(dict.fromkeys(TOPICS_SERVER_PUBLISHES + TOPICS_SERVER_SUBSCRIBES))
         for name in rogue:
             user(name, everything, everything, rca, rgov_p7s)
     print(f"security files for {', '.join(users)} in {out}")

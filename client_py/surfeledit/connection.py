@@ -32,7 +32,7 @@ from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
 from .security import (SecurityConfig, access_checked, claim_identity, participant_qos, release_identity,
                        security_config)
-from .server_process import exit_message, spawn_server, stop_process
+from .server_process import DOMAIN_TAKEN_EXIT_CODE, exit_message, server_ready, spawn_server, stop_process
 from .session import Session
 
 __all__ = ["Client", "connect", "Inbox"]
@@ -372,8 +372,16 @@ def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout:
         client._server, client._server_log = proc, log
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                raise errors.ServerStartError(exit_message(proc, log))
+            if client._server is not None and proc.poll() is not None:
+                if proc.returncode != DOMAIN_TAKEN_EXIT_CODE:
+                    raise errors.ServerStartError(exit_message(proc, log))
+                # Another client spawned a server on this domain at the same time and that one started first
+                # (PROTOCOL.md "One server per domain"): use it; it is not this client's to stop.
+                _log.info("a server started first on domain %d; using it", domain)
+                client._server = None
+            if client._server is not None and not server_ready(log):
+                time.sleep(0.02)  # until it serves or gives way: a server that answers now may be another one
+                continue
             if client.probe(min(1.0, max(0.1, deadline - time.monotonic()))):
                 return client
         raise errors.ServerStartError(f"{proc.args[0]} (pid {proc.pid}) did not answer OP_INFO within "

@@ -14,7 +14,11 @@ from typing import List, Optional, Tuple, Union
 from . import errors
 from ._protocol import REPO_ROOT
 
-__all__ = ["find_server_executable", "server_args", "spawn_server", "exit_message", "stop_process"]
+__all__ = ["DOMAIN_TAKEN_EXIT_CODE", "find_server_executable", "server_args", "spawn_server", "server_ready",
+           "exit_message", "stop_process"]
+
+# The server's exit code when a server that started earlier serves its domain (PROTOCOL.md "One server per domain").
+DOMAIN_TAKEN_EXIT_CODE = 4
 
 _log = logging.getLogger("surfeledit")
 
@@ -63,6 +67,15 @@ def spawn_server(domain: int, data_root: Optional[Union[str, Path]] = None) -> T
     finally:
         log.close()
     return proc, Path(log.name)
+
+
+def server_ready(log: Path) -> bool:
+    """True once a spawned server's log says it serves (it logs "ready on domain" after its check for another
+    server on the domain; before that, a server that answers may be another one)."""
+    try:
+        return "ready on domain" in log.read_text(errors="replace")
+    except OSError:
+        return False
 
 
 def exit_message(proc: subprocess.Popen, log: Path) -> str:

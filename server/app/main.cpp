@@ -144,6 +144,11 @@ int main(int argc, char** argv) {
                  "MiB (0: never by size)")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(0), std::uint64_t(1) << 20));
+  app.add_option("--domain-probe-ms", config.domain_probe_ms,
+                 "How long the server looks for another surfeledit server on its domain before serving; it exits "
+                 "with code 4 if one started earlier (two servers would both answer every request; 0: no check)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t(0), std::uint64_t(60'000)));
   CLI11_PARSE(app, argc, argv);
   for (const std::string& g : grants) config.grants.push_back(surfeledit::service::parse_grant(g));
   config.journal.sync = journal_sync == "group" ? surfeledit::service::JournalSync::Group
@@ -188,6 +193,9 @@ int main(int argc, char** argv) {
   } catch (const surfeledit::service::JournalError& e) {
     log->critical("surfeledit-server failed: journal: {}", e.what());
     return surfeledit::service::kJournalExitCode;
+  } catch (const surfeledit::service::DomainTakenError& e) {
+    log->critical("surfeledit-server not started: {}", e.what());
+    return surfeledit::service::kDomainTakenExitCode;
   } catch (const std::exception& e) {
     log->critical("surfeledit-server failed: {}", e.what());
     return 1;

@@ -65,6 +65,16 @@ Qos& Qos::property(const std::string& name, const std::string& value) {
   return *this;
 }
 
+Qos& Qos::user_data(const std::string& text) {
+  dds_qset_userdata(qos_, text.data(), text.size());
+  return *this;
+}
+
+Qos& Qos::ignore_local_participant() {
+  dds_qset_ignorelocal(qos_, DDS_IGNORELOCAL_PARTICIPANT);
+  return *this;
+}
+
 Qos protocol_qos() {
   Qos qos;
   qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();

@@ -67,6 +67,10 @@ class Qos {
   Qos& partitions(const std::vector<std::string>& names);
   // One participant property (e.g. a "dds.sec.*" DDS Security setting).
   Qos& property(const std::string& name, const std::string& value);
+  // User data that remote participants see in this writer's discovery data (domain_guard.hpp).
+  Qos& user_data(const std::string& text);
+  // A reader that does not match writers of its own participant.
+  Qos& ignore_local_participant();
 
  private:
   dds_qos_t* qos_;

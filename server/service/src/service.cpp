@@ -70,7 +70,8 @@ Service::Impl::Impl(const ServiceConfig& c)
       writer_wake(participant),
       request_reader(make_request_reader()),
       reply_qos(dds::protocol_qos()),
-      reply_writer(dds::make_writer(participant, reply_topic, reply_qos.automatic_liveliness(kServerLiveliness))),
+      reply_writer(dds::make_writer(participant, reply_topic,
+                                    reply_qos.automatic_liveliness(kServerLiveliness).user_data(marker.text()))),
       client_replies(participant, reply_topic, kServerLiveliness),
       update_writer(dds::make_writer(participant, update_topic, qos)),
       compact_publisher(dds::make_publisher(participant, dds::Qos().partition(kCompactUpdatePartition))),
@@ -81,6 +82,14 @@ Service::Impl::Impl(const ServiceConfig& c)
       snapshot_guard(participant),
       waitset(participant),
       publisher(make_publisher(c)) {
+  if (c.domain_probe_ms > 0) {  // first: discovery runs while the journal recovers
+    domain_probe_deadline = dds_time() + DDS_MSECS(static_cast<std::int64_t>(c.domain_probe_ms));
+    try {
+      domain_guard.emplace(participant, reply_topic, marker);
+    } catch (const std::runtime_error& e) {  // e.g. DDS Security permissions without surfeledit_reply
+      logger()->warn("cannot look for another server on domain {}: {}", c.domain, e.what());
+    }
+  }
   waitset.attach(requests, kRequestsTag);
   waitset.attach(stop_guard.entity(), kStopTag);
   waitset.attach(loads_guard.entity(), kLoadsTag);
@@ -270,7 +279,17 @@ dds_duration_t Service::Impl::next_wake() const {
   return sleep;
 }
 
-Service::Service(ServiceConfig config) : impl_(std::make_unique<Impl>(config)) {}
+void Service::Impl::check_domain() {
+  if (!domain_guard) return;
+  const std::optional<ServerMarker> other = domain_guard->earlier_server(domain_probe_deadline);
+  domain_guard.reset();
+  if (!other) return;
+  throw DomainTakenError("DDS domain " + std::to_string(config.domain) + " already has a surfeledit server (pid " +
+                         std::to_string(other->pid) + " on host '" + other->host +
+                         "'): stop it or choose another --domain");
+}
+
+Service::Service(ServiceConfig config) : impl_(std::make_unique<Impl>(config)) { impl_->check_domain(); }
 
 Service::~Service() = default;
 

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import logging
+import threading
 import time
+from typing import List
 
 import pytest
 
@@ -23,6 +25,39 @@ def test_spawn_true_starts_and_stops_a_server(monkeypatch: pytest.MonkeyPatch) -
         assert proc is not None and proc.poll() is None
         assert client.info().max_chunk_surfels > 0
     assert proc.poll() is not None, "the spawned server was not stopped on close"
+
+
+def test_two_clients_spawning_at_once_share_one_server(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Both find no server and spawn one at the same moment: the later server gives way (PROTOCOL.md "One
+    server per domain") and its client uses the earlier one, so one server runs and both clients are served."""
+    monkeypatch.setenv("SURFELEDIT_SERVER", server_executable())
+    domain = free_domain()
+    clients: List[surfeledit.Client] = []
+    failures: List[BaseException] = []
+    start = threading.Barrier(2)
+
+    def spawn() -> None:
+        try:
+            start.wait()
+            clients.append(surfeledit.connect(domain=domain, spawn=True, timeout=20.0))
+        except BaseException as e:  # reported below
+            failures.append(e)
+
+    threads = [threading.Thread(target=spawn) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60.0)
+    try:
+        assert not failures, failures
+        assert len(clients) == 2
+        owners = [c for c in clients if c._server is not None]
+        assert len(owners) == 1, "both clients kept a server of their own on one domain"
+        for c in clients:
+            assert c.info().max_chunk_surfels > 0
+    finally:
+        for c in sorted(clients, key=lambda c: c._server is not None):  # the owner last: it stops the server
+            c.close()
 
 
 def test_spawn_false_without_server_raises() -> None:

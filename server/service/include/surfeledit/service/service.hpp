@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -48,13 +49,25 @@ struct ServiceConfig {
   // Roles granted to authenticated users (--grant USER=ROLE[:SESSION]; access.hpp); needs `security`.
   std::vector<Grant> grants;
   JournalConfig journal;  // --journal DIR and its durability policy (PROTOCOL.md, "Journal"); dir empty: off
+  // How long a starting server looks for another server on its domain before it serves, ms (PROTOCOL.md,
+  // "One server per domain"); 0: it does not look.
+  std::uint64_t domain_probe_ms = 300;
 };
+
+// Another surfeledit server, started earlier, serves the domain: this one does not start.
+class DomainTakenError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// The server's exit code on DomainTakenError.
+constexpr int kDomainTakenExitCode = 4;
 
 class Service {
  public:
   // Creates the participant, topics, reader and writers, and recovers the journal's sessions when
   // config.journal.dir is set; throws std::runtime_error on DDS failures, std::invalid_argument on
-  // a bad config and JournalError when the journal cannot be used.
+  // a bad config, JournalError when the journal cannot be used and DomainTakenError when an earlier server
+  // serves the domain (it waits up to config.domain_probe_ms for discovery to find one).
   explicit Service(ServiceConfig config);
   ~Service();
   Service(const Service&) = delete;
