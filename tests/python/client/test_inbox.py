@@ -14,6 +14,7 @@ from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.topic import Topic
 
+from service import domains
 from service.conftest import free_domain
 from surfeledit._protocol import TOPIC_UPDATE, proto, update_qos
 from surfeledit.inbox import GreetingGate, Inbox, wait_matched
@@ -83,7 +84,8 @@ class RealDDS:
     """A participant on its own domain with an update writer and an :class:`Inbox` matched to it."""
 
     def __init__(self) -> None:
-        self.dp = DomainParticipant(free_domain())
+        self.domain = free_domain()  # held by this process until close()
+        self.dp = DomainParticipant(self.domain)
         topic = Topic(self.dp, TOPIC_UPDATE, proto.Update)
         self.writer = DataWriter(self.dp, topic, qos=update_qos())
         self.inbox = Inbox(self.dp, topic, update_qos())
@@ -106,6 +108,7 @@ class RealDDS:
     def close(self) -> None:
         self.inbox.close()
         self.dp.__del__()
+        domains.release(self.domain)
 
 
 def test_real_reader_keeps_samples_after_the_greeting_in_its_batch() -> None:
