@@ -115,3 +115,16 @@ def table(header: Sequence[str], rows: List[Sequence[object]]) -> str:
     lines = [fmt(cells[0]), "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
     lines += [fmt(r) for r in cells[1:]]
     return "\n".join(lines)
+
+
+_domains: Dict[object, int] = {}
+
+
+def take_domain(key: object = None) -> int:
+    """A DDS domain this process holds until it exits (tests/python/service/domains.py: an exclusive lock
+    per domain id, so no test run or other benchmark uses it meanwhile); the same one for the same ``key``."""
+    if key not in _domains:
+        sys.path.insert(0, str(REPO / "tests" / "python"))
+        from service import domains  # the tests' allocator: one lock file per domain
+        _domains[key] = domains.take()
+    return _domains[key]

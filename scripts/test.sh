@@ -63,8 +63,8 @@ ASAN_OPTIONS="detect_leaks=0 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1
 
 echo "== Python tests"
 cd "$ROOT"
-# Parallel workers (pytest-xdist): each test starts its own server on a domain of its worker's share
-# (tests/python/service/conftest.py unique_domain), so workers never meet on a domain.
+# Parallel workers (pytest-xdist): each test starts its own server on a domain that its process holds
+# a lock on (tests/python/service/domains.py), so workers, other runs and benchmarks never meet on one.
 WORKERS="$(nproc)"
 [ "$WORKERS" -le 4 ] || WORKERS=4
 "$ROOT/.venv/bin/python" -m pytest tests/python -q -rs -n "$WORKERS" "$@"

@@ -122,6 +122,11 @@ def open_session_named(domain: int, scene: Dict[str, np.ndarray], name: str,
     return s
 
 
+def domain_of(args: argparse.Namespace, offset: int) -> int:
+    """The domain of the server numbered ``offset``: --domain + offset, or one this process holds."""
+    return args.domain + offset if args.domain is not None else benchlib.take_domain(offset)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build-dir")
@@ -130,7 +135,8 @@ def main() -> None:
     ap.add_argument("--group-ms", type=int, default=2)
     ap.add_argument("--lengths", default="250,1000,4000")
     ap.add_argument("--journal-root")
-    ap.add_argument("--domain", type=int, default=150 + os.getpid() % 40)
+    ap.add_argument("--domain", type=int, default=None,
+                    help="first DDS domain; the servers use it + 0, 1, ... (default: domains held by this process)")
     ap.add_argument("--clients", type=int, default=4)
     ap.add_argument("--seconds", type=float, default=5.0)
     ap.add_argument("--baseline-exe", help="another surfeledit-server build, run with the group commit settings")
@@ -177,7 +183,7 @@ def round_trip_and_throughput(args: argparse.Namespace, configs: dict, root: Pat
                               servers: List[Server], results: Dict[str, object]) -> None:
     sessions = {}
     for k, (name, (server_exe, extra)) in enumerate(configs.items()):
-        srv = Server(server_exe, args.domain + k, root / f"rtt-{k}.log", extra)
+        srv = Server(server_exe, domain_of(args, k), root / f"rtt-{k}.log", extra)
         servers.append(srv)
         srv.wait_ready()
         sessions[name] = open_session(srv.domain, scene)
@@ -202,7 +208,7 @@ def round_trip_and_throughput(args: argparse.Namespace, configs: dict, root: Pat
     tput_rows = []
     results["throughput"] = {}
     for k, name in enumerate(configs):
-        many = [open_session_named(args.domain + k, scene, f"tput-{c}") for c in range(args.clients)]
+        many = [open_session_named(domain_of(args, k), scene, f"tput-{c}") for c in range(args.clients)]
         counts = [0] * len(many)
         stop_at = time.monotonic() + args.seconds
 
@@ -249,7 +255,7 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
             extra = ["--journal", str(jdir), "--journal-sync", "group", "--journal-group-ms", "1"]
             if snap:  # only then: a server built before snapshots (an A/B baseline) runs the rest
                 extra += ["--journal-snapshot-records", str(snap)]
-            srv = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-a.log", extra)
+            srv = Server(exe, domain_of(args, 10 + n), root / f"rec-{length}-{snap}-a.log", extra)
             servers.append(srv)
             srv.wait_ready()
             s = open_session_named(srv.domain, scene, "bench", args.algorithm)
@@ -262,7 +268,7 @@ def recovery(args: argparse.Namespace, exe: Path, root: Path, scene: Dict[str, n
                 r"snapshot \d+ taken after \d+ record\(s\): ([\d.]+) MB, the request loop waited ([\d.]+) ms, of "
                 r"which ([\d.]+) ms saving", srv.text())]
             s.client.reconnect = 0.0
-            srv2 = Server(exe, args.domain + 10 + n, root / f"rec-{length}-{snap}-b.log", extra)
+            srv2 = Server(exe, domain_of(args, 10 + n), root / f"rec-{length}-{snap}-b.log", extra)
             servers.append(srv2)
             ready_s = srv2.wait_ready()
             m = re.search(r"recovered (\d+) request\(s\), (\d+) refusal\(s\), (\d+) expiries from ([\d.]+) MB in "

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -86,8 +85,7 @@ def main() -> int:
         return 2
     server = benchlib.build_dir(args.build_dir) / "server" / "app" / "surfeledit-server"
     print(benchlib.machine_line())
-    base = 100 + os.getpid() % 60
-    domains = {ON: base, OFF: base + 61}
+    domains = {ON: benchlib.take_domain(ON), OFF: benchlib.take_domain(OFF)}
     samples: Dict[str, List[float]] = {ON: [], OFF: [], WHEEL: []}
     n_surfels = 0
     with tempfile.TemporaryDirectory(prefix="surfeledit-bench-secclient-") as tmp:

@@ -22,7 +22,6 @@ same probe, so the difference is the security (encryption and signing of every s
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
@@ -67,8 +66,7 @@ def main() -> int:
         print(f"missing {server} or {probe}: build first")
         return 2
     print(benchlib.machine_line())
-    base = 100 + os.getpid() % 60
-    domains = {"security on": base, "security off": base + 61}
+    domains = {"security on": benchlib.take_domain("on"), "security off": benchlib.take_domain("off")}
     with tempfile.TemporaryDirectory(prefix="surfeledit-bench-security-") as tmp:
         tmpdir = Path(tmp)
         subprocess.run([sys.executable, str(benchlib.REPO / "scripts" / "make_security.py"), str(tmpdir / "sec"),

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import time
@@ -193,7 +192,7 @@ def main() -> int:
     ap.add_argument("--build-dir")
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--warmup", type=int, default=20)
-    ap.add_argument("--domain", type=int, default=150 + os.getpid() % 80)
+    ap.add_argument("--domain", type=int, default=None, help="DDS domain (default: one held by this process)")
     ap.add_argument("--server-threads", default="1,0", help="comma list of surfeledit-server --threads values")
     ap.add_argument("--gap-ms", type=float, default=0.0,
                     help="pause before each step (ms): lets the server finish publishing the previous Update")
@@ -203,6 +202,8 @@ def main() -> int:
     ap.add_argument("--max-load", type=float, default=0.0)
     ap.add_argument("--json-out")
     args = ap.parse_args()
+    if args.domain is None:
+        args.domain = benchlib.take_domain()
 
     build = benchlib.build_dir(args.build_dir)
     server = build / "server" / "app" / "surfeledit-server"

@@ -16,7 +16,7 @@ from cyclonedds.topic import Topic
 from ._protocol import proto
 from .dds_status import publication_matched, subscription_matched
 
-__all__ = ["Inbox", "wait_matched"]
+__all__ = ["Inbox", "GreetingGate", "is_greeting", "wait_matched"]
 
 _log = logging.getLogger("surfeledit")
 
@@ -71,6 +71,56 @@ def wait_matched(participant: DomainParticipant, entities: Iterable[Any], timeou
         _delete(ws)
 
 
+def is_greeting(sample: Any) -> bool:
+    """True for the server's greeting of a new watcher: an ``Update`` with cause ``"watch"`` and no session."""
+    return isinstance(sample, proto.Update) and sample.cause == "watch" and not sample.session
+
+
+class GreetingGate:
+    """Which taken samples belong to a watcher's stream; pure logic, fed the lists that DDS takes return.
+
+    The stream starts at the greeting (PROTOCOL.md "Updates"): samples taken in batches before the
+    greeting's batch arrived before it and are dropped (the server may have been writing a multi-part
+    update while its writer matched the reader: only its last parts would arrive). A take groups samples
+    by instance (the topic's key, the session; the greeting is instance ``""``), so positions within one
+    batch do not tell what was written before the greeting: every other sample of the greeting's batch
+    belongs to the stream, those listed after the greeting as well as those listed before it.
+    A caller that stops waiting (:meth:`release`) gets what was held and every later sample.
+    """
+
+    def __init__(self) -> None:
+        self.greeted = False
+        self._held: List[Any] = []
+
+    def feed(self, batch: List[Any]) -> bool:
+        """While waiting for the greeting: keeps ``batch`` (held for :meth:`release`); True once greeted."""
+        if self.greeted:
+            self._held.extend(batch)
+        elif any(is_greeting(s) for s in batch):
+            self.greeted = True
+            self._held = [s for s in batch if not is_greeting(s)]
+        else:
+            self._held.extend(batch)
+        return self.greeted
+
+    @property
+    def holding(self) -> bool:
+        """True while samples wait for :meth:`release`."""
+        return bool(self._held)
+
+    def release(self) -> List[Any]:
+        """The held samples (oldest first, each once)."""
+        out, self._held = self._held, []
+        return out
+
+    def pass_on(self, batch: List[Any]) -> List[Any]:
+        """A batch taken by the consumer: all of it (a greeting that arrives now, after the caller stopped
+        waiting, marks the gate greeted but drops nothing: earlier samples were handed out already)."""
+        if not self.greeted and any(is_greeting(s) for s in batch):
+            self.greeted = True
+        return batch
+
+
 class Inbox:
     """A reader of one topic with a condition on new samples: :meth:`take` what arrived, :meth:`wait` for more."""
 
@@ -85,32 +135,34 @@ class Inbox:
         self._cond = ReadCondition(self.reader, _ANY_NEW)
         self._waitset = WaitSet(participant)
         self._waitset.attach(self._cond)
-        self._early: List[Any] = []  # samples that arrived before the greeting (await_greeting)
-        self.greeted = False
+        self._gate = GreetingGate()
+
+    @property
+    def greeted(self) -> bool:
+        """True once the server's greeting arrived (:meth:`await_greeting`)."""
+        return self._gate.greeted
 
     def take(self, n: int = 64) -> List[Any]:
-        """Up to ``n`` new samples (instance-state changes without data included; check their type)."""
-        if self._early:
-            out, self._early = self._early[:n], self._early[n:]
-            return out
-        return self.reader.take(N=n, condition=self._cond)
+        """Up to ``n`` new samples (instance-state changes without data included; check their type); more
+        when samples of the greeting's batch were held by :meth:`await_greeting`."""
+        if self._gate.holding:
+            return self._gate.release()
+        return self._gate.pass_on(self.reader.take(N=n, condition=self._cond))
 
     def wait(self, timeout: float) -> None:
         """Blocks until a new sample arrives or ``timeout`` seconds pass."""
-        if not self._early:
+        if not self._gate.holding:
             self._waitset.wait(_ns(timeout))
 
     def await_greeting(self, timeout: float) -> bool:
         """Waits up to ``timeout`` seconds for an ``Update`` with cause ``"watch"`` (PROTOCOL.md "Updates":
         the server writes one to each new watcher once its writer matched it; from then on the server
-        writes every update to this reader). Other samples that arrive first are kept for :meth:`take`."""
+        writes every update to this reader). Which samples :meth:`take` then returns: :class:`GreetingGate`
+        (those of the greeting's batch and later ones; without a greeting, all)."""
         deadline = time.monotonic() + timeout
         while True:
-            for s in self.reader.take(N=64, condition=self._cond):
-                if isinstance(s, proto.Update) and s.cause == "watch" and not s.session:
-                    self.greeted = True
-                    return True
-                self._early.append(s)
+            if self._gate.greeted or self._gate.feed(self.reader.take(N=64, condition=self._cond)):
+                return True
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 return False

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "collision_oracle.hpp"
+#include "collision_scripts.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/simplify/approximate_detector.hpp"
 

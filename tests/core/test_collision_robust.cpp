@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "collision_oracle.hpp"
+#include "collision_scripts.hpp"
 #include "surfeledit/core/deformation.hpp"
 
 namespace surfeledit {

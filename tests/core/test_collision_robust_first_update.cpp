@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "collision_oracle.hpp"
+#include "collision_scripts.hpp"
 
 namespace surfeledit {
 namespace {

@@ -2,7 +2,7 @@
 // (spheres included), also across insertion and removal; threads do not change the result.
 #include <gtest/gtest.h>
 
-#include "collision_oracle.hpp"
+#include "collision_scripts.hpp"
 
 namespace surfeledit {
 namespace {

@@ -229,9 +229,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=45.0, help="how long to fuzz (default 45)")
     ap.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
-    ap.add_argument("--domain", type=int, default=None, help="DDS domain (default: from the pid)")
+    ap.add_argument("--domain", type=int, default=None, help="DDS domain (default: one this process holds)")
     args = ap.parse_args(argv)
-    domain = args.domain if args.domain is not None else 1 + os.getpid() % 230
+    if args.domain is None:
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+        from service import domains  # one lock file per domain: no test run or benchmark uses it meanwhile
+        domain = domains.take()  # held until this process exits
+    else:
+        domain = args.domain
     try:
         run(args.seconds, args.seed, domain)
     except Violation as e:

@@ -4,14 +4,15 @@
 // a detector that reads it); the table of shared row lists; then the session's scalars, model, row
 // versions, removal log, rest radii, tools, acting tool, history entries and spare buffers.
 #include <map>
-#include <unordered_map>
 
+#include "session_snapshot_images.hpp"
 #include "session_snapshot_values.hpp"
 #include "surfeledit/core/detector_snapshot.hpp"
 #include "surfeledit/core/edit_session.hpp"
 
 namespace surfeledit {
 
+using namespace snapshot_images;
 using namespace snapshot_values;
 
 namespace {
@@ -20,198 +21,6 @@ constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
 constexpr std::uint32_t kFormat = 3;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows;
                                       // 3: merge origins may be the tool detector's (MergeMemo::origins_in_detector),
                                       // row versions as a floor and 32-bit offsets (RowVersions)
-
-// Pointer tables: index 0 is null, objects from 1 in first-seen order.
-template <typename T>
-struct Table {
-  std::unordered_map<const T*, std::uint32_t> index;
-  std::vector<const T*> list;
-  void add(const T* p) {
-    if (p && index.emplace(p, static_cast<std::uint32_t>(list.size() + 1)).second) list.push_back(p);
-  }
-  std::uint32_t at(const T* p) const { return p ? index.at(p) : 0; }
-  // Like at(), but 0 for a pointer not in the table (never dereferenced: it may be stale).
-  std::uint32_t find(const T* p) const {
-    const auto it = index.find(p);
-    return it == index.end() ? 0 : it->second;
-  }
-};
-
-struct Tables {
-  Table<CollisionDetector> detectors;
-  Table<DetectorImage> images;
-  std::vector<const CollisionDetector*> image_owner;  // per image: the detector that reads it
-  Table<IndexList> row_lists;
-  std::string why;  // not snapshottable: why
-
-  void detector(const CollisionDetector* d, const char* where) {
-    if (d && !d->snapshottable() && why.empty())
-      why = std::string(where) + ": collision detector '" + to_string(d->params().algorithm) +
-            "' with a hierarchy, clusters, Improved's sweep or an inside model has no snapshot";
-    detectors.add(d);
-  }
-  void rows_image(const RowsImage& r) {
-    row_lists.add(r.rows.get());
-    row_lists.add(r.bent.get());
-  }
-  void image(const SessionImage& im) {
-    detector(im.detector_object.get(), "history");
-    if (im.detector) {
-      if (!im.detector_object && why.empty()) why = "history: a detector image without its detector";
-      const std::size_t before = images.list.size();
-      images.add(im.detector.get());
-      if (images.list.size() > before) image_owner.push_back(im.detector_object.get());
-    }
-    if (!im.complete && why.empty()) why = "history: an incomplete image";
-    if (im.rows) rows_image(*im.rows);
-    if (im.tool_only) detector(im.tool_only->tool.detector.get(), "history");
-    if (im.whole)
-      for (const auto& [id, t] : im.whole->tools) detector(t.detector.get(), "history");
-  }
-};
-
-// The objects the tables index, on load.
-struct Loaded {
-  std::vector<std::shared_ptr<CollisionDetector>> detectors;  // [0] null
-  std::vector<std::shared_ptr<const DetectorImage>> images;   // [0] null
-  std::vector<std::shared_ptr<const IndexList>> row_lists;    // [0] null
-
-  template <typename T>
-  static const T& pick(SnapshotReader& in, const std::vector<T>& v, const char* what) {
-    const std::uint32_t k = in.u32(what);
-    if (k >= v.size()) in.fail(what, "index " + std::to_string(k) + " out of range");
-    return v[k];
-  }
-};
-
-void put_tool_image(SnapshotWriter& out, const Tables& t, const ToolImage& im) {
-  out.boolean(im.fields.has_value());
-  if (im.fields) put_fields(out, *im.fields);
-  out.boolean(im.fields_kept);
-  out.boolean(im.derive_detector);
-  put_settings(out, im.settings);
-  out.u32(t.detectors.at(im.detector.get()));
-  put_merge(out, im.merge);
-  out.vec(im.colliding);
-  out.u64(im.steps);
-  out.boolean(im.stale);
-}
-
-ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) {
-  ToolImage im;
-  if (in.boolean("tool fields")) im.fields = get_fields(in, rows);
-  im.fields_kept = in.boolean("tool fields kept");
-  im.derive_detector = in.boolean("tool derives its detector");
-  if (im.fields_kept && im.fields) in.fail("tool fields kept", "an image that keeps the fields holds none");
-  im.settings = get_settings(in);
-  im.detector = Loaded::pick(in, l.detectors, "tool detector");
-  im.merge = get_merge(in, im.detector.get());
-  im.colliding = in.vec<SurfelId>("tool colliding");
-  im.steps = in.u64("tool steps");
-  im.stale = in.boolean("tool stale");
-  return im;
-}
-
-// A rows image (an entry's or a spare buffer); get_rows_image reads it.
-void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r) {
-  out.u32(t.row_lists.at(r.rows.get()));
-  out.u32(t.row_lists.at(r.bent.get()));
-  out.mat(r.positions);
-  out.mat(r.normals);
-  out.mat(r.tangent_u);
-  out.mat(r.tangent_v);
-  put_pairs_of(out, r.version_runs);
-}
-
-void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
-  out.boolean(im.rows.has_value());
-  if (im.rows) put_rows_image(out, t, *im.rows);
-  out.boolean(im.tool_only.has_value());
-  if (im.tool_only) {
-    put_tool_image(out, t, im.tool_only->tool);
-    out.f64(im.tool_only->history.history_mb);
-  }
-  out.boolean(im.whole.has_value());
-  if (im.whole) {
-    const WholeImage& w = *im.whole;
-    put_model(out, w.model);
-    out.u64(w.model_version);
-    put_row_versions(out, w.row_version);
-    out.mat(w.rest_radius);
-    out.f64(w.history.history_mb);
-    out.u64(w.tools.size());
-    for (const auto& [id, tool] : w.tools) {
-      out.str(id);
-      put_tool_image(out, t, tool);
-    }
-  }
-  out.str(im.tool);
-  out.u32(t.images.at(im.detector.get()));
-  out.u32(t.detectors.at(im.detector_object.get()));
-  out.boolean(im.stale);
-  out.vec(im.colliding);
-  out.u64(im.steps);
-  out.boolean(im.complete);
-}
-
-RowsImage get_rows_image(SnapshotReader& in, const Loaded& l) {
-  RowsImage r;
-  r.rows = Loaded::pick(in, l.row_lists, "image rows");
-  r.bent = Loaded::pick(in, l.row_lists, "image bent rows");
-  r.positions = in.mat<Points>("image positions");
-  r.normals = in.mat<Points>("image normals");
-  r.tangent_u = in.mat<Points>("image tangent_u");
-  r.tangent_v = in.mat<Points>("image tangent_v");
-  r.version_runs = get_pairs<std::uint64_t, std::uint32_t>(in, "image version runs");
-  const std::size_t n = r.rows ? r.rows->size() : 0;
-  const std::size_t nb = r.bent ? r.bent->size() : n;  // rows with normals and tangents
-  std::size_t runs = 0;
-  for (const auto& run : r.version_runs) runs += run.second;
-  if (static_cast<std::size_t>(r.positions.rows()) != n || static_cast<std::size_t>(r.normals.rows()) != nb ||
-      (r.tangent_u.rows() != 0 && static_cast<std::size_t>(r.tangent_u.rows()) != nb) ||
-      r.tangent_v.rows() != r.tangent_u.rows() || runs != n) {
-    in.fail("rows image", "arrays do not match its rows");
-  }
-  return r;
-}
-
-SessionImage get_image(SnapshotReader& in, const Loaded& l) {
-  SessionImage im;
-  if (in.boolean("image has rows")) im.rows = get_rows_image(in, l);
-  if (in.boolean("image has tool")) {
-    ToolOnlyImage t;
-    t.tool = get_tool_image(in, l, kAnyRows);
-    t.history.history_mb = in.f64("image history_mb");
-    im.tool_only = std::move(t);
-  }
-  if (in.boolean("image has whole")) {
-    WholeImage w;
-    w.model = get_model(in);
-    w.model_version = in.u64("image model version");
-    const std::size_t rows = static_cast<std::size_t>(w.model.size());
-    w.row_version = get_row_versions(in, rows, ~std::uint64_t{0}, "image row versions");
-    w.rest_radius = in.mat<Values>("image rest radii");
-    w.history.history_mb = in.f64("image history_mb");
-    if (w.rest_radius.size() != 0 && static_cast<std::size_t>(w.rest_radius.size()) != rows)
-      in.fail("whole image", "per-row arrays do not match the model");
-    const std::size_t n = in.count("image tools", 8);
-    for (std::size_t k = 0; k < n; ++k) {
-      std::string id = in.str("image tool author");
-      w.tools.emplace(std::move(id), get_tool_image(in, l, rows));
-    }
-    im.whole = std::move(w);
-  }
-  if (int(im.rows.has_value()) + int(im.tool_only.has_value()) + int(im.whole.has_value()) != 1)
-    in.fail("image", "not exactly one of rows, tool and whole");
-  im.tool = in.str("image tool");
-  im.detector = Loaded::pick(in, l.images, "image detector states");
-  im.detector_object = Loaded::pick(in, l.detectors, "image detector");
-  im.stale = in.boolean("image stale");
-  im.colliding = in.vec<SurfelId>("image colliding");
-  im.steps = in.u64("image steps");
-  im.complete = in.boolean("image complete");
-  return im;
-}
 
 void put_item(SnapshotWriter& out, const HistoryItem& item) {
   out.u64(item.version);

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "collision_oracle.hpp"
+#include "collision_scripts.hpp"
 
 using namespace surfeledit;
 using namespace surfeledit::testing;

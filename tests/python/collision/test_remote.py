@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import surfeledit
+from service import domains
 from service.conftest import free_domain
 from surfeledit import scenario as S
 
@@ -25,6 +26,7 @@ def test_remote_equals_in_process(scenarios):
                 pytest.skip(f"the server found ({surfeledit.find_server_executable()}) predates OP_CONFIGURE: {e}")
             raise
         backend.close()
+    domains.release(domain)
     for (alg, inside), res in remote.items():
         local = S.run(sc, alg, backend=S.LocalBackend(1), settings={"threads": 1, "inside": inside})
         assert max(len(c) for c in local.colliding) > 0

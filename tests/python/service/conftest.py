@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import glob
-import itertools
 import json
 import os
 import signal
@@ -31,25 +30,13 @@ from surfeledit.dds_status import publication_matched
 from surfeledit.demo import default_scene
 from surfeledit.server_process import server_args
 
+from . import domains
+
 REPO = Path(__file__).resolve().parents[3]
-_counter = itertools.count()
 
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "large: big data round trips (1M surfels, ~tens of seconds)")
-
-
-def unique_domain() -> int:
-    """A DDS domain in 1..230, distinct for the first calls of this process and varying with the pid.
-
-    Under pytest-xdist (``-n N``) worker w of N draws only from the domains that are w modulo N, so two
-    workers never pick the same domain at the same time; within a worker, 7 is coprime with the number
-    of its domains (230 // N for N <= 4), so consecutive calls never repeat within a run.
-    """
-    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
-    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
-    slots = 230 // workers
-    return 1 + worker + workers * ((os.getpid() * 31 + 7 * next(_counter)) % slots)
 
 
 def domain_in_use(domain: int, wait: float = 0.3) -> bool:
@@ -70,12 +57,23 @@ def domain_in_use(domain: int, wait: float = 0.3) -> bool:
 
 
 def free_domain() -> int:
-    """A unique domain (see unique_domain) on which nothing answers yet."""
+    """A DDS domain that this process holds (domains.py: no other process gets it until the test ends)
+    and on which nothing answers yet (a stray server that takes no lock would answer our requests too)."""
     for _ in range(20):
-        d = unique_domain()
+        d = domains.take()
         if not domain_in_use(d):
-            return d
+            return d  # a domain in use stays held until the test ends, so the next try takes another
     raise RuntimeError("no free DDS domain found in 20 tries")
+
+
+@pytest.fixture(autouse=True)
+def _domains_for_the_test() -> Iterator[None]:
+    """Gives back, at the end of each test, the domains it took (free_domain)."""
+    before = set(domains.held())
+    yield
+    for d in domains.held():
+        if d not in before:
+            domains.release(d)
 
 
 def find_executable(env: str, *candidates: str) -> Optional[str]:
@@ -154,6 +152,7 @@ class SecuredServer(ManagedProcess):
                 extra: Sequence[str] = ()) -> "SecuredServer":
         """One on a fresh domain, stopped at the test's teardown whatever happens, ready to answer."""
         srv = cls(free_domain(), tmp_path / "server.log", security, extra)
+        request.addfinalizer(lambda: domains.release(srv.domain))  # after the stop (finalizers run last first)
         request.addfinalizer(srv.stop)
         srv.wait_ready()
         return srv
