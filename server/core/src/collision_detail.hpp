@@ -82,10 +82,14 @@ struct ZeroSet {
   // Copies the zero rows of `scene` and builds the tree (approximate search `eps`; with cells when
   // `with_cells` and eps == 0). Throws InvalidArgument when there are none.
   void build(const CollisionScene& scene, const IndexList& zero_rows, double eps, bool with_cells = false);
-  // The parameters `tree` is built with (eps, cells).
+  // Leaves of a tree with cells: 48 points measured 1.23x faster than the default 10 on Temporal's exact detect
+  // (piercing scene; 24: 0.89x, 96: 0.98x against 48), with a fifth of the nodes (RESULTS §63).
+  static constexpr int kCellsLeafSize = 48;
+  // The parameters `tree` is built with (eps; cells and kCellsLeafSize when `cells` and exact).
   KdTreeParams tree_params() const {
     KdTreeParams p = nearest_tree_params(knn_eps);
     p.cells = cells && knn_eps == 0.0;
+    if (p.cells) p.leaf_size = kCellsLeafSize;
     return p;
   }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
