@@ -83,14 +83,14 @@ std::vector<std::uint32_t> every_start(const KdTree& tree) {
 
 TEST(KdTreeFromLeaf, EveryStartGivesTheRootAnswerOnRandomClouds) {
   for (int leaf_size : {1, 4, 10, 48}) {
-   for (KdScan scan : kScans) {
-    const Points pts = test::uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
-    const KdTree tree(pts, with_cells(leaf_size, scan));
-    const Points queries = test::uniform_cloud(20, 12, 1.3, Vec3::Zero());
-    for (Eigen::Index i = 0; i < queries.rows(); ++i)
-      for (std::uint32_t s : every_start(tree))
-        expect_same_as_root(tree, pts, queries.row(i).transpose(), s, Vec3::Zero(), 1e-12);
-   }
+    for (KdScan scan : kScans) {
+      const Points pts = test::uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      const Points queries = test::uniform_cloud(20, 12, 1.3, Vec3::Zero());
+      for (Eigen::Index i = 0; i < queries.rows(); ++i)
+        for (std::uint32_t s : every_start(tree))
+          expect_same_as_root(tree, pts, queries.row(i).transpose(), s, Vec3::Zero(), 1e-12);
+    }
   }
 }
 
@@ -122,19 +122,19 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
   for (int i = 0; i < m * m * m; ++i)
     for (int c = 0; c < 3; ++c) pts.row(c * m * m * m + i) << i % m, (i / m) % m, i / (m * m);
   for (int leaf_size : {1, 3, 10}) {
-   for (KdScan scan : kScans) {
-    const KdTree tree(pts, with_cells(leaf_size, scan));
-    std::mt19937_64 rng(31 + leaf_size);
-    std::uniform_int_distribution<int> cell(0, m - 2), axes(0, 7);
-    for (int i = 0; i < 24; ++i) {
-      const int mask = axes(rng);
-      Vec3 q(cell(rng), cell(rng), cell(rng));
-      for (int d = 0; d < 3; ++d)
-        if (mask & (1 << d)) q[d] += 0.5;
-      if (i % 8 == 7) q[i % 3] = -2.5;  // outside the lattice, equidistant from a face's points
-      for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+    for (KdScan scan : kScans) {
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      std::mt19937_64 rng(31 + leaf_size);
+      std::uniform_int_distribution<int> cell(0, m - 2), axes(0, 7);
+      for (int i = 0; i < 24; ++i) {
+        const int mask = axes(rng);
+        Vec3 q(cell(rng), cell(rng), cell(rng));
+        for (int d = 0; d < 3; ++d)
+          if (mask & (1 << d)) q[d] += 0.5;
+        if (i % 8 == 7) q[i % 3] = -2.5;  // outside the lattice, equidistant from a face's points
+        for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+      }
     }
-   }
   }
 }
 
@@ -143,17 +143,17 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
 TEST(KdTreeFromLeaf, OffsetsAndScales) {
   for (const double scale : {1e-4, 1.0, 1e4}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
-     for (KdScan scan : kScans) {
-      const Points pts = test::uniform_cloud(2000, 41, scale, offset);
-      const KdTree tree(pts, with_cells(24, scan));
-      const Points queries = test::uniform_cloud(60, 42, 1.2 * scale, offset);
-      std::uint32_t leaf = 0;
-      for (Eigen::Index i = 0; i < queries.rows(); ++i) {
-        const Vec3 q = queries.row(i).transpose();
-        for (std::uint32_t s : {leaf, 0u, 7u, 100u, ~0u}) expect_same_as_root(tree, pts, q, s, offset, 1e-9);
-        tree.nearest_from(q, leaf);
+      for (KdScan scan : kScans) {
+        const Points pts = test::uniform_cloud(2000, 41, scale, offset);
+        const KdTree tree(pts, with_cells(24, scan));
+        const Points queries = test::uniform_cloud(60, 42, 1.2 * scale, offset);
+        std::uint32_t leaf = 0;
+        for (Eigen::Index i = 0; i < queries.rows(); ++i) {
+          const Vec3 q = queries.row(i).transpose();
+          for (std::uint32_t s : {leaf, 0u, 7u, 100u, ~0u}) expect_same_as_root(tree, pts, q, s, offset, 1e-9);
+          tree.nearest_from(q, leaf);
+        }
       }
-     }
     }
   }
 }
@@ -189,19 +189,19 @@ TEST(KdTreeFromLeaf, TiesAcrossCutsThroughEqualCoordinates) {
     for (int c = 0; c < 2; ++c) pts.row(2 * i + c) << (i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h;
   for (int i = 0; i < 8; ++i) pts.row(250 + i) << (i & 1 ? 1.0 : -1.0), (i & 2 ? 1.0 : -1.0), (i & 4 ? 1.0 : -1.0);
   for (int leaf_size : {1, 2, 3, 5}) {
-   for (KdScan scan : kScans) {
-    const KdTree tree(pts, with_cells(leaf_size, scan));
-    for (int i = 0; i < 125; i += 3) {
-      const Vec3 base((i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h);
-      for (int axis = 0; axis < 3; ++axis) {
-        for (const double off : {0.5 * h, -0.5 * h, 0.25 * h, 1.5 * h}) {
-          Vec3 q = base;
-          q[axis] += off;
-          for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+    for (KdScan scan : kScans) {
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      for (int i = 0; i < 125; i += 3) {
+        const Vec3 base((i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h);
+        for (int axis = 0; axis < 3; ++axis) {
+          for (const double off : {0.5 * h, -0.5 * h, 0.25 * h, 1.5 * h}) {
+            Vec3 q = base;
+            q[axis] += off;
+            for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+          }
         }
       }
     }
-   }
   }
 }
 
