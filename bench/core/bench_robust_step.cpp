@@ -16,10 +16,11 @@
 // BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
-//   session, no history; the detect input carries the translation's displacement bound, as EditSession's). <config> indexes kConfigs below (0: Robust without a hierarchy, 1: Robust with
-//   zero + deformable AABB trees at the default update; BM_DetectIdle runs every one). Counters: median /
-//   max thread CPU ms of one detect (detect_cpu_*), as the CPU column is of the whole iteration; use them on
-//   a loaded machine; the broad phase's nv / np / nu and the queries (medians).
+//   session, no history; the detect input carries the translation's displacement bound, as EditSession's).
+//   <config> indexes kConfigs below (0: Robust without a hierarchy, 1: Robust with zero + deformable AABB
+//   trees at the default update, 12: Temporal without a hierarchy, exact queries; BM_DetectIdle runs every
+//   one). Counters: median / max thread CPU ms of one detect (detect_cpu_*), as the CPU column is of the whole
+//   iteration; use them on a loaded machine; the broad phase's nv / np / nu and the queries (medians).
 #include <benchmark/benchmark.h>
 
 #include <time.h>
@@ -285,7 +286,7 @@ void BM_DetectIdle(benchmark::State& state) {
   state.counters["queries_median"] = median(queries);
 }
 
-BENCHMARK(BM_DetectRun)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_DetectRun)->DenseRange(0, 1)->Arg(12)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);

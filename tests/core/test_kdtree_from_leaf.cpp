@@ -1,7 +1,9 @@
 // KdTree::nearest_from (the search that starts at a leaf and walks up) against brute force and against the
 // root descent, bit for bit: random clouds, exact ties (duplicates, lattices, queries equidistant from 2-8
-// points), every possible start value (each node of the tree, non-leaf nodes, out-of-range values, a leaf
-// of another tree), 1e6 offsets, 1e+-4 scales, and cuts whose float bounds overlap.
+// points), every possible start value (each node of the tree, non-leaf nodes and out-of-range values, which
+// start from the near-path leaf, a leaf of another tree), 1e6 offsets, 1e+-4 scales, and cuts whose float
+// bounds overlap; each with the baseline walk (KdScan::Scalar) and the vector one (Auto: AVX2 where the CPU
+// has it), which must also agree with each other on the winner's leaf.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,6 +26,8 @@ KdTreeParams with_cells(int leaf_size, KdScan scan = KdScan::Auto) {
   return p;
 }
 
+// The baseline leaf scan and walk, and the vector ones where the CPU has them.
+const KdScan kScans[] = {KdScan::Scalar, KdScan::Auto};
 
 // The rows at the smallest squared distance from q (brute force over every row; `offset` is subtracted from
 // both sides first, as the tree works relative to its points' centroid, so far from the origin the comparison
@@ -79,12 +83,14 @@ std::vector<std::uint32_t> every_start(const KdTree& tree) {
 
 TEST(KdTreeFromLeaf, EveryStartGivesTheRootAnswerOnRandomClouds) {
   for (int leaf_size : {1, 4, 10, 48}) {
-    const Points pts = test::uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
-    const KdTree tree(pts, with_cells(leaf_size));
-    const Points queries = test::uniform_cloud(20, 12, 1.3, Vec3::Zero());
-    for (Eigen::Index i = 0; i < queries.rows(); ++i)
-      for (std::uint32_t s : every_start(tree))
-        expect_same_as_root(tree, pts, queries.row(i).transpose(), s, Vec3::Zero(), 1e-12);
+    for (KdScan scan : kScans) {
+      const Points pts = test::uniform_cloud(300, 11 + leaf_size, 1.0, Vec3::Zero());
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      const Points queries = test::uniform_cloud(20, 12, 1.3, Vec3::Zero());
+      for (Eigen::Index i = 0; i < queries.rows(); ++i)
+        for (std::uint32_t s : every_start(tree))
+          expect_same_as_root(tree, pts, queries.row(i).transpose(), s, Vec3::Zero(), 1e-12);
+    }
   }
 }
 
@@ -116,16 +122,18 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
   for (int i = 0; i < m * m * m; ++i)
     for (int c = 0; c < 3; ++c) pts.row(c * m * m * m + i) << i % m, (i / m) % m, i / (m * m);
   for (int leaf_size : {1, 3, 10}) {
-    const KdTree tree(pts, with_cells(leaf_size));
-    std::mt19937_64 rng(31 + leaf_size);
-    std::uniform_int_distribution<int> cell(0, m - 2), axes(0, 7);
-    for (int i = 0; i < 24; ++i) {
-      const int mask = axes(rng);
-      Vec3 q(cell(rng), cell(rng), cell(rng));
-      for (int d = 0; d < 3; ++d)
-        if (mask & (1 << d)) q[d] += 0.5;
-      if (i % 8 == 7) q[i % 3] = -2.5;  // outside the lattice, equidistant from a face's points
-      for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+    for (KdScan scan : kScans) {
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      std::mt19937_64 rng(31 + leaf_size);
+      std::uniform_int_distribution<int> cell(0, m - 2), axes(0, 7);
+      for (int i = 0; i < 24; ++i) {
+        const int mask = axes(rng);
+        Vec3 q(cell(rng), cell(rng), cell(rng));
+        for (int d = 0; d < 3; ++d)
+          if (mask & (1 << d)) q[d] += 0.5;
+        if (i % 8 == 7) q[i % 3] = -2.5;  // outside the lattice, equidistant from a face's points
+        for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+      }
     }
   }
 }
@@ -135,14 +143,16 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
 TEST(KdTreeFromLeaf, OffsetsAndScales) {
   for (const double scale : {1e-4, 1.0, 1e4}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
-      const Points pts = test::uniform_cloud(2000, 41, scale, offset);
-      const KdTree tree(pts, with_cells(24));
-      const Points queries = test::uniform_cloud(60, 42, 1.2 * scale, offset);
-      std::uint32_t leaf = 0;
-      for (Eigen::Index i = 0; i < queries.rows(); ++i) {
-        const Vec3 q = queries.row(i).transpose();
-        for (std::uint32_t s : {leaf, 0u, 7u, 100u}) expect_same_as_root(tree, pts, q, s, offset, 1e-9);
-        tree.nearest_from(q, leaf);
+      for (KdScan scan : kScans) {
+        const Points pts = test::uniform_cloud(2000, 41, scale, offset);
+        const KdTree tree(pts, with_cells(24, scan));
+        const Points queries = test::uniform_cloud(60, 42, 1.2 * scale, offset);
+        std::uint32_t leaf = 0;
+        for (Eigen::Index i = 0; i < queries.rows(); ++i) {
+          const Vec3 q = queries.row(i).transpose();
+          for (std::uint32_t s : {leaf, 0u, 7u, 100u, ~0u}) expect_same_as_root(tree, pts, q, s, offset, 1e-9);
+          tree.nearest_from(q, leaf);
+        }
       }
     }
   }
@@ -157,11 +167,13 @@ TEST(KdTreeFromLeaf, CutsInsideOneFloatInterval) {
   Points pts(260, 3);
   for (int i = 0; i < 200; ++i) pts.row(i) << 1.0 + 1e-10 * i, 1.0 + 1e-10 * ((i * 7) % 200), 1.0;
   for (int i = 200; i < 260; ++i) pts.row(i) << -1.0 - u(rng), -1.0 - u(rng), u(rng) - 0.5;
-  const KdTree tree(pts, with_cells(2));
   const Vec3 centroid = pts.colwise().mean().transpose();
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 q(1.0 + 1e-10 * (5 * i) + 3e-11, 1.0 + 1e-10 * ((i * 13) % 200), 1.0 + (i % 3) * 1e-9);
-    for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, centroid, 0.0);
+  for (KdScan scan : kScans) {
+    const KdTree tree(pts, with_cells(2, scan));
+    for (int i = 0; i < 40; ++i) {
+      const Vec3 q(1.0 + 1e-10 * (5 * i) + 3e-11, 1.0 + 1e-10 * ((i * 13) % 200), 1.0 + (i % 3) * 1e-9);
+      for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, centroid, 0.0);
+    }
   }
 }
 
@@ -177,17 +189,49 @@ TEST(KdTreeFromLeaf, TiesAcrossCutsThroughEqualCoordinates) {
     for (int c = 0; c < 2; ++c) pts.row(2 * i + c) << (i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h;
   for (int i = 0; i < 8; ++i) pts.row(250 + i) << (i & 1 ? 1.0 : -1.0), (i & 2 ? 1.0 : -1.0), (i & 4 ? 1.0 : -1.0);
   for (int leaf_size : {1, 2, 3, 5}) {
-    const KdTree tree(pts, with_cells(leaf_size));
-    for (int i = 0; i < 125; i += 3) {
-      const Vec3 base((i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h);
-      for (int axis = 0; axis < 3; ++axis) {
-        for (const double off : {0.5 * h, -0.5 * h, 0.25 * h, 1.5 * h}) {
-          Vec3 q = base;
-          q[axis] += off;
-          for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+    for (KdScan scan : kScans) {
+      const KdTree tree(pts, with_cells(leaf_size, scan));
+      for (int i = 0; i < 125; i += 3) {
+        const Vec3 base((i % 5 - 2) * h, (i / 5 % 5 - 2) * h, (i / 25 - 2) * h);
+        for (int axis = 0; axis < 3; ++axis) {
+          for (const double off : {0.5 * h, -0.5 * h, 0.25 * h, 1.5 * h}) {
+            Vec3 q = base;
+            q[axis] += off;
+            for (std::uint32_t s : every_start(tree)) expect_same_as_root(tree, pts, q, s, Vec3::Zero(), 0.0);
+          }
         }
       }
     }
+  }
+}
+
+// The baseline and the vector walk from the same start: the same row, dist2 bits and winner's leaf (their box
+// tests decide alike), from every start (cold ones from the near-path leaf) at 1e6 offsets and 1e+-4 scales
+// and on a lattice of exact ties.
+TEST(KdTreeFromLeaf, ScalarAndVectorWalksAgree) {
+  auto agree = [](const KdTree& a, const KdTree& b, const Vec3& q, std::uint32_t s) {
+    std::uint32_t la = s, lb = s;
+    double da = 0.0, db = 0.0;
+    ASSERT_EQ(a.nearest_from(q, la, &da), b.nearest_from(q, lb, &db)) << "start " << s;
+    ASSERT_EQ(da, db) << "start " << s;
+    ASSERT_EQ(la, lb) << "start " << s;
+  };
+  for (const double scale : {1e-4, 1e4}) {
+    for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
+      const Points pts = test::uniform_cloud(1500, 71, scale, offset);
+      const KdTree scalar(pts, with_cells(8, KdScan::Scalar)), vector(pts, with_cells(8));
+      const Points queries = test::uniform_cloud(25, 72, 1.3 * scale, offset);
+      for (Eigen::Index i = 0; i < queries.rows(); ++i)
+        for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, queries.row(i).transpose(), s);
+    }
+  }
+  constexpr int m = 6;
+  Points lattice(2 * m * m * m, 3);
+  for (int i = 0; i < 2 * m * m * m; ++i) lattice.row(i) << i % m, (i / m) % m, (i / (m * m)) % m;
+  const KdTree scalar(lattice, with_cells(3, KdScan::Scalar)), vector(lattice, with_cells(3));
+  for (int i = 0; i < 30; ++i) {
+    const Vec3 q(0.5 * (i % 11), 0.5 * ((i * 7) % 11), 0.5 * ((i * 3) % 11) - 1.0);
+    for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, q, s);
   }
 }
 

@@ -172,8 +172,9 @@ void require_deformable_parents(const CollisionScene& scene, Index rows, const I
   }
 }
 
-void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, double eps) {
+void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, double eps, bool with_cells) {
   knn_eps = eps;
+  cells = with_cells;
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
   const Eigen::Index z = static_cast<Eigen::Index>(zero_rows.size());
   positions.resize(z, 3);
@@ -187,7 +188,7 @@ void ZeroSet::build(const CollisionScene& scene, const IndexList& zero_rows, dou
   }
   rows = zero_rows;
   marked.assign(zero_rows.size(), 0);
-  tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
+  tree = std::make_unique<KdTree>(positions, tree_params());
 }
 
 double ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
@@ -206,7 +207,7 @@ double ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
     radii[k] = scene.radii[r];
   }
   // A new tree: the old one may be shared by clones (history images) that keep the old positions.
-  if (!moved.empty()) tree = std::make_shared<const KdTree>(positions, nearest_tree_params(knn_eps));
+  if (!moved.empty()) tree = std::make_shared<const KdTree>(positions, tree_params());
   return reach;
 }
 
@@ -256,7 +257,7 @@ void ZeroSet::on_removed(const std::vector<bool>& keep, const IndexList& new_row
   compact(rows, keep_zero);
   for (Index& r : rows) r = new_row[r];
   if (rows.empty()) throw Error(ErrorCode::Internal, "regions", "every zero surfel was removed");
-  tree = std::make_unique<KdTree>(positions, nearest_tree_params(knn_eps));
+  tree = std::make_unique<KdTree>(positions, tree_params());
 }
 
 std::size_t ZeroSet::memory_bytes() const {

@@ -77,10 +77,21 @@ struct ZeroSet {
   IndexList rows;                    // #Z: row in the model
   std::shared_ptr<const KdTree> tree;  // over `positions`; immutable once built, shared by copies
   double knn_eps = 0.0;              // approximate search of `tree` (CollisionParams::knn_eps)
+  bool cells = false;                // `tree` keeps cells (KdTree::nearest_from) when knn_eps == 0 (Temporal)
 
-  // Copies the zero rows of `scene` and builds the tree (approximate search `eps`). Throws
-  // InvalidArgument when there are none.
-  void build(const CollisionScene& scene, const IndexList& zero_rows, double eps);
+  // Copies the zero rows of `scene` and builds the tree (approximate search `eps`; with cells when
+  // `with_cells` and eps == 0). Throws InvalidArgument when there are none.
+  void build(const CollisionScene& scene, const IndexList& zero_rows, double eps, bool with_cells = false);
+  // Leaves of a tree with cells: 48 points measured 1.23x faster than the default 10 on Temporal's exact detect
+  // (piercing scene; 24: 0.89x, 96: 0.98x against 48), with a fifth of the nodes (RESULTS §63).
+  static constexpr int kCellsLeafSize = 48;
+  // The parameters `tree` is built with (eps; cells and kCellsLeafSize when `cells` and exact).
+  KdTreeParams tree_params() const {
+    KdTreeParams p = nearest_tree_params(knn_eps);
+    p.cells = cells && knn_eps == 0.0;
+    if (p.cells) p.leaf_size = kCellsLeafSize;
+    return p;
+  }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.
@@ -91,6 +102,9 @@ struct ZeroSet {
   double move_rows(const CollisionScene& scene, const IndexList& moved);
   // Index (into the copies) of the zero surfel nearest to p; -1 when there is none.
   Index nearest(const Vec3& p) const { return tree->nearest(p); }
+  // The same, the search starting from `leaf` (the last winner's; updated) when the tree has cells; with
+  // knn_eps > 0 the approximate nearest(p), `leaf` unchanged (KdTree::nearest_from).
+  Index nearest_from(const Vec3& p, std::uint32_t& leaf) const { return tree->nearest_from(p, leaf); }
   // Drops removed rows (marks of the survivors are kept) and renumbers rows; rebuilds the tree
   // when a zero surfel went away.
   void on_removed(const std::vector<bool>& keep, const IndexList& new_row);

@@ -10,7 +10,7 @@ namespace surfeledit::detail {
 void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
                           int threads) {
   ZeroSet zero;
-  zero.build(scene, zero_rows, params_.knn_eps);
+  zero.build(scene, zero_rows, params_.knn_eps, zero_cells_);
   if (params_.boundary) zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads);
   zero_ = std::move(zero);
 }

@@ -118,8 +118,10 @@ void put_zero_set(SnapshotWriter& out, const ZeroSet& z) {
   out.f64(z.knn_eps);
 }
 
-ZeroSet get_zero_set(SnapshotReader& in, Index rows) {
+// `cells`: the kernel's choice (ZeroSet::cells), not stored.
+ZeroSet get_zero_set(SnapshotReader& in, Index rows, bool cells) {
   ZeroSet z;
+  z.cells = cells;
   z.positions = in.mat<Points>("zero positions");
   z.normals = in.mat<Points>("zero normals");
   z.radii = in.mat<Values>("zero radii");
@@ -134,7 +136,7 @@ ZeroSet get_zero_set(SnapshotReader& in, Index rows) {
   check_rows(in, z.rows, rows, "zero rows");
   if (!(z.knn_eps >= 0.0) || !std::isfinite(z.knn_eps)) in.fail("zero knn_eps", "out of range");
   try {
-    z.tree = std::make_shared<const KdTree>(z.positions, nearest_tree_params(z.knn_eps));
+    z.tree = std::make_shared<const KdTree>(z.positions, z.tree_params());
   } catch (const Error& e) {
     in.fail("zero positions", e.what());
   }
@@ -145,7 +147,7 @@ ZeroSet get_zero_set(SnapshotReader& in, Index rows) {
 
 void ZeroSetKernel::save(SnapshotWriter& out) const { put_zero_set(out, zero_); }
 
-void ZeroSetKernel::load(SnapshotReader& in, Index rows) { zero_ = get_zero_set(in, rows); }
+void ZeroSetKernel::load(SnapshotReader& in, Index rows) { zero_ = get_zero_set(in, rows, zero_cells_); }
 
 void RobustKernel::save(SnapshotWriter& out) const {
   out.u64(static_cast<std::uint64_t>(original_rows()));

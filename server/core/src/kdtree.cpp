@@ -1,6 +1,7 @@
 // k-d tree over 3-D points (docs/algorithms.md §3): API, input checks and batches. The build (Morton sort,
-// midpoint cuts, leaf order) is in kdtree_build.cpp, the exact descent in kdtree_search.hpp; batches on
-// large trees are answered along a Morton curve, each query warm-started from the previous answer.
+// midpoint cuts, leaf order) is in kdtree_build.cpp, the exact descent in kdtree_search.hpp, the search from
+// a leaf in kdtree_walk.hpp; batches on large trees are answered along a Morton curve, each query warm-started
+// from the previous answer.
 #include "surfeledit/core/kdtree.hpp"
 
 #include <omp.h>
@@ -11,7 +12,7 @@
 #include <sstream>
 #include <utility>
 
-#include "kdtree_search.hpp"
+#include "kdtree_walk.hpp"
 #include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
@@ -51,7 +52,7 @@ double checked_radius2(double radius) {
 }
 
 const kd::SearchFns* search_for(KdScan scan) {
-  static const kd::SearchFns scalar = kd::search_fns<kd::ScalarScan>();
+  static const kd::SearchFns scalar = kd::search_fns<kd::ScalarScan, kd::ScalarWalk>();
   const bool avx2 = kd_scan_available(KdScan::Avx2);
   switch (scan) {
     case KdScan::Auto:

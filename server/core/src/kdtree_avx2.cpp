@@ -1,10 +1,11 @@
-// The k-d tree's leaf scans four points at a time (AVX2; kdtree_search.hpp). This file alone is built with
+// The k-d tree's leaf scans four points at a time and the walk's box tests on three axes at once (AVX2;
+// kdtree_search.hpp, kdtree_walk.hpp). This file alone is built with
 // -mavx2 and without fused multiply-adds, so every lane computes dx * dx + dy * dy + dz * dz exactly as the
 // scalar scan does and the winners are bit-identical; KdTree uses it only on a CPU that has AVX2
 // (kd_scan_available). The scan type has internal linkage, so the descent instantiated here (Descent<Avx2Scan,
 // .>) is this file's own; the shared helpers it inlines (the sets' add / worst) are forced inline, so no AVX
 // copy of them can stand in for the baseline's at link time.
-#include "kdtree_search.hpp"
+#include "kdtree_walk.hpp"
 
 #if defined(__AVX2__) && !defined(__FMA__)
 #include <immintrin.h>
@@ -85,10 +86,43 @@ struct Avx2Scan {
   }
 };
 
+// The walk's box tests (kdtree_walk.hpp's ScalarWalk) on the three axes at once: the same subtractions, min /
+// max, products and (scalar, x + y + z) sum per axis, so the same bits. A cell's six floats are read as lanes
+// (lo0, lo1, lo2, hi0) and (hi0, hi1, hi2, lo2) from two 16-byte loads inside the cell (the second, from lo2,
+// rotated one lane), so lane 3 is a finite or infinite box coordinate, never the parent word (which, read as a
+// float, is a denormal that could cost a microcode assist); q's lane 3 is 0 and lane 3's results are ignored.
+class Avx2Walk {
+ public:
+  Avx2Walk(const double* q, const double* box)
+      : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)) {}
+  bool holds(const Cell& c, double best) const {
+    __m256d lo, hi;
+    load(c, lo, hi);
+    const __m256d g = _mm256_min_pd(_mm256_sub_pd(q_, lo), _mm256_sub_pd(hi, q_));
+    const __m256d in = _mm256_and_pd(_mm256_cmp_pd(g, _mm256_setzero_pd(), _CMP_GT_OQ),
+                                     _mm256_cmp_pd(_mm256_mul_pd(g, g), _mm256_set1_pd(best), _CMP_GT_OQ));
+    return (_mm256_movemask_pd(in) & 7) == 7;
+  }
+  double bound(const Cell& c, double* off) const {
+    __m256d lo, hi;
+    load(c, lo, hi);
+    const __m256d g = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(lo, q_), _mm256_sub_pd(q_, hi)), _mm256_setzero_pd());
+    _mm256_store_pd(off, _mm256_max_pd(_mm256_mul_pd(g, g), box_));
+    return off[0] + off[1] + off[2];
+  }
+
+ private:
+  static void load(const Cell& c, __m256d& lo, __m256d& hi) {
+    lo = _mm256_cvtps_pd(_mm_loadu_ps(c.lo));
+    hi = _mm256_cvtps_pd(_mm_permute_ps(_mm_loadu_ps(c.lo + 2), _MM_SHUFFLE(0, 3, 2, 1)));
+  }
+  __m256d q_, box_;
+};
+
 }  // namespace
 
 const SearchFns* avx2_search() {
-  static const SearchFns fns = search_fns<Avx2Scan>();
+  static const SearchFns fns = search_fns<Avx2Scan, Avx2Walk>();
   return &fns;
 }
 #else

@@ -88,9 +88,10 @@ struct RadiusSet {
   void push(std::uint32_t s, double d2);
 };
 
-// A node's cell for the search that starts from a leaf (nearest_from below; only in trees built with cells): a
-// box holding every point of the node, and its parent. An inner node's box is the one its ancestors' cuts bound
-// it to (the near side of each cut; +-inf where no cut bounds it); a leaf's is also clipped to its points' box.
+// A node's cell for the search that starts from a leaf (nearest_from, kdtree_walk.hpp; only in trees built with
+// cells): a box holding every point of the node, and its parent. An inner node's box is the one its ancestors'
+// cuts bound it to (the near side of each cut; +-inf where no cut bounds it); a leaf's is also clipped to its
+// points' box.
 struct Cell {
   float lo[3], hi[3];    // box, local frame
   std::uint32_t parent;  // parent node (the root: itself) | kNoStop
@@ -253,86 +254,6 @@ class Descent {
   std::uint32_t won_ = NearestSet::kNone;
   Far stack_[kMaxDepth];
 };
-
-// The exact nearest search that starts from a leaf (a tree with cells): `leaf` (any value; one that is not a
-// leaf's node index starts at the root) is scanned first, then the walk goes up through its ancestors: at each,
-// the other child's subtree is searched (the descent above) when its cell, clipped to the tree's box, is within
-// the best distance (inclusive), and the walk stops at the first node N whose box holds the ball strictly.
-// Exactness, ties included: every point outside the leaf lies in the other child of exactly one node on the
-// walk's path, and that subtree is either searched (the descent feeds the set every point whose dist2 is <= the
-// best, which only shrinks) or skipped because its lower bound exceeds the best then (hence also every later
-// best); the points outside N lie beyond one of N's faces f on some axis (each face is the near-side cut of an
-// ancestor, and without kNoStop that cut is at or below / above the far side's), so for such a point P,
-// |q - P| >= |f - q| per axis; rounding is monotonic, so its computed dist2 >= fl(g * g) for the smallest face
-// gap g, and g * g > best means P cannot beat or tie the winner. NearestSet keeps the (dist2, slot)-smallest of
-// what it is fed, whatever the order, so the answer is the root descent's bit for bit. `leaf` gets the winner's
-// leaf (unchanged when there is no winner).
-template <class Scan>
-void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t& leaf) {
-  using D = Descent<Scan, NearestSet>;
-  D descent(t, q, set, 1.0);
-  if (t.cells.empty() || leaf >= t.nodes.size() || !t.nodes[leaf].leaf()) {
-    descent.run();
-    if (descent.won() != NearestSet::kNone) leaf = descent.won();
-    return;
-  }
-  double box[3];
-  D::box_offsets(t, q, box);
-  std::uint32_t won = NearestSet::kNone;
-  std::uint32_t n = leaf;
-  const Node& start = t.nodes[n];
-  if (start.a != start.b) {
-    Scan::nearest(t, q, start.a, start.b, set);
-    won = n;
-  }
-  while (n != 0) {
-    const Cell& c = t.cells[n];
-    if (!(c.parent & Cell::kNoStop)) {
-      double gap = std::numeric_limits<double>::infinity();
-      for (int d = 0; d < 3; ++d)
-        gap = std::min(gap, std::min(q[d] - static_cast<double>(c.lo[d]), static_cast<double>(c.hi[d]) - q[d]));
-      if (gap > 0.0 && gap * gap > set.best) break;
-    }
-    const std::uint32_t p = c.parent & ~Cell::kNoStop;
-    const std::uint32_t s = n == p + 1 ? t.nodes[p].a : p + 1;
-    const Cell& sc = t.cells[s];
-    double off[3];
-    for (int d = 0; d < 3; ++d) {
-      const double below = static_cast<double>(sc.lo[d]) - q[d], above = q[d] - static_cast<double>(sc.hi[d]);
-      const double g = std::max(std::max(below, above), 0.0);
-      off[d] = std::max(g * g, box[d]);
-    }
-    if (off[0] + off[1] + off[2] <= set.best) {
-      descent.run_from(s, off);
-      if (descent.won() != NearestSet::kNone) won = descent.won();
-    }
-    n = p;
-  }
-  if (set.slot != NearestSet::kNone) leaf = won;
-}
-
-// One search entry per set type, for one leaf scan; a tree's owner picks the table once (kdtree.cpp).
-struct SearchFns {
-  void (*nearest)(const Tree&, const double* q, NearestSet&, double eps_factor);
-  void (*knn)(const Tree&, const double* q, KnnSet&, double eps_factor);
-  void (*radius)(const Tree&, const double* q, RadiusSet&, double eps_factor);
-  void (*nearest_from)(const Tree&, const double* q, NearestSet&, std::uint32_t& leaf);  // exact only
-};
-
-template <class Scan, class Set>
-void search_with(const Tree& t, const double* q, Set& set, double eps_factor) {
-  Descent<Scan, Set>(t, q, set, eps_factor).run();
-}
-
-template <class Scan>
-constexpr SearchFns search_fns() {
-  return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>,
-          &nearest_from<Scan>};
-}
-
-// The AVX2 leaf scans' table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then never
-// chosen). The caller checks the CPU (__builtin_cpu_supports).
-const SearchFns* avx2_search();
 
 // Spreads the low 10 bits of v to every third bit (Morton interleave: x, y, z codes -> one 30-bit code).
 inline std::uint32_t spread10(std::uint32_t v) {

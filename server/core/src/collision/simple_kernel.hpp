@@ -37,6 +37,7 @@ class ZeroSetKernel {
 
   CollisionParams params_;
   ZeroSet zero_;
+  bool zero_cells_ = false;  // build zero_'s tree with cells when exact (ZeroSet::cells; Temporal)
 };
 
 class SimpleKernel : public ZeroSetKernel {

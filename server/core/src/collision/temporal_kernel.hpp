@@ -23,14 +23,18 @@ class TemporalKernel : public ZeroSetKernel {
     double depth = 0.0;     // depth estimate of the last evaluation (model units)
     std::uint8_t hit = 0;   // colliding (1: by the test, 2: only by the swept test this step)
     std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
-    std::uint8_t pad[6] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint8_t pad[2] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint32_t leaf = 0;      // the zero tree's leaf that held the last nearest: where the next query starts
+                                 // (KdTree::nearest_from; exact queries only; a stale one costs time, not exactness)
     bool colliding() const { return hit != 0; }
   };
   static_assert(sizeof(State) == 48, "State has padding bytes");
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
 
-  using ZeroSetKernel::ZeroSetKernel;
+  // The zero tree keeps cells when the queries are exact (knn_eps == 0): each point's query starts at its last
+  // winner's leaf (State::leaf; 28 B per tree node, RESULTS §63).
+  explicit TemporalKernel(const CollisionParams& params) : ZeroSetKernel(params) { zero_cells_ = true; }
 
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads) {
     ZeroSetKernel::reset(scene, deformable, zero_rows, threads);
@@ -63,7 +67,7 @@ class TemporalKernel : public ZeroSetKernel {
       return 0;
     }
     if (inside_) return update_inside(s, pt);
-    const Index k = zero_.nearest(pt.p);
+    const Index k = zero_.nearest_from(pt.p, s.leaf);
     const SimpleTest t = test(k, pt, s.colliding(), !s.unbounded);
     s.unbounded = 0;
     s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};

@@ -71,8 +71,8 @@ class KdTree {
   Index nearest_within(const Vec3& q, double max_dist2, double* dist2 = nullptr) const;
   // nearest(q), searched from a leaf up (for a caller whose queries move little between calls): `leaf` is a leaf
   // to start from, in (any value: a stale, wrong or unset one costs time, never exactness; pass the value a
-  // previous call left), and the leaf holding the answer, out (unchanged when there is none). The same row and
-  // dist2 as nearest(q), ties included. A tree without `cells` answers by the root descent (and still sets
+  // previous call left; one that is not a leaf starts at the leaf the descent reaches first), and the leaf
+  // holding the answer, out (unchanged when there is none). The same row and dist2 as nearest(q), ties included. A tree without `cells` answers by the root descent (and still sets
   // `leaf`); one with eps > 0 answers nearest(q) and leaves `leaf` as it was.
   Index nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2 = nullptr) const;
   // k nearest to q (fewer if the tree holds fewer), ascending by distance.
