@@ -1,0 +1,75 @@
+// Brute-force truth for the k-d tree tests: seeded clouds, sorted squared distances, and the checks of a kNN or
+// radius answer against them.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "random_data.hpp"
+#include "surfeledit/core/kdtree.hpp"
+
+namespace surfeledit::test {
+
+// #n by 3 points uniform in offset + scale * [-1, 1]^3.
+inline Points random_cloud(int n, std::uint64_t seed, double scale = 1.0, const Vec3& offset = Vec3::Zero()) {
+  return uniform_cloud(n, seed, scale, offset);
+}
+
+// Squared distances (model units^2) from q to every row of `points` listed in `rows` (all rows when empty).
+inline std::vector<double> brute_dist2(const Points& points, const Vec3& q, const IndexList& rows = {}) {
+  std::vector<double> d;
+  if (rows.empty()) {
+    for (Eigen::Index i = 0; i < points.rows(); ++i) d.push_back((points.row(i).transpose() - q).squaredNorm());
+  } else {
+    for (Index i : rows) d.push_back((points.row(i).transpose() - q).squaredNorm());
+  }
+  std::sort(d.begin(), d.end());
+  return d;
+}
+
+// Checks a kNN answer: ascending, the distances equal the k smallest brute-force ones (as a multiset,
+// so ties may pick any index), and every returned dist2 is the true distance of the returned row.
+inline void expect_knn_matches(const Points& points, const Vec3& q, int k, const IndexList& idx,
+                        const std::vector<double>& d2, const IndexList& rows = {}) {
+  const std::vector<double> truth = brute_dist2(points, q, rows);
+  const std::size_t expect = std::min<std::size_t>(static_cast<std::size_t>(k), truth.size());
+  ASSERT_EQ(idx.size(), expect);
+  ASSERT_EQ(d2.size(), expect);
+  for (std::size_t j = 0; j < expect; ++j) {
+    const double tol = 1e-12 * (1.0 + truth[j]);
+    EXPECT_NEAR(d2[j], truth[j], tol) << "rank " << j;
+    ASSERT_GE(idx[j], 0);
+    ASSERT_LT(idx[j], points.rows());
+    EXPECT_NEAR((points.row(idx[j]).transpose() - q).squaredNorm(), d2[j], tol);
+    if (j > 0) {
+      EXPECT_LE(d2[j - 1], d2[j]);
+    }
+    if (!rows.empty()) {
+      EXPECT_NE(std::find(rows.begin(), rows.end(), idx[j]), rows.end());
+    }
+  }
+  // no duplicate rows
+  IndexList sorted = idx;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
+}
+
+inline void expect_radius_matches(const Points& points, const Vec3& q, double r, const IndexList& idx,
+                           const std::vector<double>& d2, const IndexList& rows = {}) {
+  std::vector<double> truth;
+  for (double d : brute_dist2(points, q, rows)) {
+    if (d <= r * r) truth.push_back(d);
+  }
+  ASSERT_EQ(idx.size(), truth.size()) << "radius " << r;
+  for (std::size_t j = 0; j < truth.size(); ++j) {
+    EXPECT_NEAR(d2[j], truth[j], 1e-12 * (1.0 + truth[j]));
+    EXPECT_NEAR((points.row(idx[j]).transpose() - q).squaredNorm(), d2[j], 1e-12 * (1.0 + truth[j]));
+    if (j > 0) {
+      EXPECT_LE(d2[j - 1], d2[j]);
+    }
+  }
+}
+
+}  // namespace surfeledit::test
