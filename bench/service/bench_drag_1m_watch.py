@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The ~1M-surfel drag through a real server with a watcher attached (issue 14: "whole step (deform + detect +
-update written)"): piercing at scale 4.8, Temporal, knn_eps 2 (the GUI setting of bench/core/bench_drag_1m.py),
+update written)"): piercing at scale 4.8, Temporal with exact queries (the GUI setting of bench/core/bench_drag_1m.py),
 the server with `--threads 2`, one client deforming and one watcher of the session (full encoding) in this
 process. Per step (milliseconds, client side, time.perf_counter):
 
@@ -44,7 +44,7 @@ def run(exe: str, sc: S.Scenario, watch: bool) -> Dict[str, List[float]]:
         client = connect_when_up(domain)
         backend = S.RemoteBackend(client, "drag1m")
         backend.start(sc.scene)
-        backend.configure(algorithm="temporal", threads=2, knn_eps=2.0)
+        backend.configure(algorithm="temporal", threads=2, knn_eps=0.0)
         params = sc.step_params()
         watcher = backend.session.watch() if watch else None
         try:
