@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "inside_model.hpp"
 #include "kernel.hpp"
@@ -150,9 +151,11 @@ class RobustKernel {
   // `before` (the model before the move), when given.
   Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
                          const RigidRows* before = nullptr) const;
-  // The inside state of a point at p against the original model (its tree, bound model).
+  // The inside state of a point at p against the original model (its tree, bound model). Searched from the leaf
+  // the tree's descent reaches first (no leaf given: a cold KdTree::nearest_from, the same answer as nearest()).
   bool inside_original(const Vec3& p) const {
-    const Ref k = ref(orig_.tree->nearest(p));
+    std::uint32_t leaf = std::numeric_limits<std::uint32_t>::max();
+    const Ref k = ref(orig_.tree->nearest_from(p, leaf));
     return (p - k.p).dot(k.n) < params_.threshold;
   }
 
