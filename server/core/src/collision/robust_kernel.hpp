@@ -136,14 +136,15 @@ class RobustKernel {
     bool zero;      // a zero surfel (a change of inside state against it counts)
   };
   // Original row o: from the copy (deformable) or from the bound model (zero).
+  // The copy or the model picked by a select, not a branch: which one holds a search's winner varies from test to
+  // test (the piercing scene: plate or ball), so a branch on it mispredicts (RESULTS §64).
   Ref ref(Index o) const {
-    if (orig_.deformable.test(o)) {
-      const Index d = orig_.deformable.rank(o);
-      return {row3(orig_.positions, d), row3(orig_.normals, d), orig_.radii[d], false};
-    }
-    const double* p = model_positions_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
-    const double* n = model_normals_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
-    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), model_radii_[row_of(o)], true};
+    const bool deformable = orig_.deformable.test(o);
+    const std::ptrdiff_t d = orig_.deformable.rank(o), m = row_of(o);  // either is valid for any original row
+    const double* p = deformable ? orig_.positions.data() + 3 * d : model_positions_ + 3 * m;
+    const double* n = deformable ? orig_.normals.data() + 3 * d : model_normals_ + 3 * m;
+    const double* r = deformable ? orig_.radii.data() + d : model_radii_ + m;
+    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), *r, !deformable};
   }
   bool alive(Index o) const { return orig_.alive.empty() || orig_.alive[static_cast<std::size_t>(o)] != 0; }
   Index original_rows() const { return orig_.deformable.rows(); }
@@ -210,13 +211,13 @@ class RobustKernel {
     r_near = k.radius;
     s.sphere = {p1, sphere_rho2(d.squaredNorm(), k.radius, params_.sphere_margin)};
     const bool inside_now = d.dot(k.n) < w;
-    if (k.zero) {
-      if (s.flags & kFirstUpdate) {
-        ++made;
-        set_inside(s, inside_original(s.old_position));
-      }
-      if (inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    if (k.zero & ((s.flags & kFirstUpdate) != 0)) {
+      ++made;
+      set_inside(s, inside_original(s.old_position));
     }
+    // Against a zero surfel a change of inside state flips the parity (a select: k.zero varies, see ref()).
+    const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
+    s.flags ^= static_cast<std::uint8_t>(flip ? kColliding : 0);
     s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
     set_inside(s, inside_now);
     return made;
