@@ -136,14 +136,13 @@ class RobustKernel {
     bool zero;      // a zero surfel (a change of inside state against it counts)
   };
   // Original row o: from the copy (deformable) or from the bound model (zero).
-  // The copy or the model picked by a select, not a branch: which one holds a search's winner varies from test to
-  // test (the piercing scene: plate or ball), so a branch on it mispredicts (RESULTS §64).
   Ref ref(Index o) const {
     const bool deformable = orig_.deformable.test(o);
-    const std::ptrdiff_t d = orig_.deformable.rank(o), m = row_of(o);  // either is valid for any original row
-    const double* p = deformable ? orig_.positions.data() + 3 * d : model_positions_ + 3 * m;
-    const double* n = deformable ? orig_.normals.data() + 3 * d : model_normals_ + 3 * m;
-    const double* r = deformable ? orig_.radii.data() + d : model_radii_ + m;
+    // Its index in the copy or its model row (row_of(o) may be -1 for a removed deformable row: not picked then).
+    const std::ptrdiff_t i = deformable ? orig_.deformable.rank(o) : row_of(o);
+    const double* p = (deformable ? orig_.positions.data() : model_positions_) + 3 * i;
+    const double* n = (deformable ? orig_.normals.data() : model_normals_) + 3 * i;
+    const double* r = (deformable ? orig_.radii.data() : model_radii_) + i;
     return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), *r, !deformable};
   }
   bool alive(Index o) const { return orig_.alive.empty() || orig_.alive[static_cast<std::size_t>(o)] != 0; }
@@ -215,7 +214,7 @@ class RobustKernel {
       ++made;
       set_inside(s, inside_original(s.old_position));
     }
-    // Against a zero surfel a change of inside state flips the parity (a select: k.zero varies, see ref()).
+    // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero).
     const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
     s.flags ^= static_cast<std::uint8_t>(flip ? kColliding : 0);
     s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
