@@ -2,8 +2,12 @@
 // point's last free position only when the nearest original surfel to its new position is a zero surfel
 // (robust_kernel.hpp, RESULTS §50). Two hand-built scenes, each against the brute-force oracle: one where
 // that query is provably useless (nearest: a deformable surfel) and is skipped, and one where it decides the
-// result (nearest: a zero surfel, the old inside state differs from the default) and must be made.
+// result (nearest: a zero surfel, the old inside state differs from the default) and must be made; and a random
+// scene whose old-position queries (searched from the leaf the tree's descent reaches first, not from the root)
+// land in many leaves.
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "collision_oracle.hpp"
 #include "collision_scripts.hpp"
@@ -13,10 +17,9 @@ namespace {
 
 using namespace testing;
 
-// A rigid plane z = 0 (normals +z, spacing 0.1, radii 0.05, 21 x 21 surfels) and the deformable rows `at`.
-TestScene plane_and(const std::vector<Vec3>& at) {
+// A rigid plane z = 0 (normals +z, `spacing` apart, radii 0.05, side x side surfels) and the deformable rows `at`.
+TestScene plane_and(const std::vector<Vec3>& at, int side = 21, double spacing = 0.1) {
   TestScene s;
-  const int side = 21;
   const Index n = side * side + static_cast<Index>(at.size());
   s.positions.resize(n, 3);
   s.normals.resize(n, 3);
@@ -24,7 +27,7 @@ TestScene plane_and(const std::vector<Vec3>& at) {
   Index r = 0;
   for (int i = 0; i < side; ++i) {
     for (int j = 0; j < side; ++j, ++r) {
-      s.positions.row(r) << 0.1 * (i - side / 2), 0.1 * (j - side / 2), 0.0;
+      s.positions.row(r) << spacing * (i - side / 2), spacing * (j - side / 2), 0.0;
       s.normals.row(r) << 0.0, 0.0, 1.0;
       s.radii[r] = 0.05;
       s.regions.push_back(Region::Zero);
@@ -101,6 +104,38 @@ TEST(CollisionRobustFirstUpdate, MadeWhenTheNearestIsZero) {
   const CollisionResult hit = step_both(above, d, Vec3(0.0, 0.0, -0.02), *det2, oracle2);
   EXPECT_EQ(hit.stats.queries, 2);
   EXPECT_EQ(hit.colliding, IndexList{d});
+}
+
+// A 41 x 41 plane (the original tree has ~35 leaves of <= 48 points) and 300 deformable points scattered within
+// 0.3 of it, all with random normals, each moved every step by up to 0.4 per axis (fixed seed): the first tests
+// after the reset re-derive the inside states at the reset positions, far from the points' new leaves, and every
+// step must agree with the brute-force oracle (colliding rows, depths bit for bit).
+TEST(CollisionRobustFirstUpdate, OldPositionsSearchedFromTheirNearPathLeafMatchTheOracle) {
+  std::mt19937 rng(14);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3> at;
+  for (int i = 0; i < 300; ++i) at.emplace_back(1.0 * u(rng), 1.0 * u(rng), 0.3 * u(rng));
+  TestScene scene = plane_and(at, 41, 0.05);
+  // Random unit normals: an inside state then depends on which surfel is the nearest, not only on the side.
+  for (Index k = 0; k < scene.rows(); ++k) scene.normals.row(k) = Vec3(u(rng), u(rng), u(rng)).normalized().transpose();
+  const CollisionParams p = params_of(CollisionAlgorithm::Robust);
+  auto det = CollisionDetector::create(p);
+  det->reset(scene.view());
+  Oracle oracle(p);
+  oracle.reset(scene);
+  const Index first = scene.rows() - static_cast<Index>(at.size());
+  Index rederived = 0;
+  for (int step = 0; step < 6; ++step) {
+    const Points previous = scene.positions;
+    for (Index k = first; k < scene.rows(); ++k) scene.positions.row(k) += 0.4 * Vec3(u(rng), u(rng), u(rng)).transpose();
+    const CollisionResult got = det->detect(scene.view(), previous);
+    std::vector<double> depths;
+    const IndexList want = oracle.detect(scene, previous, &depths);
+    ASSERT_EQ(got.colliding, want) << "step " << step;
+    ASSERT_EQ(got.depths, depths) << "step " << step;
+    rederived += got.stats.queries - got.stats.tested;
+  }
+  EXPECT_GT(rederived, 50);  // old-position queries were made
 }
 
 }  // namespace

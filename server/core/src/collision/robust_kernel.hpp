@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "inside_model.hpp"
 #include "kernel.hpp"
@@ -136,13 +137,13 @@ class RobustKernel {
   };
   // Original row o: from the copy (deformable) or from the bound model (zero).
   Ref ref(Index o) const {
-    if (orig_.deformable.test(o)) {
-      const Index d = orig_.deformable.rank(o);
-      return {row3(orig_.positions, d), row3(orig_.normals, d), orig_.radii[d], false};
-    }
-    const double* p = model_positions_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
-    const double* n = model_normals_ + 3 * static_cast<std::ptrdiff_t>(row_of(o));
-    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), model_radii_[row_of(o)], true};
+    const bool deformable = orig_.deformable.test(o);
+    // Its index in the copy or its model row (row_of(o) may be -1 for a removed deformable row: not picked then).
+    const std::ptrdiff_t i = deformable ? orig_.deformable.rank(o) : row_of(o);
+    const double* p = (deformable ? orig_.positions.data() : model_positions_) + 3 * i;
+    const double* n = (deformable ? orig_.normals.data() : model_normals_) + 3 * i;
+    const double* r = (deformable ? orig_.radii.data() : model_radii_) + i;
+    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), *r, !deformable};
   }
   bool alive(Index o) const { return orig_.alive.empty() || orig_.alive[static_cast<std::size_t>(o)] != 0; }
   Index original_rows() const { return orig_.deformable.rows(); }
@@ -150,9 +151,11 @@ class RobustKernel {
   // `before` (the model before the move), when given.
   Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
                          const RigidRows* before = nullptr) const;
-  // The inside state of a point at p against the original model (its tree, bound model).
+  // The inside state of a point at p against the original model (its tree, bound model). Searched from the leaf
+  // the tree's descent reaches first (no leaf given: a cold KdTree::nearest_from, the same answer as nearest()).
   bool inside_original(const Vec3& p) const {
-    const Ref k = ref(orig_.tree->nearest(p));
+    std::uint32_t leaf = std::numeric_limits<std::uint32_t>::max();
+    const Ref k = ref(orig_.tree->nearest_from(p, leaf));
     return (p - k.p).dot(k.n) < params_.threshold;
   }
 
@@ -207,13 +210,13 @@ class RobustKernel {
     r_near = k.radius;
     s.sphere = {p1, sphere_rho2(d.squaredNorm(), k.radius, params_.sphere_margin)};
     const bool inside_now = d.dot(k.n) < w;
-    if (k.zero) {
-      if (s.flags & kFirstUpdate) {
-        ++made;
-        set_inside(s, inside_original(s.old_position));
-      }
-      if (inside_now != static_cast<bool>(s.flags & kInside)) s.flags ^= kColliding;
+    if (k.zero & ((s.flags & kFirstUpdate) != 0)) {
+      ++made;
+      set_inside(s, inside_original(s.old_position));
     }
+    // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero).
+    const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
+    s.flags ^= static_cast<std::uint8_t>(flip ? kColliding : 0);
     s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
     set_inside(s, inside_now);
     return made;
