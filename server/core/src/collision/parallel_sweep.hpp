@@ -1,0 +1,116 @@
+// The row detector's sweep over independent points (row_detector.hpp): serial or in OpenMP chunks, by the
+// previous step's estimated work; results do not depend on either.
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+#include "kernel_rows.hpp"
+#include "row_journal.hpp"
+
+namespace surfeledit::detail {
+
+// Nearest-neighbour queries and points tested in one step.
+struct Tally {
+  Index tested = 0;   // points whose state was (re)evaluated (queries > 0)
+  Index queries = 0;  // nearest-neighbour queries made
+};
+
+// The points of a step are independent: each row goes through update() (not_candidate() when the
+// broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
+// large enough to pay for waking the other threads, else serially. Results do not depend on either.
+// Every sweep also fills hit[q] (#rows): 1 when rows[q] collides after the step.
+//
+// The work is not known before the step, so the previous step's stands for it (steps of one drag are
+// alike): `rows` x kRowNs + its nearest-neighbour queries x kQueryNs, from one-thread profiles of the
+// Robust step (RESULTS §23: ~5 ns a row that stays in its sphere, ~0.37 us a query). Below kParallelNs a
+// step runs on one thread: a parallel region costs little on an idle machine, but on a busy one a worker
+// that is not running waits for the scheduler's next tick (steps of 0.3 ms took 4, 8 or 16 ms), which
+// only work of a millisecond or more can hide (RESULTS §35). The threshold is the setting parallel_min_ms.
+struct ParallelSweep {
+  static constexpr double kRowNs = 5.0;      // per row of the sweep (estimate, one thread)
+  static constexpr double kQueryNs = 400.0;  // per nearest-neighbour query (estimate, one thread)
+  double min_ns = 1.0e6;                     // the least estimated work run on several threads (parallel_min_ms)
+  Index last_queries = 0;                    // queries of the previous sweep (0 after a reset)
+
+  ParallelSweep() = default;
+  explicit ParallelSweep(const CollisionParams& params) : min_ns(params.parallel_min_ms * 1.0e6) {}
+  void reset() { last_queries = 0; }
+  // Whether a sweep over `n` rows runs on several threads, from the previous sweep's queries.
+  bool parallel(Index n, int threads) const {
+    return threads > 1 && static_cast<double>(n) * kRowNs + static_cast<double>(last_queries) * kQueryNs >= min_ns;
+  }
+
+  // `journal` (may be null): notes each row's state before its update. `by_slot`: `rows` are exactly the
+  // rows with a state, in order (the deformable list), so rows[q]'s state is the q-th stored one and the
+  // sweep walks the states in storage order without the row -> slot map (RESULTS §39).
+  template <typename Kernel>
+  Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
+            const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
+            int threads, std::vector<std::uint8_t>& hit, bool by_slot,
+            Journal<typename Kernel::State>* journal = nullptr) {
+    const Index n = static_cast<Index>(rows.size());
+    if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
+    // One loop per combination of the three options, each compiled without their branches.
+    auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
+      auto range = [&](Index begin, Index end, std::size_t part, Index& tested, Index& queries) {
+        rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
+            kernel, rows, states, scene, previous, candidate, hit, journal, part, begin, end, tested, queries);
+      };
+      Index tested = 0, queries = 0;
+      if (!parallel(n, threads)) {
+        const std::size_t part = journal ? journal->begin_sweep(1) : 0;
+        range(0, n, part, tested, queries);
+      } else {
+        const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
+        const std::size_t base = journal ? journal->begin_sweep(static_cast<std::size_t>(chunks)) : 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
+        for (Index c = 0; c < chunks; ++c)
+          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), tested, queries);
+      }
+      return Tally{tested, queries};
+    };
+    auto with_candidate = [&](auto by_slot_c, auto journal_c) {
+      return candidate ? pick(by_slot_c, journal_c, std::true_type{}) : pick(by_slot_c, journal_c, std::false_type{});
+    };
+    auto with_journal = [&](auto by_slot_c) {
+      return journal ? with_candidate(by_slot_c, std::true_type{}) : with_candidate(by_slot_c, std::false_type{});
+    };
+    const Tally tally = by_slot ? with_journal(std::true_type{}) : with_journal(std::false_type{});
+    last_queries = tally.queries;
+    return tally;
+  }
+
+ private:
+  // Rows rows[begin..end) of a sweep (run()), the options fixed at compile time.
+  template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
+  static void rows_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
+                         const CollisionScene& scene, const Points& previous,
+                         const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
+                         Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
+                         Index& tested, Index& queries) {
+    typename Kernel::State* const stored = states.stored_data();
+    Index t = 0, m_sum = 0;
+    for (Index q = begin; q < end; ++q) {
+      const Index r = rows[q];
+      const TestPoint pt = row_point(scene, previous, r);
+      auto& s = kBySlot ? stored[q] : states[r];
+      typename Kernel::State before;
+      if constexpr (kJournal) before = s;
+      Index made;
+      if (kCandidate && !(*candidate)[r]) {
+        made = kernel.not_candidate(s, pt);
+      } else {
+        made = kernel.update(s, pt);
+      }
+      if constexpr (kJournal) journal->note(r, before, s, made, part);
+      hit[q] = s.colliding();  // read while the state is in cache
+      m_sum += made;
+      t += made > 0;
+    }
+    tested += t;
+    queries += m_sum;
+  }
+};
+
+}  // namespace surfeledit::detail
