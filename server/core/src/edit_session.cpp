@@ -214,7 +214,7 @@ SessionReport EditSession::report() const {
   for (const char* kind : {"rows", "tool", "whole"}) rep.history_kinds.push_back({kind, 0, 0});
   for (const HistoryEntry& e : history_.entries()) {
     for (auto& k : rep.history_kinds) {
-      if (k.kind != e.image.kind()) continue;
+      if (k.kind != e.image->kind()) continue;
       ++k.entries;
       k.bytes += e.bytes;
     }

@@ -1,6 +1,7 @@
 #include "surfeledit/core/history.hpp"
 
 #include <algorithm>
+#include <atomic>
 
 namespace surfeledit {
 
@@ -46,7 +47,7 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
   entry.stamp = entry.applied_at = entry.item.version;
   entries_.push_back(std::move(entry));
   HistoryEntry& e = entries_.back();
-  e.bytes = e.image.bytes();
+  e.bytes = e.image->bytes();
   recount();  // the dropped redo tail, and the new entry
   trim(limit_bytes);
 }
@@ -67,7 +68,7 @@ void History::trim(std::size_t limit_bytes) {
       continue;
     }
     bytes_ -= front.bytes;
-    count_object(front.image, -1);
+    count_object(*front.image, -1);
     keep_spare(front);
     entries_.pop_front();
   }
@@ -105,8 +106,50 @@ void History::set_undone(HistoryEntry& entry, bool undone, std::uint64_t stamp) 
 }
 
 void History::keep_spare(HistoryEntry& entry) {
-  if (entry.image.rows && spare_.size() < 2) spare_.push_back(std::move(*entry.image.rows));
+  std::shared_ptr<const SessionImage>& image = entry.image;
+  if (image && image->rows && spare_.size() < 2) {
+    if (image.use_count() == 1) {
+      // No snapshot view shares it (a view that did has let go: its reads happened before).
+      std::atomic_thread_fence(std::memory_order_acquire);
+      spare_.push_back(std::move(*std::const_pointer_cast<SessionImage>(image)->rows));
+    } else {
+      // A view still reads it: the spare is a copy, the same as the move would give (version runs with
+      // their capacity: the bound counts capacities).
+      const RowsImage& r = *image->rows;
+      RowsImage copy;
+      copy.rows = r.rows;
+      copy.bent = r.bent;
+      copy.positions = r.positions;
+      copy.normals = r.normals;
+      copy.tangent_u = r.tangent_u;
+      copy.tangent_v = r.tangent_v;
+      copy.version_runs.reserve(r.version_runs.capacity());
+      copy.version_runs.assign(r.version_runs.begin(), r.version_runs.end());
+      spare_.push_back(std::move(copy));
+    }
+  }
+  retire(image);
 }
+
+void History::retire(std::shared_ptr<const SessionImage>& image) {
+  if (image && image.use_count() > 1) {
+    // Shared with a snapshot view, which reads none of these (their table indices were taken at its point).
+    // The image was made non-const (make_shared<SessionImage>), so writing through the cast is defined.
+    SessionImage& im = *std::const_pointer_cast<SessionImage>(image);
+    if (im.rows) {
+      im.rows->rows.reset();
+      im.rows->bent.reset();
+    }
+    im.detector.reset();
+    im.detector_object.reset();
+    if (im.tool_only) im.tool_only->tool.detector.reset();
+    if (im.whole)
+      for (auto& [id, t] : im.whole->tools) t.detector.reset();
+  }
+  image.reset();
+}
+
+History::~History() { clear(); }
 
 RowsImage History::take_spare() {
   if (spare_.empty()) return RowsImage();
@@ -116,6 +159,7 @@ RowsImage History::take_spare() {
 }
 
 void History::clear() {
+  for (HistoryEntry& e : entries_) retire(e.image);
   entries_.clear();
   bytes_ = 0;
   refs_.clear();
@@ -129,6 +173,7 @@ std::vector<HistoryItem> History::items() const {
 }
 
 void History::restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare) {
+  for (HistoryEntry& e : entries_) retire(e.image);
   entries_ = std::move(entries);
   spare_ = std::move(spare);
   recount();
@@ -139,7 +184,7 @@ void History::recount() {
   refs_.clear();
   for (const HistoryEntry& e : entries_) {
     bytes_ += e.bytes;
-    count_object(e.image, +1);
+    count_object(*e.image, +1);
   }
 }
 
@@ -165,11 +210,12 @@ History::Held History::held_detectors() const {
 
 void History::replace_image(HistoryEntry& entry, SessionImage image) {
   bytes_ -= entry.bytes;
-  count_object(entry.image, -1);
-  entry.image = std::move(image);
-  entry.bytes = entry.image.bytes();
+  count_object(*entry.image, -1);
+  retire(entry.image);
+  entry.image = std::make_shared<SessionImage>(std::move(image));
+  entry.bytes = entry.image->bytes();
   bytes_ += entry.bytes;
-  count_object(entry.image, +1);
+  count_object(*entry.image, +1);
 }
 
 }  // namespace surfeledit

@@ -219,27 +219,27 @@ void EditSession::record(const char* op, const std::string& author, IdList touch
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   HistoryEntry e;
   e.item = {version_, op, author, std::move(touched), false};
-  e.image = std::move(before);
+  e.image = std::make_shared<SessionImage>(std::move(before));
   if (!e.item.touched.empty()) mark_others_stale(moved);
   history_.push(std::move(e), history_limit());
 }
 
 std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
-  if (!entry.image.complete) {
+  if (!entry.image->complete) {
     throw Error(ErrorCode::Conflict, "history",
                 std::string("cannot ") + what + " '" + entry.item.op +
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
-  use(entry.image.tool);
+  use(entry.image->tool);
   // The rows image of the other side keeps what this one keeps (the step changed no other normals).
-  SessionImage now = entry.image.rows        ? capture_rows(*entry.image.rows->rows, false, true, entry.image.rows->bent)
-                     : entry.image.tool_only ? capture_tool(entry.image.tool_only->tool.fields_kept)
+  SessionImage now = entry.image->rows        ? capture_rows(*entry.image->rows->rows, false, true, entry.image->rows->bent)
+                     : entry.image->tool_only ? capture_tool(entry.image->tool_only->tool.fields_kept)
                                              : capture_whole(false);
   const IdList ids_before = model_.ids();
-  if (entry.image.rows) hold_for_others(*entry.image.rows->rows);  // they move under the other tools' detectors
-  restore(entry.image, false);
+  if (entry.image->rows) hold_for_others(*entry.image->rows->rows);  // they move under the other tools' detectors
+  restore(*entry.image, false);
   // A step's rows moved under the other tools' detectors (a whole image puts every tool back as it was).
-  if (entry.image.rows) mark_others_stale(entry.image.rows->rows.get());
+  if (entry.image->rows) mark_others_stale(entry.image->rows->rows.get());
   history_.replace_image(entry, std::move(now));
   // The restored rows count as changed now; ids that went away are logged as removed.
   ++version_;
@@ -266,7 +266,7 @@ bool meet(const IdList& a, const IdList& b) {  // both ascending
 }
 
 // An entry whose op inserted or removed surfels (a whole image with touched surfels): rows renumbered.
-bool renumbers(const HistoryEntry& e) { return e.image.whole && !e.item.touched.empty(); }
+bool renumbers(const HistoryEntry& e) { return e.image->whole && !e.item.touched.empty(); }
 
 // Whether another author's entry `o` is in effect now and was not at `e`'s last swap, or the other way
 // round: applied or redone since, or in effect then and undone since. (Applied and undone again since
@@ -303,24 +303,24 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
                       std::to_string(o.item.version) + ") after it; " + why);
     }
   }
-  if (!e.image.complete) {
+  if (!e.image->complete) {
     throw Error(ErrorCode::Conflict, "history",
                 std::string("cannot ") + what + " '" + e.item.op +
                     "': its detector state was not saved (hierarchies and approximate detection keep no history)");
   }
   std::uint64_t v = 0;
-  if (whole || e.image.rows) {
+  if (whole || e.image->rows) {
     v = swap_entry(e, what);
     // Its tool's detector saw the rows other tools moved since as they were then.
-    if (!whole) tools_.at(e.image.tool).mark_stale(nullptr);
+    if (!whole) tools_.at(e.image->tool).mark_stale(nullptr);
   } else {
     // A change of the author's tool alone (set_regions, configure, release): that tool comes back.
     // (A whole image without touched surfels, e.g. a resampling step that moved nothing: its tool alone.)
-    const ToolImage& t = e.image.tool_only ? e.image.tool_only->tool : e.image.whole->tools.at(e.image.tool);
+    const ToolImage& t = e.image->tool_only ? e.image->tool_only->tool : e.image->whole->tools.at(e.image->tool);
     if (t.fields && t.fields->regions.size() != static_cast<std::size_t>(model_.size()))
       throw Error(ErrorCode::Internal, "history", "the tool image does not fit the model");
     for (const auto& [id, other] : tools_) {
-      if (id == e.image.tool || !other.fields || !t.fields) continue;
+      if (id == e.image->tool || !other.fields || !t.fields) continue;
       const std::size_t overlap = lock_overlap(t.fields->regions, other.fields->regions);
       if (overlap > 0) {
         throw Error(ErrorCode::Conflict, "history",
@@ -328,8 +328,8 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
                         std::to_string(overlap) + " surfel(s) of its regions are in the lock of client '" + id + "'");
       }
     }
-    use(e.image.tool);
-    SessionImage now = e.image.tool_only ? capture_tool(t.fields_kept) : capture_whole(false);
+    use(e.image->tool);
+    SessionImage now = e.image->tool_only ? capture_tool(t.fields_kept) : capture_whole(false);
     restore_tool(*tool_, t, false);
     tool_->mark_stale(nullptr);
     history_.replace_image(e, std::move(now));

@@ -1,4 +1,4 @@
-// EditSession::save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 3; see kFormat):
+// EditSession::snapshot_view / save / restore (edit_session.hpp, docs/journal.md "Snapshots"). Layout (format 3; see kFormat):
 // magic, format version; the detector table (every detector object once, by identity: tools and
 // history images refer to it by index, 0 = none); the detector-image table (each with the index of
 // a detector that reads it); the table of shared row lists; then the session's scalars, model, row
@@ -7,6 +7,7 @@
 
 #include "session_snapshot_images.hpp"
 #include "session_snapshot_values.hpp"
+#include "session_snapshot_view.hpp"
 #include "surfeledit/core/detector_snapshot.hpp"
 #include "surfeledit/core/edit_session.hpp"
 
@@ -45,20 +46,26 @@ HistoryItem get_item(SnapshotReader& in) {
 std::string EditSession::not_snapshottable() const {
   Tables t;
   for (const auto& [id, tool] : tools_) t.detector(tool.detector.get(), "tool");
-  for (const HistoryEntry& e : history_.entries()) t.image(e.image);
+  for (const HistoryEntry& e : history_.entries()) t.image(*e.image);
   return t.why;
 }
 
-void EditSession::save(SnapshotWriter& out) const {
+void EditSession::save(SnapshotWriter& out) const { snapshot_view().encode(out); }
+
+SessionSnapshotView EditSession::snapshot_view() const {
   Tables t;
   for (const auto& [id, tool] : tools_) {
     t.detector(tool.detector.get(), "tool");
     t.row_lists.add(tool.shared_rows.get());
   }
-  for (const HistoryEntry& e : history_.entries()) t.image(e.image);
+  for (const HistoryEntry& e : history_.entries()) t.image(*e.image);
   for (const RowsImage& r : history_.spare()) t.rows_image(r);
   if (!t.why.empty()) throw Error(ErrorCode::Internal, "snapshot", "session '" + name_ + "' is not snapshottable: " + t.why);
 
+  // Everything is encoded here but the history's images, which the view shares (with their pointers as
+  // table indices): each entry's image follows the bytes before it.
+  SessionSnapshotView view;
+  SnapshotWriter out;
   out.u32(kMagic);
   out.u32(kFormat);
   out.u64(t.detectors.list.size());
@@ -107,13 +114,16 @@ void EditSession::save(SnapshotWriter& out) const {
   out.u64(entries.size());
   for (const HistoryEntry& e : entries) {
     put_item(out, e.item);
-    put_image(out, t, e.image);
+    view.pieces_.push_back({out.take(), e.image, image_refs(t, *e.image)});
+    out = SnapshotWriter();
     out.u64(e.bytes);
     out.u64(e.stamp);
     out.u64(e.applied_at);
   }
   out.u64(history_.spare().size());
-  for (const RowsImage& r : history_.spare()) put_rows_image(out, t, r);
+  for (const RowsImage& r : history_.spare()) put_rows_image(out, rows_refs(t, r), r);
+  view.pieces_.push_back({out.take(), nullptr, {}});
+  return view;
 }
 
 void EditSession::restore(SnapshotReader& in) {
@@ -191,7 +201,7 @@ void EditSession::restore(SnapshotReader& in) {
   for (std::size_t k = 0; k < n_entries; ++k) {
     HistoryEntry e;
     e.item = get_item(in);
-    e.image = get_image(in, l);
+    e.image = std::make_shared<SessionImage>(get_image(in, l));
     e.bytes = in.u64("entry bytes");
     e.stamp = in.u64("entry stamp");
     e.applied_at = in.u64("entry applied_at");

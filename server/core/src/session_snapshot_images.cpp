@@ -7,13 +7,26 @@ namespace surfeledit::snapshot_images {
 
 using namespace snapshot_values;
 
-void put_tool_image(SnapshotWriter& out, const Tables& t, const ToolImage& im) {
+RowsRefs rows_refs(const Tables& t, const RowsImage& r) { return {t.row_lists.at(r.rows.get()), t.row_lists.at(r.bent.get())}; }
+
+ImageRefs image_refs(const Tables& t, const SessionImage& im) {
+  ImageRefs refs;
+  if (im.rows) refs.rows = rows_refs(t, *im.rows);
+  refs.states = t.images.at(im.detector.get());
+  refs.object = t.detectors.at(im.detector_object.get());
+  if (im.tool_only) refs.tool_detector = t.detectors.at(im.tool_only->tool.detector.get());
+  if (im.whole)
+    for (const auto& [id, tool] : im.whole->tools) refs.tools.push_back(t.detectors.at(tool.detector.get()));
+  return refs;
+}
+
+void put_tool_image(SnapshotWriter& out, std::uint32_t detector, const ToolImage& im) {
   out.boolean(im.fields.has_value());
   if (im.fields) put_fields(out, *im.fields);
   out.boolean(im.fields_kept);
   out.boolean(im.derive_detector);
   put_settings(out, im.settings);
-  out.u32(t.detectors.at(im.detector.get()));
+  out.u32(detector);
   put_merge(out, im.merge);
   out.vec(im.colliding);
   out.u64(im.steps);
@@ -36,9 +49,9 @@ ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows) 
 }
 
 // A rows image (an entry's or a spare buffer); get_rows_image reads it.
-void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r) {
-  out.u32(t.row_lists.at(r.rows.get()));
-  out.u32(t.row_lists.at(r.bent.get()));
+void put_rows_image(SnapshotWriter& out, const RowsRefs& refs, const RowsImage& r) {
+  out.u32(refs.rows);
+  out.u32(refs.bent);
   out.mat(r.positions);
   out.mat(r.normals);
   out.mat(r.tangent_u);
@@ -46,12 +59,12 @@ void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r) {
   put_pairs_of(out, r.version_runs);
 }
 
-void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
+void put_image(SnapshotWriter& out, const ImageRefs& refs, const SessionImage& im) {
   out.boolean(im.rows.has_value());
-  if (im.rows) put_rows_image(out, t, *im.rows);
+  if (im.rows) put_rows_image(out, refs.rows, *im.rows);
   out.boolean(im.tool_only.has_value());
   if (im.tool_only) {
-    put_tool_image(out, t, im.tool_only->tool);
+    put_tool_image(out, refs.tool_detector, im.tool_only->tool);
     out.f64(im.tool_only->history.history_mb);
   }
   out.boolean(im.whole.has_value());
@@ -63,14 +76,15 @@ void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im) {
     out.mat(w.rest_radius);
     out.f64(w.history.history_mb);
     out.u64(w.tools.size());
+    std::size_t k = 0;
     for (const auto& [id, tool] : w.tools) {
       out.str(id);
-      put_tool_image(out, t, tool);
+      put_tool_image(out, refs.tools.at(k++), tool);
     }
   }
   out.str(im.tool);
-  out.u32(t.images.at(im.detector.get()));
-  out.u32(t.detectors.at(im.detector_object.get()));
+  out.u32(refs.states);
+  out.u32(refs.object);
   out.boolean(im.stale);
   out.vec(im.colliding);
   out.u64(im.steps);

@@ -78,11 +78,28 @@ struct Loaded {
   }
 };
 
-void put_tool_image(SnapshotWriter& out, const Tables& t, const ToolImage& im);
+// The table indices of what an image refers to, taken from the tables at the save's point: an image is
+// written from these and its values, never reading its pointers (History::retire may drop those of an
+// image a snapshot view shares while the view writes it on another thread).
+struct RowsRefs {
+  std::uint32_t rows = 0, bent = 0;  // row lists
+};
+struct ImageRefs {
+  RowsRefs rows;                     // a rows image's row lists
+  std::uint32_t states = 0;          // the detector image
+  std::uint32_t object = 0;          // the detector object
+  std::uint32_t tool_detector = 0;   // a tool-only image's tool's detector
+  std::vector<std::uint32_t> tools;  // a whole image's tools' detectors, in the order of its tools
+};
+RowsRefs rows_refs(const Tables& t, const RowsImage& r);
+ImageRefs image_refs(const Tables& t, const SessionImage& im);
+
+// `detector`: the table index of the tool image's detector.
+void put_tool_image(SnapshotWriter& out, std::uint32_t detector, const ToolImage& im);
 ToolImage get_tool_image(SnapshotReader& in, const Loaded& l, std::size_t rows);
 // A rows image (an entry's or a spare buffer); get_rows_image reads it.
-void put_rows_image(SnapshotWriter& out, const Tables& t, const RowsImage& r);
-void put_image(SnapshotWriter& out, const Tables& t, const SessionImage& im);
+void put_rows_image(SnapshotWriter& out, const RowsRefs& refs, const RowsImage& r);
+void put_image(SnapshotWriter& out, const ImageRefs& refs, const SessionImage& im);
 RowsImage get_rows_image(SnapshotReader& in, const Loaded& l);
 SessionImage get_image(SnapshotReader& in, const Loaded& l);
 

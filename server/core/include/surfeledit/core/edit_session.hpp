@@ -21,6 +21,7 @@
 #include "surfeledit/core/holes.hpp"
 #include "surfeledit/core/response/curves.hpp"
 #include "surfeledit/core/selector.hpp"
+#include "surfeledit/core/session_snapshot_view.hpp"
 #include "surfeledit/core/settings.hpp"
 #include "surfeledit/core/snapshot_io.hpp"
 #include "surfeledit/core/surfel_model.hpp"
@@ -261,7 +262,12 @@ class EditSession {
   // has no snapshot (detector_snapshot.hpp). save(): Internal when not snapshottable. restore(): replaces
   // everything by a saved state (the name and SessionParams stay this session's); InvalidArgument
   // ("snapshot") for a corrupt or unknown-version snapshot, and then nothing changed.
+  // snapshot_view(): the same snapshot taken now and encoded later, on any thread, while this session goes
+  // on (session_snapshot_view.hpp): it encodes what is small or changes in place now (a copy of about the
+  // model's size) and shares the history's images; save(out) is snapshot_view().encode(out). Internal
+  // when not snapshottable.
   std::string not_snapshottable() const;
+  SessionSnapshotView snapshot_view() const;
   void save(SnapshotWriter& out) const;
   void restore(SnapshotReader& in);
 

@@ -110,7 +110,11 @@ struct HistoryItem {
 
 struct HistoryEntry {
   HistoryItem item;
-  SessionImage image;  // before the op while applied, after it once undone
+  // Before the op while applied, after it once undone. Immutable once stored: undo and redo replace it
+  // (History::replace_image), and a snapshot view (EditSession::snapshot_view) may share it and read it
+  // on another thread; History alone touches a stored image again, and only once no view shares it, or
+  // to drop the references a dropped image holds (History::retire).
+  std::shared_ptr<const SessionImage> image;
   std::size_t bytes = 0;  // image.bytes(), kept by History
   std::uint64_t stamp = 0;       // the session version of its last apply, undo or redo
   std::uint64_t applied_at = 0;  // the session version of its last apply or redo
@@ -148,6 +152,12 @@ class History {
   Held held_detectors() const;
   // Replaces an entry's image (undo / redo swap), keeping the byte count.
   void replace_image(HistoryEntry& entry, SessionImage image);
+  History() = default;
+  History(const History&) = delete;
+  History& operator=(const History&) = delete;
+  History(History&&) = default;
+  History& operator=(History&&) = default;
+  ~History();
   // Snapshots (session_snapshot.cpp): the entries and spare buffers as saved (each entry's `bytes` kept).
   const std::vector<RowsImage>& spare() const { return spare_; }
   void restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare);
@@ -156,8 +166,13 @@ class History {
   RowsImage take_spare();
 
  private:
-  // Keeps the rows image of an entry about to be dropped (at most two are kept).
+  // Keeps the rows image of an entry about to be dropped (at most two are kept), then retires its image.
   void keep_spare(HistoryEntry& entry);
+  // Lets go of an image that leaves the history. One a snapshot view still shares first drops the
+  // references it holds (row lists, detector objects and states), which the view does not read: what
+  // the history's bound and a stale tool's detector clone count (their owners) is then exactly what it
+  // would be without the view; the view frees the arrays when it is done.
+  static void retire(std::shared_ptr<const SessionImage>& image);
 
   // Sums the entries' bytes and counts their detector objects again (after entries were dropped).
   void recount();
