@@ -12,8 +12,8 @@ interleaved, the same period on a shared machine), a fresh server with `--thread
 collision "none") and --steps OP_DEFORM back to back from one client. Reported per run, from the server's
 log lines: the snapshots taken, how long each held the request loop (median / max; for a server with the
 writer thread its "started" line, else its "taken" line), of which `Handler::save` (encoding, CPU on the
-loop), and, with the writer thread, the thread's write and fdatasync + rename + directory fsync times (off
-the loop). From the client: the step round trip's median and maximum (a snapshot's stall shows in the step
+loop; since §67 `Handler::snapshot`: the history's images shared, the rest copied), and, with the writer
+thread, the thread's encoding (since §67), write and fdatasync + rename + directory fsync times (off the loop). From the client: the step round trip's median and maximum (a snapshot's stall shows in the step
 that follows its point). Journals on the build disk unless --journal-root says otherwise.
 """
 
@@ -41,6 +41,7 @@ STARTED = re.compile(r"snapshot \d+ started after \d+ record\(s\): the request l
 TAKEN = re.compile(r"snapshot \d+ taken after \d+ record\(s\): ([\d.]+) MB, the request loop waited ([\d.]+) ms, of "
                    r"which ([\d.]+) ms saving the state(?:; the writer thread wrote it in ([\d.]+) ms and synced it in "
                    r"([\d.]+) ms)?")
+ENCODED = re.compile(r"snapshot \d+ taken after .* the writer thread encoded it in ([\d.]+) ms first")
 
 
 def run_once(exe: Path, domain: int, jdir: Path, log: Path, steps: int, every: int,
@@ -72,6 +73,7 @@ def run_once(exe: Path, domain: int, jdir: Path, log: Path, steps: int, every: i
     save = [t[1] for t in started] if started else [t[2] for t in taken]
     return {"snapshots": len(taken), "mb": taken[-1][0] if taken else 0.0, "loop": loop, "save": save,
             "segment": [t[2] for t in started],
+            "encode": [float(x) for x in ENCODED.findall(text)],
             "write": [t[3] for t in taken if t[3] is not None], "sync": [t[4] for t in taken if t[4] is not None],
             "rtt_median": benchlib.median(rtt), "rtt_max": max(rtt)}
 
@@ -113,16 +115,18 @@ def main() -> None:
                 res = run_once(exe, args.domain + n % 7, root / f"j-{n}", root / f"s-{n}.log", args.steps,
                                args.snapshot_records, h, scene)
                 rows.append([r + 1, "default" if h is None else h, name, res["snapshots"], f"{res['mb']:.1f}",
-                             fmt(res["loop"]), fmt(res["loop"], "max"), fmt(res["save"]), fmt(res["segment"]), fmt(res["write"]),
+                             fmt(res["loop"]), fmt(res["loop"], "max"), fmt(res["save"]), fmt(res["segment"]),
+                             fmt(res["encode"]), fmt(res["write"]),
                              fmt(res["sync"]), f"{res['rtt_median']:.2f}", f"{res['rtt_max']:.1f}", load.strip()])
                 print(benchlib.table(["round", "history_mb", "server", "snapshots", "MB", "loop stall ms (median)",
-                                      "(max)", "of which save", "new segment", "writer: write ms", "writer: sync ms",
+                                      "(max)", "of which save", "new segment", "writer: encode ms", "writer: write ms",
+                                      "writer: sync ms",
                                       "step rtt median ms", "step rtt max ms", "load"], rows[-1:]), flush=True)
     if not args.journal_root:
         shutil.rmtree(root, ignore_errors=True)
     print()
     print(benchlib.table(["round", "history_mb", "server", "snapshots", "MB", "loop stall ms (median)", "(max)",
-                          "of which save", "new segment", "writer: write ms", "writer: sync ms",
+                          "of which save", "new segment", "writer: encode ms", "writer: write ms", "writer: sync ms",
                           "step rtt median ms", "step rtt max ms", "load (1, 5, 15 min)"], rows))
     print(benchlib.machine_line())
 

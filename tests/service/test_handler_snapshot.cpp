@@ -1,6 +1,7 @@
-// Handler::save / restore (the service state of a journal snapshot): a restored handler answers repeated
-// request ids with the replies first sent (their CDR), serves the same session state and roles, and a
-// truncated or corrupt snapshot changes nothing; an unfinished upload defers the save.
+// Handler::save / snapshot / restore (the service state of a journal snapshot): a restored handler answers
+// repeated request ids with the replies first sent (their CDR), serves the same session state and roles,
+// and a truncated or corrupt snapshot changes nothing; an unfinished upload defers the save; a snapshot
+// encoded after the state changed writes the state of its point.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -88,4 +89,48 @@ TEST_F(HandlerTest, SnapshotRestoresSessionsRolesAndStoredRepliesAndACorruptOneC
   EXPECT_TRUE(handler.not_snapshottable().soon);
   std::vector<std::string> refused_parts;
   EXPECT_THROW(handler.save(refused_parts), Error);
+}
+
+// Handler::snapshot (the journal's writer thread encodes it): taken at one point and encoded after the
+// session changed (a second upload replaces the model and pushes a history entry), its parts concatenate
+// to the bytes save() gave at that point. Truth: that save.
+TEST_F(HandlerTest, SnapshotEncodedLaterWritesThePoint) {
+  load(8);
+  std::vector<std::string> at_point;
+  handler.save(at_point);
+  const Handler::Snapshot snap = handler.snapshot();
+  EXPECT_GT(snap.shared_images(), 0u);
+  EXPECT_GT(snap.copied_bytes(), 0u);
+  const auto info = send(surfeledit_proto_OP_INFO);
+  // A second upload of another size: a new model, a new history entry.
+  const std::size_t n = 12;
+  rb.load_begin.total = n;
+  ASSERT_EQ(send(surfeledit_proto_OP_LOAD_BEGIN)->status, Status::Ok);
+  for (std::size_t first = 0; first < n; first += 4) {
+    ChunkArrays c = sphere_chunk(4, first, n);
+    rb.load_chunk.offset = first;
+    point_to(rb.load_chunk.positions, c.positions);
+    point_to(rb.load_chunk.normals, c.normals);
+    point_to(rb.load_chunk.radii, c.radii);
+    ASSERT_EQ(send(surfeledit_proto_OP_LOAD_CHUNK)->status, Status::Ok);
+  }
+  ASSERT_EQ(send(surfeledit_proto_OP_LOAD_COMMIT)->status, Status::Ok);
+  std::vector<std::string> now;
+  handler.save(now);
+  std::vector<std::string> later;
+  snap.encode(later);
+  std::string a, b, c;
+  for (const std::string& p : at_point) a += p;
+  for (const std::string& p : later) b += p;
+  for (const std::string& p : now) c += p;
+  EXPECT_TRUE(a == b) << a.size() << " / " << b.size();
+  EXPECT_FALSE(a == c);  // the state did change after the point
+  // Restored, it is the session as it was at the point.
+  SnapshotReader in(b);
+  Handler restored{HandlerConfig{4, 1000, 1}};
+  restored.restore(in);
+  const auto info_after = send_to(restored, rb, surfeledit_proto_OP_INFO, 9000, updates);
+  ASSERT_TRUE(info_after->session_info);
+  EXPECT_EQ(info_after->version, info->version);
+  EXPECT_EQ(info_after->session_info->state_hash, info->session_info->state_hash);
 }

@@ -128,25 +128,23 @@ Handler::SnapshotBlock Handler::not_snapshottable() const {
   return {};
 }
 
-void Handler::save(std::vector<std::string>& parts) const {
+Handler::Snapshot Handler::snapshot() const {
   const std::string why = not_snapshottable().why;
   if (!why.empty()) throw Error(ErrorCode::Internal, "snapshot", "the service state cannot be saved: " + why);
   const HandlerState& s = *state_;
   const Clock::time_point now = Clock::now();
+  Snapshot snap;
   SnapshotWriter w;
   w.u32(kMagic);
   w.u32(kFormat);
   w.u64(s.sessions.size());
   for (const auto& [name, entry] : s.sessions.all()) {
     save_entry(w, name, entry, now);
-    // The session's bytes as a string of the stream (u64 size, bytes: the core's reader checks it reads
-    // them to the end), handed over as a part of their own rather than copied into this one.
-    SnapshotWriter session;
-    entry.session->save(session);
-    w.u64(session.bytes().size());
-    parts.push_back(w.take());
+    // The session's bytes follow as a string of the stream (u64 size, bytes: the core's reader checks it
+    // reads them to the end); encode() writes both.
+    snap.heads.push_back(w.take());
     w = SnapshotWriter();
-    parts.push_back(session.take());
+    snap.sessions.push_back(entry.session->snapshot_view());
   }
   w.u64(s.away.size());
   for (const auto& [client, since] : s.away) {
@@ -160,8 +158,38 @@ void Handler::save(std::vector<std::string>& parts) const {
     w.u64(bytes);
     w.str(cdr);
   }
-  parts.push_back(w.take());
+  snap.tail = w.take();
+  return snap;
 }
+
+void Handler::Snapshot::encode(std::vector<std::string>& parts) const {
+  for (std::size_t k = 0; k < sessions.size(); ++k) {
+    // Each session's bytes are a part of their own, not copied into the stream's.
+    SnapshotWriter session;
+    sessions[k].encode(session);
+    SnapshotWriter head;
+    head.raw(heads[k].data(), heads[k].size());
+    head.u64(session.bytes().size());
+    parts.push_back(head.take());
+    parts.push_back(session.take());
+  }
+  parts.push_back(tail);
+}
+
+std::size_t Handler::Snapshot::copied_bytes() const {
+  std::size_t n = tail.size();
+  for (const std::string& h : heads) n += h.size();
+  for (const SessionSnapshotView& v : sessions) n += v.copied_bytes();
+  return n;
+}
+
+std::size_t Handler::Snapshot::shared_images() const {
+  std::size_t n = 0;
+  for (const SessionSnapshotView& v : sessions) n += v.shared_images();
+  return n;
+}
+
+void Handler::save(std::vector<std::string>& parts) const { snapshot().encode(parts); }
 
 void Handler::restore(SnapshotReader& in) {
   HandlerState& s = *state_;

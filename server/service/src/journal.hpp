@@ -41,7 +41,8 @@ struct SnapshotStats {
   std::uint64_t seq = 0;        // the last one's number
   std::uint64_t bytes = 0;      // its file's size
   double ms = 0.0;              // how long it blocked the request loop at its point (commit, save, new segment)
-  double save_ms = 0.0;         // of which Handler::save
+  double save_ms = 0.0;         // of which Handler::snapshot (the state taken: the history shared, the rest copied)
+  double encode_ms = 0.0;       // the writer thread encoding it (Handler::Snapshot::encode)
   double write_ms = 0.0;        // the writer thread writing its file
   double sync_ms = 0.0;         // the writer thread's fdatasync, rename and directory fsync
   double total_ms = 0.0;        // from its point to its record durable (requests were served meanwhile)
@@ -85,8 +86,9 @@ class Journal {
   // the obsolete files to the writer), then takes a snapshot when one is due
   // (JournalConfig::snapshot_records / snapshot_mb), none is in flight and the handler's state can be
   // saved (else it is deferred, with a log line saying why); call on the request thread between two
-  // requests. Taking one commits the open group, saves the state, starts a new segment and hands the bytes
-  // to the writer thread; requests go on meanwhile. A snapshot that cannot be written is logged and retried
+  // requests. Taking one commits the open group, takes the state (Handler::snapshot: the history's images
+  // shared, the rest copied), starts a new segment and hands the snapshot to the writer thread, which
+  // encodes and writes it; requests go on meanwhile. A snapshot that cannot be written is logged and retried
   // later (the log goes on); a failure to journal its record stops the journal (failed()).
   void maybe_snapshot();
   // Called on the writer thread when a snapshot's file is written or failed (set once, before the first
@@ -138,7 +140,7 @@ class Journal {
     std::uint64_t records = 0;   // records journaled before its point (its record's `records`)
     Clock::time_point taken;     // its point
     double ms = 0.0;             // how long the point blocked the loop
-    double save_ms = 0.0;        // of which Handler::save
+    double save_ms = 0.0;        // of which Handler::snapshot
     double segment_ms = 0.0;     // of which starting the new segment (its header and directory entry synced)
   };
   std::optional<InFlight> in_flight_;

@@ -1,5 +1,6 @@
 // The journal's snapshot files (docs/journal.md "Snapshots"): DIR/snapshot-<seq>.bin holds the
-// handler's whole state (Handler::save) after every record before the Snapshot record that names it.
+// handler's whole state (Handler::Snapshot, encoded on the writer thread) after every record before the
+// Snapshot record that names it.
 // A 32-byte header (magic "SESNAPSH", u32 file format 1, u32 record format kRecordFormat, u64 seq,
 // u64 payload bytes), then the payload; the Snapshot record holds the whole file's size and CRC-32,
 // so a file that does not match its record (torn, corrupt, replaced) is never restored. Written

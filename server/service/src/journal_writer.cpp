@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <utility>
 
 #include "surfeledit/service/log.hpp"
@@ -44,6 +45,13 @@ void SnapshotThread::write(std::uint64_t seq, std::vector<std::string> parts) {
   Job job;
   job.seq = seq;
   job.parts = std::move(parts);
+  push(std::move(job));
+}
+
+void SnapshotThread::write(std::uint64_t seq, Encoder encode) {
+  Job job;
+  job.seq = seq;
+  job.encode = std::move(encode);
   push(std::move(job));
 }
 
@@ -111,10 +119,17 @@ void SnapshotThread::run() {
       WrittenSnapshot done;
       done.seq = job.seq;
       try {
+        if (job.encode) {
+          const auto t0 = std::chrono::steady_clock::now();
+          job.encode(job.parts);
+          job.encode = nullptr;  // what it held (history images shared with the session) is let go here
+          done.encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        }
         done.record = write_snapshot_file(dir_, dir_fd_.get(), job.seq, job.parts, &done.times);
       } catch (const std::exception& e) {
         done.error = e.what();
       }
+      job.encode = nullptr;
       job.parts.clear();
       job.parts.shrink_to_fit();  // the snapshot's bytes are freed here, not on the request thread
       lock.lock();

@@ -1,5 +1,5 @@
-// The journal's writer thread (docs/journal.md "Snapshots: the writer thread"): writes a snapshot's
-// file off the request thread (temporary name, fdatasync, rename, directory fsync) and deletes the
+// The journal's writer thread (docs/journal.md "Snapshots: the writer thread"): encodes a snapshot
+// taken at its point (Handler::Snapshot) and writes its file off the request thread (temporary name, fdatasync, rename, directory fsync) and deletes the
 // files a durable snapshot made obsolete. One thread, one queue of jobs done in order; at most one
 // snapshot in flight (the journal checks busy() before it hands one over). The request thread owns the
 // log: it appends the Snapshot record once this thread reports the file durable. Private to the service.
@@ -26,7 +26,8 @@ struct WrittenSnapshot {
   std::uint64_t seq = 0;    // its number
   SnapshotRecord record;    // its record (records = 0: the journal fills it in); valid when error is empty
   std::string error;        // why it was not written (what it wrote is removed)
-  SnapshotFileTimes times;  // where the thread's time went
+  SnapshotFileTimes times;  // where the thread's time went (after encoding)
+  double encode_ms = 0.0;   // encoding it (Handler::Snapshot::encode), before the file was written
 };
 
 class SnapshotThread {
@@ -42,6 +43,10 @@ class SnapshotThread {
 
   // Hands snapshot `seq` (the concatenation of `parts`) over. Requires !busy().
   void write(std::uint64_t seq, std::vector<std::string> parts);
+  // The same with the parts made on this thread by `encode` (which appends them; destroyed on this
+  // thread once it ran). A throw from it is the snapshot's failure, like a failed write.
+  using Encoder = std::function<void(std::vector<std::string>& parts)>;
+  void write(std::uint64_t seq, Encoder encode);
   // Hands over files to delete in order (journal segments), then the snapshots below `seq` and every
   // temporary one, then a directory fsync. A failure is logged (the files stay; nothing depends on them).
   void remove(std::vector<std::string> segments, std::uint64_t snapshots_before);
@@ -62,6 +67,7 @@ class SnapshotThread {
     Kind kind = Kind::Write;
     std::uint64_t seq = 0;  // write: the snapshot's number; remove: snapshots below it; prepare: the segment
     std::vector<std::string> parts;         // write: the payload
+    Encoder encode;                         // write: makes the payload first (when set)
     std::vector<std::string> segments;      // remove: segment files, oldest first
   };
   void push(Job job);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "surfeledit/core/session_snapshot_view.hpp"
 #include "surfeledit/core/surfel_model.hpp"
 #include "surfeledit/service/access.hpp"
 #include "surfeledit/service/command.hpp"
@@ -121,6 +122,19 @@ class Handler {
     bool soon = false;  // an unfinished upload or a running file load: ends by itself, worth trying again soon
   };
   SnapshotBlock not_snapshottable() const;
+  // A snapshot taken at one point and encoded later, on another thread while requests go on (the
+  // journal's writer thread): the service's own state encoded at the point, each session's as a view
+  // (EditSession::snapshot_view: its history images shared, not copied). encode() appends exactly the
+  // parts save() would have appended at the point; save(parts) is snapshot().encode(parts).
+  struct Snapshot {
+    std::vector<std::string> heads;           // the bytes before each session's core snapshot (but its size)
+    std::vector<SessionSnapshotView> sessions;
+    std::string tail;                         // the clients away and the replies kept
+    void encode(std::vector<std::string>& parts) const;
+    std::size_t copied_bytes() const;         // encoded at the point
+    std::size_t shared_images() const;        // history images shared
+  };
+  Snapshot snapshot() const;
   void save(std::vector<std::string>& parts) const;
   void restore(SnapshotReader& in);
 
