@@ -44,6 +44,7 @@ void History::push(HistoryEntry entry, std::size_t limit_bytes) {
   }
   entries_ = std::move(kept);
   entry.item.undone = false;
+  share_touched(entry);
   entry.stamp = entry.applied_at = entry.item.version;
   entries_.push_back(std::move(entry));
   HistoryEntry& e = entries_.back();
@@ -149,6 +150,13 @@ void History::retire(std::shared_ptr<const SessionImage>& image) {
   image.reset();
 }
 
+void History::share_touched(HistoryEntry& entry) {
+  if (entry.touched) return;
+  // Moved, not copied: the capacity stays (a snapshot writes it).
+  entry.touched = std::make_shared<const IdList>(std::move(entry.item.touched));
+  entry.item.touched = IdList();
+}
+
 History::~History() { clear(); }
 
 RowsImage History::take_spare() {
@@ -168,13 +176,17 @@ void History::clear() {
 std::vector<HistoryItem> History::items() const {
   std::vector<HistoryItem> out;
   out.reserve(entries_.size());
-  for (const HistoryEntry& e : entries_) out.push_back(e.item);
+  for (const HistoryEntry& e : entries_) {
+    out.push_back(e.item);
+    out.back().touched = *e.touched;
+  }
   return out;
 }
 
 void History::restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare) {
   for (HistoryEntry& e : entries_) retire(e.image);
   entries_ = std::move(entries);
+  for (HistoryEntry& e : entries_) share_touched(e);
   spare_ = std::move(spare);
   recount();
 }

@@ -244,7 +244,7 @@ std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {
   // The restored rows count as changed now; ids that went away are logged as removed.
   ++version_;
   if (entry.item.op == "load") model_version_ = version_;
-  std::unordered_set<SurfelId> touched(entry.item.touched.begin(), entry.item.touched.end());
+  std::unordered_set<SurfelId> touched(entry.touched->begin(), entry.touched->end());
   const IdList& ids = model_.ids();
   for (std::size_t r = 0; r < ids.size(); ++r)
     if (touched.count(ids[r])) row_version_.set(r, version_);
@@ -266,7 +266,7 @@ bool meet(const IdList& a, const IdList& b) {  // both ascending
 }
 
 // An entry whose op inserted or removed surfels (a whole image with touched surfels): rows renumbered.
-bool renumbers(const HistoryEntry& e) { return e.image->whole && !e.item.touched.empty(); }
+bool renumbers(const HistoryEntry& e) { return e.image->whole && !e.touched->empty(); }
 
 // Whether another author's entry `o` is in effect now and was not at `e`'s last swap, or the other way
 // round: applied or redone since, or in effect then and undone since. (Applied and undone again since
@@ -291,7 +291,7 @@ std::uint64_t EditSession::swap_own(HistoryEntry& e, bool undo) {
   if (!whole) {
     for (const HistoryEntry& o : entries) {
       if (!changed_since(o, e)) continue;
-      const bool hit = renumbers(o) || renumbers(e) || meet(o.item.touched, e.item.touched);
+      const bool hit = renumbers(o) || renumbers(e) || meet(*o.touched, *e.touched);
       if (!hit) continue;
       std::string why = renumbers(e) ? "it inserted or removed surfels and cannot come back alone"
                         : renumbers(o) ? "that op inserted or removed surfels since"

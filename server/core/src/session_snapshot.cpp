@@ -23,12 +23,11 @@ constexpr std::uint32_t kFormat = 3;  // 2: rows images name their `bent` rows; 
                                       // 3: merge origins may be the tool detector's (MergeMemo::origins_in_detector),
                                       // row versions as a floor and 32-bit offsets (RowVersions)
 
-void put_item(SnapshotWriter& out, const HistoryItem& item) {
+// An entry's item: version, op, author, then its touched ids (the view shares them) and its undone flag.
+void put_item_head(SnapshotWriter& out, const HistoryItem& item) {
   out.u64(item.version);
   out.str(item.op);
   out.str(item.author);
-  out.vec(item.touched);
-  out.boolean(item.undone);
 }
 
 HistoryItem get_item(SnapshotReader& in) {
@@ -113,8 +112,11 @@ SessionSnapshotView EditSession::snapshot_view() const {
   const auto& entries = history_.entries();
   out.u64(entries.size());
   for (const HistoryEntry& e : entries) {
-    put_item(out, e.item);
-    view.pieces_.push_back({out.take(), e.image, image_refs(t, *e.image)});
+    put_item_head(out, e.item);
+    view.pieces_.push_back({out.take(), e.touched, nullptr, {}});
+    out = SnapshotWriter();
+    out.boolean(e.item.undone);
+    view.pieces_.push_back({out.take(), nullptr, e.image, image_refs(t, *e.image)});
     out = SnapshotWriter();
     out.u64(e.bytes);
     out.u64(e.stamp);
@@ -122,7 +124,7 @@ SessionSnapshotView EditSession::snapshot_view() const {
   }
   out.u64(history_.spare().size());
   for (const RowsImage& r : history_.spare()) put_rows_image(out, rows_refs(t, r), r);
-  view.pieces_.push_back({out.take(), nullptr, {}});
+  view.pieces_.push_back({out.take(), nullptr, nullptr, {}});
   return view;
 }
 

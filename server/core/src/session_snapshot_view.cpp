@@ -12,6 +12,7 @@ SessionSnapshotView& SessionSnapshotView::operator=(SessionSnapshotView&&) noexc
 void SessionSnapshotView::encode(SnapshotWriter& out) const {
   for (const Piece& p : pieces_) {
     out.raw(p.bytes.data(), p.bytes.size());
+    if (p.ids) out.vec(*p.ids);
     if (p.image) snapshot_images::put_image(out, p.refs, *p.image);
   }
 }

@@ -1,5 +1,6 @@
 // What a SessionSnapshotView holds (session_snapshot_view.hpp): bytes encoded at its point, each
-// followed by a history image it shares and the table indices of that image's pointers.
+// followed by an entry's touched ids or a history image it shares (with the table indices of that
+// image's pointers).
 #pragma once
 
 #include <memory>
@@ -13,6 +14,7 @@ namespace surfeledit {
 
 struct SessionSnapshotView::Piece {
   std::string bytes;                           // encoded at the point
+  std::shared_ptr<const IdList> ids;           // then these ids (an entry's touched; null: none) as a vector
   std::shared_ptr<const SessionImage> image;   // then this image (null: none), encoded by encode()
   snapshot_images::ImageRefs refs;             // its pointers as table indices, taken at the point
 };

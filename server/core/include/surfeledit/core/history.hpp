@@ -109,7 +109,9 @@ struct HistoryItem {
 };
 
 struct HistoryEntry {
-  HistoryItem item;
+  HistoryItem item;  // its `touched` is moved to `touched` below when the entry is stored (items() lists it)
+  // The ids the op touched (HistoryItem::touched), immutable once stored and shared with snapshot views.
+  std::shared_ptr<const IdList> touched;
   // Before the op while applied, after it once undone. Immutable once stored: undo and redo replace it
   // (History::replace_image), and a snapshot view (EditSession::snapshot_view) may share it and read it
   // on another thread; History alone touches a stored image again, and only once no view shares it, or
@@ -168,6 +170,8 @@ class History {
  private:
   // Keeps the rows image of an entry about to be dropped (at most two are kept), then retires its image.
   void keep_spare(HistoryEntry& entry);
+  // Moves an entry's item.touched to its shared `touched` (when not done yet).
+  static void share_touched(HistoryEntry& entry);
   // Lets go of an image that leaves the history. One a snapshot view still shares first drops the
   // references it holds (row lists, detector objects and states), which the view does not read: what
   // the history's bound and a stale tool's detector clone count (their owners) is then exactly what it

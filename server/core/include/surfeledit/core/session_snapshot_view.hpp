@@ -3,8 +3,8 @@
 //
 // At its point the view encodes what changes in place or is small -- the detector objects and their
 // images' states, the row lists, the scalars, the model, row versions, removal log, rest radii, every
-// tool, each history entry's item and counters, the spare buffers -- and shares the history's images,
-// which are immutable once stored (history.hpp: undo and redo replace an entry's image, buffers are
+// tool, each history entry's item (but its touched ids) and counters, the spare buffers -- and shares the
+// history's images and the entries' touched ids, which are immutable once stored (history.hpp: undo and redo replace an entry's image, buffers are
 // reused only from images no view shares). encode() then writes exactly the bytes EditSession::save
 // wrote at the view's point (save is snapshot_view().encode()), whatever the session did since (closed
 // included). A view is read-only: encode() may run on one thread while the session goes on in another.
