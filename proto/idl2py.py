@@ -34,9 +34,11 @@ import sys
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Union
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # idl_parser.py sits beside this file
-from idl_parser import *  # noqa: E402,F401,F403  (IdlError, parse and the Spec types, re-exported)
-from idl_parser import PRIMITIVE_DEFAULTS, PRIMITIVES, Definition, TypeRef  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the idl_*.py modules sit beside this file
+# IdlError, parse and the Spec types are re-exported: callers and tests reach them as idl2py.<name>.
+from idl_error import IdlError  # noqa: E402
+from idl_model import Definition, Enum, Member, Named, Primitive, Sequence_, Spec, Struct, TypeRef  # noqa: E402,F401
+from idl_parser import parse  # noqa: E402
 
 __all__ = ["IdlError", "parse", "generate", "generate_file", "main"]
 
@@ -44,6 +46,32 @@ __all__ = ["IdlError", "parse", "generate", "generate_file", "main"]
 # --------------------------------------------------------------------------------------
 # Code generation
 # --------------------------------------------------------------------------------------
+
+
+# IDL primitive spelling -> expression of the cyclonedds-python type.
+PRIMITIVES: Dict[str, str] = {
+    "boolean": "bool",
+    "octet": "_byte",  # XTypes TK_BYTE, as idlc types IDL octet (generate() defines _byte per binding version)
+    "char": "_t.char",
+    "short": "_t.int16",
+    "unsigned short": "_t.uint16",
+    "long": "_t.int32",
+    "unsigned long": "_t.uint32",
+    "long long": "_t.int64",
+    "unsigned long long": "_t.uint64",
+    "float": "_t.float32",
+    "double": "_t.float64",
+    "string": "str",
+}
+
+# Default values (Python source) used for the generated dataclass fields.
+PRIMITIVE_DEFAULTS: Dict[str, str] = {
+    "boolean": "False",
+    "char": "'\\x00'",
+    "float": "0.0",
+    "double": "0.0",
+    "string": "''",
+}
 
 
 def _typename(scoped: str) -> str:

@@ -1,189 +1,21 @@
-"""The parser of proto/idl2py.py: the IDL subset surfeledit uses, tokenised and parsed into a ``Spec``.
+"""The parser of proto/idl2py.py: the IDL subset surfeledit uses, parsed into a ``Spec`` (idl_model.py)
+by recursive descent over the tokens of idl_lexer.py.
 
 What is supported and what is rejected is listed in idl2py.py's docstring; anything else raises
 ``IdlError`` naming the file, line and construct.
 """
 
-
 from __future__ import annotations
 
 import keyword
-import re
-from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Dict, List, Optional
 
-__all__ = ["IdlError", "parse", "Spec", "Struct", "Enum", "Member", "Primitive", "Sequence_", "Named"]
+from idl_error import IdlError
+from idl_lexer import Token, tokenize
+from idl_model import Definition, Enum, Member, Named, Primitive, Sequence_, Spec, Struct, TypeRef
 
+__all__ = ["parse"]
 
-class IdlError(Exception):
-    """An IDL construct this generator does not understand (or a semantic error).
-
-    The message has the form ``<file>:<line>: <what>``; ``file``, ``line`` and ``what``
-    are also available as attributes.
-    """
-
-    def __init__(self, file: str, line: int, what: str) -> None:
-        super().__init__(f"{file}:{line}: {what}")
-        self.file = file
-        self.line = line
-        self.what = what
-
-
-# --------------------------------------------------------------------------------------
-# Model of the parsed IDL
-# --------------------------------------------------------------------------------------
-
-# IDL primitive spelling -> expression of the cyclonedds-python type.
-PRIMITIVES: Dict[str, str] = {
-    "boolean": "bool",
-    "octet": "_byte",  # XTypes TK_BYTE, as idlc types IDL octet (idl2py defines _byte per binding version)
-    "char": "_t.char",
-    "short": "_t.int16",
-    "unsigned short": "_t.uint16",
-    "long": "_t.int32",
-    "unsigned long": "_t.uint32",
-    "long long": "_t.int64",
-    "unsigned long long": "_t.uint64",
-    "float": "_t.float32",
-    "double": "_t.float64",
-    "string": "str",
-}
-
-# Default values (Python source) used for the generated dataclass fields.
-PRIMITIVE_DEFAULTS: Dict[str, str] = {
-    "boolean": "False",
-    "char": "'\\x00'",
-    "float": "0.0",
-    "double": "0.0",
-    "string": "''",
-}
-
-
-@dataclass(frozen=True)
-class Primitive:
-    """A primitive type, spelled as in IDL (``unsigned long long``)."""
-
-    name: str
-
-
-@dataclass(frozen=True)
-class Sequence_:
-    """An unbounded ``sequence<element>``."""
-
-    element: "TypeRef"
-
-
-@dataclass(frozen=True)
-class Named:
-    """A reference to an earlier enum or struct, by fully scoped name (``surfeledit::proto::Vec3``)."""
-
-    scoped: str
-
-
-TypeRef = Union[Primitive, Sequence_, Named]
-
-
-@dataclass
-class Member:
-    """One struct member; ``array_len`` is set for ``T name[N]``."""
-
-    name: str
-    type: TypeRef
-    key: bool = False
-    array_len: Optional[int] = None
-    line: int = 0
-
-
-@dataclass
-class Enum:
-    """``enum`` with its enumerators (values 0, 1, ... in order)."""
-
-    scoped: str
-    name: str
-    enumerators: List[str]
-    line: int = 0
-
-
-@dataclass
-class Struct:
-    """``struct`` with its members in declaration order."""
-
-    scoped: str
-    name: str
-    members: List[Member]
-    line: int = 0
-
-
-Definition = Union[Enum, Struct]
-
-
-@dataclass
-class Spec:
-    """All definitions of one IDL file, in file order (dependencies always come first)."""
-
-    file: str
-    definitions: List[Definition] = field(default_factory=list)
-
-    def by_scoped(self) -> Dict[str, Definition]:
-        return {d.scoped: d for d in self.definitions}
-
-
-# --------------------------------------------------------------------------------------
-# Tokenizer
-# --------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Token:
-    kind: str  # "id", "int", "punct", "eof"
-    text: str
-    line: int
-
-
-# One alternative per token class; anything that matches none of them is an error.
-_TOKEN_RE = re.compile(
-    r"""
-    (?P<ws>[ \t\r\f\v]+)
-  | (?P<nl>\n)
-  | (?P<comment>//[^\n]*)
-  | (?P<id>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<int>[0-9]+)
-  | (?P<punct>::|[{}();:<>\[\],@=])
-    """,
-    re.VERBOSE,
-)
-
-
-def tokenize(text: str, file: str) -> List[Token]:
-    """Splits IDL text into tokens, dropping whitespace and ``//`` comments.
-
-    Raises IdlError on block comments, preprocessor directives and any other character.
-    """
-    tokens: List[Token] = []
-    pos = 0
-    line = 1
-    while pos < len(text):
-        if text.startswith("/*", pos):
-            raise IdlError(file, line, "block comments '/* */' are not supported (use //)")
-        if text[pos] == "#":
-            raise IdlError(file, line, "preprocessor directives ('#...') are not supported")
-        m = _TOKEN_RE.match(text, pos)
-        if m is None:
-            raise IdlError(file, line, f"unexpected character {text[pos]!r}")
-        kind = m.lastgroup
-        assert kind is not None
-        if kind == "nl":
-            line += 1
-        elif kind in ("id", "int", "punct"):
-            tokens.append(Token(kind, m.group(), line))
-        pos = m.end()
-    tokens.append(Token("eof", "", line))
-    return tokens
-
-
-# --------------------------------------------------------------------------------------
-# Parser (recursive descent over the subset above)
-# --------------------------------------------------------------------------------------
 
 # Words that are IDL keywords for constructs we reject explicitly (clearer than "expected ...").
 _UNSUPPORTED_KEYWORDS = {

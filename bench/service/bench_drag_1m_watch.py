@@ -83,7 +83,7 @@ def main() -> int:
     args = ap.parse_args()
     print(f"# {benchlib.machine_line()}", flush=True)
     sc = S.make_scenario("piercing", scale=args.scale, seed=1)
-    print(f"piercing scale {args.scale}: {len(sc.scene.positions):,} surfels, {sc.steps} steps; temporal knn_eps 2, "
+    print(f"piercing scale {args.scale}: {len(sc.scene.positions):,} surfels, {sc.steps} steps; temporal knn_eps 0 (exact), "
           f"server --threads 2", flush=True)
     for rnd in range(args.rounds):
         for exe in args.server.split(","):

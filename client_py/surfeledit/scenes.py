@@ -128,8 +128,11 @@ def seam_points(positions: np.ndarray, zero: np.ndarray, spacing: float) -> np.n
     mask[zero] = True
     if mask.all():
         return np.zeros((0, 3))
-    d, _ = cKDTree(positions[~mask]).query(positions[mask], k=1)
-    return positions[mask][d < 1.5 * spacing]
+    # The bound prunes each search at 1.5 spacings (d = inf beyond it): without it a zero surfel far from every
+    # deformable one searched much of the tree (45 s for the 1M piercing scene, 0.16 s with it).
+    reach = 1.5 * spacing
+    d, _ = cKDTree(positions[~mask]).query(positions[mask], k=1, distance_upper_bound=reach)
+    return positions[mask][d < reach]
 
 
 def _setup(name: str, s: "core.SampledSurfels", zero: np.ndarray, one: np.ndarray, spacing: float,

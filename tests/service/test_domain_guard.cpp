@@ -1,5 +1,6 @@
-// One server per domain (server/service/src/domain_guard.hpp): the marker's text form, its order, and the probe
-// finding an earlier server's reply writer through real DDS discovery (two participants in this process).
+// One server per domain (server/service/src/domain_guard.hpp): the marker's text form, its order, the discovery
+// window the guard keeps, and the probe finding an earlier server's reply writer through real DDS discovery (two
+// participants in this process).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -39,8 +40,8 @@ std::optional<ServerMarker> probe(const ServerMarker& self, dds_duration_t windo
   dds::Entity participant = dds::make_participant(kDomain);
   dds::Entity topic =
       dds::make_topic(participant, &surfeledit_proto_Reply_desc, "surfeledit_reply", dds::protocol_qos());
-  DomainGuard guard(participant, topic, self);
-  return guard.earlier_server(dds_time() + window);
+  DomainGuard guard(participant, topic, self, window);
+  return guard.earlier_server();
 }
 
 }  // namespace
@@ -94,4 +95,19 @@ TEST(DomainGuard, IgnoresALaterServerAndOtherWriters) {
   const dds_time_t t0 = dds_time();
   EXPECT_FALSE(probe(marker(0, 0, ""), DDS_MSECS(500)));
   EXPECT_GE(dds_time() - t0, DDS_MSECS(500));  // it looked for the whole window
+}
+
+TEST(DomainGuard, WindowEndsItsLengthAfterConstruction) {
+  dds::Entity participant = dds::make_participant(kDomain);
+  dds::Entity topic =
+      dds::make_topic(participant, &surfeledit_proto_Reply_desc, "surfeledit_reply", dds::protocol_qos());
+  const dds_duration_t window = DDS_SECS(3600);  // no test runs that long: the bounds below are the clock's own
+  const dds_time_t before = dds_time();
+  DomainGuard guard(participant, topic, marker(0, 0, ""), window);
+  const dds_time_t after = dds_time();
+  // The window opened somewhere in [before, after], so it ends in [before + window, after + window].
+  EXPECT_FALSE(guard.expired(before));
+  EXPECT_FALSE(guard.expired(before + window - 1));
+  EXPECT_TRUE(guard.expired(after + window));
+  EXPECT_TRUE(guard.expired(after + window + DDS_SECS(1)));
 }

@@ -72,8 +72,9 @@ bool ServerMarker::precedes(const ServerMarker& other) const {
   return std::tie(start_ns, pid, host) < std::tie(other.start_ns, other.pid, other.host);
 }
 
-DomainGuard::DomainGuard(const dds::Entity& participant, const dds::Entity& reply_topic, ServerMarker self)
-    : self_(std::move(self)) {
+DomainGuard::DomainGuard(const dds::Entity& participant, const dds::Entity& reply_topic, ServerMarker self,
+                         dds_duration_t window_ns)
+    : self_(std::move(self)), deadline_ns_(dds_time() + window_ns) {
   dds::Qos qos = dds::protocol_qos();
   qos.ignore_local_participant();
   probe_ = dds::make_reader(participant, reply_topic, qos);
@@ -99,11 +100,11 @@ std::optional<ServerMarker> DomainGuard::scan() const {
   return earliest;
 }
 
-std::optional<ServerMarker> DomainGuard::earlier_server(dds_time_t deadline_ns) {
+std::optional<ServerMarker> DomainGuard::earlier_server() {
   std::optional<ServerMarker> found = scan();
-  while (!found && dds_time() < deadline_ns) {
+  while (!found && !expired(dds_time())) {
     std::array<dds_attach_t, 1> triggered{};
-    dds::check(dds_waitset_wait_until(waitset_.get(), triggered.data(), triggered.size(), deadline_ns),
+    dds::check(dds_waitset_wait_until(waitset_.get(), triggered.data(), triggered.size(), deadline_ns_),
                "dds_waitset_wait_until");
     dds_subscription_matched_status_t status{};  // reading it resets the trigger
     dds::check(dds_get_subscription_matched_status(probe_.get(), &status), "dds_get_subscription_matched_status");

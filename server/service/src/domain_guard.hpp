@@ -33,18 +33,23 @@ struct ServerMarker {
 
 class DomainGuard {
  public:
-  // Creates the probe reader on `reply_topic` (a participant's own writers are not matched).
-  DomainGuard(const dds::Entity& participant, const dds::Entity& reply_topic, ServerMarker self);
-  // Waits until `deadline_ns` (dds_time() scale) for another server's reply writer and deletes the probe.
-  // Returns the marker of a server this one must give way to (it started earlier), else nothing; a later
-  // server found in the window is left to give way itself.
-  std::optional<ServerMarker> earlier_server(dds_time_t deadline_ns);
+  // Creates the probe reader on `reply_topic` (a participant's own writers are not matched) and opens the
+  // discovery window: it ends `window_ns` (nanoseconds) after this call.
+  DomainGuard(const dds::Entity& participant, const dds::Entity& reply_topic, ServerMarker self,
+              dds_duration_t window_ns);
+  // True once the discovery window has ended at `now_ns` (dds_time() scale).
+  bool expired(dds_time_t now_ns) const { return now_ns >= deadline_ns_; }
+  // Waits until the window ends for another server's reply writer and deletes the probe. Returns the marker
+  // of a server this one must give way to (it started earlier), else nothing; a later server found in the
+  // window is left to give way itself.
+  std::optional<ServerMarker> earlier_server();
 
  private:
   // The earliest marker among the writers matched now that precedes `self_`.
   std::optional<ServerMarker> scan() const;
 
   ServerMarker self_;
+  dds_time_t deadline_ns_;  // end of the discovery window (dds_time() scale)
   dds::Entity probe_;
   dds::Entity waitset_;
 };

@@ -83,9 +83,8 @@ Service::Impl::Impl(const ServiceConfig& c)
       waitset(participant),
       publisher(make_publisher(c)) {
   if (c.domain_probe_ms > 0) {  // first: discovery runs while the journal recovers
-    domain_probe_deadline = dds_time() + DDS_MSECS(static_cast<std::int64_t>(c.domain_probe_ms));
     try {
-      domain_guard.emplace(participant, reply_topic, marker);
+      domain_guard.emplace(participant, reply_topic, marker, DDS_MSECS(static_cast<std::int64_t>(c.domain_probe_ms)));
     } catch (const std::runtime_error& e) {  // e.g. DDS Security permissions without surfeledit_reply
       logger()->warn("cannot look for another server on domain {}: {}", c.domain, e.what());
     }
@@ -281,7 +280,7 @@ dds_duration_t Service::Impl::next_wake() const {
 
 void Service::Impl::check_domain() {
   if (!domain_guard) return;
-  const std::optional<ServerMarker> other = domain_guard->earlier_server(domain_probe_deadline);
+  const std::optional<ServerMarker> other = domain_guard->earlier_server();
   domain_guard.reset();
   if (!other) return;
   throw DomainTakenError("DDS domain " + std::to_string(config.domain) + " already has a surfeledit server (pid " +

@@ -64,7 +64,7 @@ struct Service::Impl {
   void stop_publisher();
 
   // Throws DomainTakenError when an earlier server serves this domain (domain_guard.hpp); waits for the rest of
-  // the discovery window (config.domain_probe_ms from the participant's creation) when none has shown up yet.
+  // the guard's discovery window (config.domain_probe_ms from its creation) when none has shown up yet.
   void check_domain();
 
   ServiceConfig config;
@@ -87,7 +87,6 @@ struct Service::Impl {
   dds::Qos reply_qos;
   dds::Entity reply_writer;          // default partition: replies without a client id; carries `marker`
   std::optional<DomainGuard> domain_guard;  // until check_domain(); none with domain_probe_ms 0
-  dds_time_t domain_probe_deadline = 0;
   ReplyWriters client_replies;       // one writer per client, in the client's partition
   dds::Entity update_writer;
   dds::Entity compact_publisher;      // partition kCompactUpdatePartition

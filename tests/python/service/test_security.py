@@ -11,11 +11,13 @@ it does get in: the probe can see what security prevents.
 
 from __future__ import annotations
 
+import importlib.util
 import shutil
 import subprocess
 import sys
 import time
 from pathlib import Path
+from types import ModuleType
 from typing import Dict, List, Optional
 
 import pytest
@@ -49,6 +51,38 @@ def stranger_dir(tmp_path_factory: pytest.TempPathFactory, security_dir: Path) -
                     "--clients", "alice", "--denied", "", "--rogue", ""],
                    check=True, capture_output=True, text=True, timeout=120)
     return out
+
+
+def make_security_module() -> ModuleType:
+    """scripts/make_security.py as a module: its permission documents and topic lists, for variants of them."""
+    spec = importlib.util.spec_from_file_location("make_security", REPO / "scripts" / "make_security.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def probe_denied_conf(security_dir: Path) -> Path:
+    """The server's identity with permissions that are the server's minus reading surfeledit_reply (the
+    one-server-per-domain probe), signed by the same permissions CA; its security.conf beside the server's,
+    so the relative paths of the CAs and the governance stay valid."""
+    ms = make_security_module()
+    d = security_dir / "server-probe-denied"
+    d.mkdir()
+    for name in ("cert.pem", "key.pem", "security.conf"):
+        shutil.copy(security_dir / "server" / name, d / name)
+    subscribe = [t for t in ms.TOPICS_SERVER_SUBSCRIBES if t != "surfeledit_reply"]
+    assert subscribe and len(subscribe) < len(ms.TOPICS_SERVER_SUBSCRIBES)
+    domains = (0, 230)  # make_security.py's default --domains, which the security_dir fixture uses
+    (d / "permissions.xml").write_text(ms.permissions_xml("server", ms.TOPICS_SERVER_PUBLISHES, subscribe,
+                                                          domains, days=1))
+    ca = security_dir / "ca"
+    ms.sign(d / "permissions.xml", ca / "permissions_ca.pem", ca / "permissions_ca.key")
+    return d / "security.conf"
+
+
+PROBE_FALLBACK_LOG = "cannot look for another server on domain"
 
 
 def parse(out: str) -> Dict[str, List[str]]:
@@ -95,6 +129,25 @@ def test_permitted_client_works_end_to_end(request: pytest.FixtureRequest, tmp_p
     assert out["deform"] == ["0"] * 3 and len(out["step_ms"]) == 3
     # The commit's full update and one per step reached alice's update reader.
     assert int(out["updates"][0]) >= 4, p.log_tail()
+    assert srv.alive, srv.log_tail()
+    assert PROBE_FALLBACK_LOG not in srv.log_tail(100_000)  # its permissions let it probe the domain
+
+
+def test_server_without_probe_permission_falls_back_and_serves(request: pytest.FixtureRequest, tmp_path: Path,
+                                                               security_dir: Path, probe_denied_conf: Path) -> None:
+    """A server whose permissions do not let it read surfeledit_reply cannot create the domain probe's reader:
+    it logs that it cannot look for another server, starts without the check and serves a permitted client."""
+    srv = SecuredServer.started(request, tmp_path, probe_denied_conf)
+    log = srv.log_tail(100_000)
+    assert f"{PROBE_FALLBACK_LOG} {srv.domain}" in log, log
+    assert log.index(PROBE_FALLBACK_LOG) < log.index("ready on domain"), log
+    p = start_probe(client_args(srv.domain, security_dir / "alice" / "security.conf", "alice.1", "unprobed", steps=1),
+                    tmp_path / "alice.log")
+    out = finish(p, 60)
+    assert p.proc.returncode == 0, p.log_tail()
+    for op in ("open", "load_begin", "load_chunk", "load_commit", "set_regions", "configure", "deform", "close"):
+        assert out[op] == ["0"], (op, p.log_tail())
+    assert int(out["updates"][0]) >= 2, p.log_tail()  # the commit's full update and the step's
     assert srv.alive, srv.log_tail()
 
 
