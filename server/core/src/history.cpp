@@ -159,6 +159,19 @@ void History::share_touched(HistoryEntry& entry) {
 
 History::~History() { clear(); }
 
+History& History::operator=(History&& other) noexcept {
+  if (this == &other) return *this;
+  clear();
+  entries_ = std::move(other.entries_);
+  bytes_ = other.bytes_;
+  refs_ = std::move(other.refs_);
+  spare_ = std::move(other.spare_);
+  other.entries_.clear();
+  other.bytes_ = 0;
+  other.refs_.clear();
+  return *this;
+}
+
 RowsImage History::take_spare() {
   if (spare_.empty()) return RowsImage();
   RowsImage r = std::move(spare_.back());

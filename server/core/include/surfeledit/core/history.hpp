@@ -158,8 +158,8 @@ class History {
   History(const History&) = delete;
   History& operator=(const History&) = delete;
   History(History&&) = default;
-  History& operator=(History&&) = default;
-  ~History();
+  History& operator=(History&& other) noexcept;  // retires this one's images first
+  ~History();                                     // retires its images (History::retire)
   // Snapshots (session_snapshot.cpp): the entries and spare buffers as saved (each entry's `bytes` kept).
   const std::vector<RowsImage>& spare() const { return spare_; }
   void restore(std::deque<HistoryEntry> entries, std::vector<RowsImage> spare);
