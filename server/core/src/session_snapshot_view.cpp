@@ -10,6 +10,15 @@ SessionSnapshotView::SessionSnapshotView(SessionSnapshotView&&) noexcept = defau
 SessionSnapshotView& SessionSnapshotView::operator=(SessionSnapshotView&&) noexcept = default;
 
 void SessionSnapshotView::encode(SnapshotWriter& out) const {
+  // The buffer sized once: each image's bytes() (its arrays' capacities) is about what it encodes to, so a
+  // large history is not copied again at every doubling (nor held twice while the buffer grows).
+  std::size_t n = out.bytes().size();
+  for (const Piece& p : pieces_) {
+    n += p.bytes.size();
+    if (p.ids) n += 2 * sizeof(std::uint64_t) + p.ids->size() * sizeof(IdList::value_type);
+    if (p.image) n += p.image->bytes();
+  }
+  out.reserve(n);
   for (const Piece& p : pieces_) {
     out.raw(p.bytes.data(), p.bytes.size());
     if (p.ids) out.vec(*p.ids);

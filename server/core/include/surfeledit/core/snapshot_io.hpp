@@ -46,6 +46,8 @@ class SnapshotWriter {
   void raw(const void* p, std::size_t n) {
     if (n) buf_.append(static_cast<const char*>(p), n);
   }
+  // Room for `n` bytes in all, so that a writer that knows about how much it will write grows its buffer once.
+  void reserve(std::size_t n) { buf_.reserve(n); }
   const std::string& bytes() const { return buf_; }
   std::string take() { return std::move(buf_); }
 
