@@ -13,6 +13,7 @@
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/kdtree.hpp"
 #include "surfeledit/core/two_arms.hpp"
+#include "two_author_script.hpp"
 
 namespace surfeledit {
 namespace {
@@ -28,46 +29,22 @@ struct Outcome {
   }
 };
 
-// A scripted op by one of two authors.
-struct Op {
-  int kind = 0;  // 0 step, 1 undo, 2 redo
-  std::string author;
-  Vec3 t = Vec3::Zero();
-  double angle = 0.0;
-};
+using test::ScriptOp;
+using Op = ScriptOp;
 
-std::vector<Op> script(std::uint32_t seed, int n) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<Op> ops;
-  for (int k = 0; k < n; ++k) {
-    Op op;
-    op.author = rng() % 2 ? "a" : "b";
-    const std::uint32_t r = rng() % 10;
-    op.kind = r < 6 ? 0 : r < 8 ? 1 : 2;
-    // Arm A moves towards +x, arm B towards -x: they meet after a few steps each.
-    const double dir = op.author == "a" ? 1.0 : -1.0;
-    op.t = Vec3(dir * (0.04 + 0.02 * u(rng)), 0.01 * u(rng), 0.01 * u(rng));
-    op.angle = 0.05 * u(rng);
-    ops.push_back(op);
-  }
-  return ops;
-}
+// Steps, undos and redos (no configure).
+std::vector<Op> script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {6, 2, 2, 10}); }
 
 Outcome apply(EditSession& s, const Op& op) {
   Outcome out;
   try {
-    if (op.kind == 0) {
-      DeformParams p;
-      p.translation = op.t;
-      p.axis = Vec3::UnitY();
-      p.angle = op.angle;
-      const StepResult r = s.deform(p, op.author);
+    if (op.kind == ScriptOp::Step) {
+      const StepResult r = s.deform(test::step_params(op), op.author);
       out.colliding = r.colliding;
       out.response = r.response;
       out.version = s.version();
     } else {
-      out.version = op.kind == 1 ? s.undo(op.author) : s.redo(op.author);
+      out.version = op.kind == ScriptOp::Undo ? s.undo(op.author) : s.redo(op.author);
     }
   } catch (const Error& e) {
     out.error = std::string(to_string(e.code())) + ": " + e.what();
@@ -171,7 +148,7 @@ TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
   // Per-author undo to the bottom of each history, alternating authors.
   for (int k = 0; k < 30; ++k) {
     Op op;
-    op.kind = 1;
+    op.kind = ScriptOp::Undo;
     op.author = k % 2 ? "a" : "b";
     const Outcome x = apply(live, op), y = apply(copy, op);
     EXPECT_TRUE(x == y) << "undo " << k << ": " << x.error << " / " << y.error;

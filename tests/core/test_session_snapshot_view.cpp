@@ -13,51 +13,29 @@
 
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/two_arms.hpp"
+#include "two_author_script.hpp"
 
 namespace surfeledit {
 namespace {
 
-// A scripted op: 0 step, 1 undo, 2 redo, 3 configure (a tool-only image), by author a or b.
-struct Op {
-  int kind = 0;
-  std::string author;
-  Vec3 t = Vec3::Zero();
-  double angle = 0.0;
-};
+using test::ScriptOp;
+using Op = ScriptOp;
 
-std::vector<Op> script(std::uint32_t seed, int n) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<Op> ops;
-  for (int k = 0; k < n; ++k) {
-    Op op;
-    op.author = rng() % 2 ? "a" : "b";
-    const std::uint32_t r = rng() % 12;
-    op.kind = r < 7 ? 0 : r < 9 ? 1 : r < 11 ? 2 : 3;
-    const double dir = op.author == "a" ? 1.0 : -1.0;  // the arms move towards each other
-    op.t = Vec3(dir * (0.04 + 0.02 * u(rng)), 0.01 * u(rng), 0.01 * u(rng));
-    op.angle = 0.05 * u(rng);
-    ops.push_back(op);
-  }
-  return ops;
-}
+// Steps, undos, redos and configures (tool-only images).
+std::vector<Op> script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {7, 2, 2, 12}); }
 
 // The op's outcome as text (a step's colliding count and response, a version, or the error).
 std::string apply(EditSession& s, const Op& op, int k) {
   try {
-    if (op.kind == 0) {
-      DeformParams p;
-      p.translation = op.t;
-      p.axis = Vec3::UnitY();
-      p.angle = op.angle;
-      const StepResult r = s.deform(p, op.author);
+    if (op.kind == ScriptOp::Step) {
+      const StepResult r = s.deform(test::step_params(op), op.author);
       return "step " + std::to_string(r.colliding.size()) + " " + r.response;
     }
-    if (op.kind == 3) {
+    if (op.kind == ScriptOp::Configure) {
       s.configure({{"parallel_min_ms", 1.0 + k}}, op.author);
       return "configure";
     }
-    return std::to_string(op.kind == 1 ? s.undo(op.author) : s.redo(op.author));
+    return std::to_string(op.kind == ScriptOp::Undo ? s.undo(op.author) : s.redo(op.author));
   } catch (const Error& e) {
     return std::string("error ") + e.what();
   }
