@@ -116,16 +116,8 @@ void History::keep_spare(HistoryEntry& entry) {
     } else {
       // A view still reads it: the spare is a copy, the same as the move would give (version runs with
       // their capacity: the bound counts capacities).
-      const RowsImage& r = *image->rows;
-      RowsImage copy;
-      copy.rows = r.rows;
-      copy.bent = r.bent;
-      copy.positions = r.positions;
-      copy.normals = r.normals;
-      copy.tangent_u = r.tangent_u;
-      copy.tangent_v = r.tangent_v;
-      copy.version_runs.reserve(r.version_runs.capacity());
-      copy.version_runs.assign(r.version_runs.begin(), r.version_runs.end());
+      RowsImage copy = *image->rows;
+      copy.version_runs.reserve(image->rows->version_runs.capacity());
       spare_.push_back(std::move(copy));
     }
   }

@@ -42,10 +42,7 @@ void SnapshotThread::push(Job job) {
 }
 
 void SnapshotThread::write(std::uint64_t seq, std::vector<std::string> parts) {
-  Job job;
-  job.seq = seq;
-  job.parts = std::move(parts);
-  push(std::move(job));
+  write(seq, [ready = std::move(parts)](std::vector<std::string>& out) mutable { out = std::move(ready); });
 }
 
 void SnapshotThread::write(std::uint64_t seq, Encoder encode) {
@@ -119,12 +116,10 @@ void SnapshotThread::run() {
       WrittenSnapshot done;
       done.seq = job.seq;
       try {
-        if (job.encode) {
-          const auto t0 = std::chrono::steady_clock::now();
-          job.encode(job.parts);
-          job.encode = nullptr;  // what it held (history images shared with the session) is let go here
-          done.encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        }
+        const auto t0 = std::chrono::steady_clock::now();
+        job.encode(job.parts);
+        job.encode = nullptr;  // what it held (history images shared with the session) is let go here
+        done.encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         done.record = write_snapshot_file(dir_, dir_fd_.get(), job.seq, job.parts, &done.times);
       } catch (const std::exception& e) {
         done.error = e.what();

@@ -41,12 +41,13 @@ class SnapshotThread {
   SnapshotThread(const SnapshotThread&) = delete;
   SnapshotThread& operator=(const SnapshotThread&) = delete;
 
-  // Hands snapshot `seq` (the concatenation of `parts`) over. Requires !busy().
-  void write(std::uint64_t seq, std::vector<std::string> parts);
-  // The same with the parts made on this thread by `encode` (which appends them; destroyed on this
-  // thread once it ran). A throw from it is the snapshot's failure, like a failed write.
+  // Hands snapshot `seq` over, its payload (the concatenation of parts) made on this thread by `encode`
+  // (which appends the parts; destroyed on this thread once it ran). A throw from it is the snapshot's
+  // failure, like a failed write. Requires !busy().
   using Encoder = std::function<void(std::vector<std::string>& parts)>;
   void write(std::uint64_t seq, Encoder encode);
+  // The same with the parts ready.
+  void write(std::uint64_t seq, std::vector<std::string> parts);
   // Hands over files to delete in order (journal segments), then the snapshots below `seq` and every
   // temporary one, then a directory fsync. A failure is logged (the files stay; nothing depends on them).
   void remove(std::vector<std::string> segments, std::uint64_t snapshots_before);
@@ -66,8 +67,8 @@ class SnapshotThread {
   struct Job {
     Kind kind = Kind::Write;
     std::uint64_t seq = 0;  // write: the snapshot's number; remove: snapshots below it; prepare: the segment
-    std::vector<std::string> parts;         // write: the payload
-    Encoder encode;                         // write: makes the payload first (when set)
+    Encoder encode;                         // write: makes the payload
+    std::vector<std::string> parts;         // write: the payload, once made (on this thread)
     std::vector<std::string> segments;      // remove: segment files, oldest first
   };
   void push(Job job);
