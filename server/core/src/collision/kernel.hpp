@@ -56,6 +56,16 @@
 //     // (CollisionDetector::reset_rows; Robust). The driver answers none for a kernel without it.
 //     CollisionDetector::ResetRows reset_rows() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
+//
+//     // Optional probes, for a kernel whose test is searches and then reads of the rows they found (Robust): the
+//     // row sweep (parallel_sweep.hpp) then runs a block of rows in two passes, every search first, then the
+//     // updates, so that the rows found are fetched while the next searches run.
+//     struct Probe;           // what the searches of one row's test found
+//     bool probing() const;   // whether these settings test by probes (else update(s, pt) is called)
+//     // update()'s searches, when it will test the point (true); reads the state only.
+//     bool probe(const State& s, const TestPoint& pt, Probe& found) const;
+//     // update(s, pt) with what probe() found (nullptr: probe() returned false).
+//     Index update(State& s, const TestPoint& pt, const Probe* found) const;
 //   };
 //
 // What a tested point asks about inside/outside beyond the thesis's nearest-surfel test (`inside` =

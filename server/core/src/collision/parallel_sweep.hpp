@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <type_traits>
 #include <vector>
 
 #include "kernel_rows.hpp"
@@ -15,6 +16,12 @@ struct Tally {
   Index tested = 0;   // points whose state was (re)evaluated (queries > 0)
   Index queries = 0;  // nearest-neighbour queries made
 };
+
+// Whether a kernel has probes (kernel.hpp: Probe, probing(), probe(), update(s, pt, found)).
+template <typename Kernel, typename = void>
+inline constexpr bool kProbes = false;
+template <typename Kernel>
+inline constexpr bool kProbes<Kernel, std::void_t<typename Kernel::Probe>> = true;
 
 // The points of a step are independent: each row goes through update() (not_candidate() when the
 // broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
@@ -89,6 +96,11 @@ struct ParallelSweep {
                          const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
                          Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
                          Index& tested, Index& queries) {
+    if constexpr (kProbes<Kernel>) {
+      if (kernel.probing())
+        return probed_range<kBySlot, kJournal, kCandidate>(kernel, rows, states, scene, previous, candidate, hit,
+                                                           journal, part, begin, end, tested, queries);
+    }
     typename Kernel::State* const stored = states.stored_data();
     Index t = 0, m_sum = 0;
     for (Index q = begin; q < end; ++q) {
@@ -107,6 +119,52 @@ struct ParallelSweep {
       hit[q] = s.colliding();  // read while the state is in cache
       m_sum += made;
       t += made > 0;
+    }
+    tested += t;
+    queries += m_sum;
+  }
+
+  // rows_range() for a kernel with probes (kernel.hpp), kProbeBlock rows at a time: first the searches of the
+  // block's rows that will be tested (the kernel asks for the cache lines of what they found), then every row's
+  // update in order with what its searches found, so a row's reads do not wait on memory right after its
+  // search. States are written in the second pass only, so the journal sees each row as rows_range() does.
+  static constexpr Index kProbeBlock = 32;
+  static constexpr Index kAhead = 24;  // rows: the state read that far ahead is asked for
+  template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
+  static void probed_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
+                           const CollisionScene& scene, const Points& previous,
+                           const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
+                           Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
+                           Index& tested, Index& queries) {
+    typename Kernel::State* const stored = states.stored_data();
+    typename Kernel::Probe found[kProbeBlock];
+    bool probed[kProbeBlock];
+    Index t = 0, m_sum = 0;
+    for (Index b = begin; b < end; b += kProbeBlock) {
+      const Index e = std::min(end, b + kProbeBlock);
+      for (Index q = b; q < e; ++q) {
+        const Index r = rows[q];
+        const auto& s = kBySlot ? stored[q] : states[r];
+        if constexpr (kBySlot) __builtin_prefetch(stored + std::min(q + kAhead, end - 1));
+        probed[q - b] = !(kCandidate && !(*candidate)[r]) && kernel.probe(s, row_point(scene, previous, r), found[q - b]);
+      }
+      for (Index q = b; q < e; ++q) {
+        const Index r = rows[q];
+        const TestPoint pt = row_point(scene, previous, r);
+        auto& s = kBySlot ? stored[q] : states[r];
+        typename Kernel::State before;
+        if constexpr (kJournal) before = s;
+        Index made;
+        if (kCandidate && !(*candidate)[r]) {
+          made = kernel.not_candidate(s, pt);
+        } else {
+          made = kernel.update(s, pt, probed[q - b] ? &found[q - b] : nullptr);
+        }
+        if constexpr (kJournal) journal->note(r, before, s, made, part);
+        hit[q] = s.colliding();
+        m_sum += made;
+        t += made > 0;
+      }
     }
     tested += t;
     queries += m_sum;

@@ -63,9 +63,39 @@ class RobustKernel {
   }
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2) made = test(s, pt.p, pt.previous());
+    if (leaves(s, pt)) made = test(s, pt.p, pt.previous());
     finish(s, pt.p);
     return made;
+  }
+  // Probes (kernel.hpp): the original model's searches of a test, found for a block of rows before their updates.
+  struct Probe {
+    Index near = -1;         // original row nearest to the point
+    Index near_old = -1;     // original row nearest to old_position, when its inside state is re-derived; else -1
+    std::uint32_t leaf = 0;  // the leaf holding `near` (State::leaf's next value)
+  };
+  bool probing() const { return !with_inside(); }
+  // update()'s searches when the point left its sphere (true; the rows they found are being fetched), else false.
+  [[gnu::always_inline]] bool probe(const State& s, const TestPoint& pt, Probe& found) const {
+    if (!leaves(s, pt)) return false;
+    found = search(s, pt.p);
+    prefetch_ref(found.near);
+    if (found.near_old >= 0) prefetch_ref(found.near_old);
+    return true;
+  }
+  // update() with what probe() found (null when it returned false).
+  [[gnu::always_inline]] Index update(State& s, const TestPoint& pt, const Probe* found) const {
+    Index made = 0;
+    if (found) {
+      s.flags &= static_cast<std::uint8_t>(~kCrossed);
+      double r_near;
+      made = classify(s, pt.p, *found, r_near);
+    }
+    finish(s, pt.p);
+    return made;
+  }
+  // Whether the point at pt left its sphere (is tested this step).
+  [[gnu::always_inline]] static bool leaves(const State& s, const TestPoint& pt) {
+    return (pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2;
   }
   // Not a candidate: it keeps its collision state. If it left its sphere and does not collide, its
   // inside state is forgotten (re-derived at its previous position when it is tested next) and its
@@ -73,7 +103,7 @@ class RobustKernel {
   // everything (it is still inside, farther than its step from the zero surface).
   Index not_candidate(State& s, const TestPoint& pt) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
-    if ((pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2 && !(s.flags & kColliding)) {
+    if (leaves(s, pt) && !(s.flags & kColliding)) {
       s.flags |= kFirstUpdate;
       s.sphere = {pt.p, 0.0};
     }
@@ -135,15 +165,35 @@ class RobustKernel {
     double radius;  // disc radius
     bool zero;      // a zero surfel (a change of inside state against it counts)
   };
-  // Original row o: from the copy (deformable) or from the bound model (zero).
-  Ref ref(Index o) const {
+  // Where original row o's values are: in the copy (deformable) or in the bound model (zero).
+  struct At {
+    const double* p;  // position (3)
+    const double* n;  // normal (3)
+    const double* r;  // radius
+    bool zero;        // a zero surfel
+  };
+  [[gnu::always_inline]] At at(Index o) const {
     const bool deformable = orig_.deformable.test(o);
     // Its index in the copy or its model row (row_of(o) may be -1 for a removed deformable row: not picked then).
     const std::ptrdiff_t i = deformable ? orig_.deformable.rank(o) : row_of(o);
-    const double* p = (deformable ? orig_.positions.data() : model_positions_) + 3 * i;
-    const double* n = (deformable ? orig_.normals.data() : model_normals_) + 3 * i;
-    const double* r = (deformable ? orig_.radii.data() : model_radii_) + i;
-    return {Vec3(p[0], p[1], p[2]), Vec3(n[0], n[1], n[2]), *r, !deformable};
+    return {(deformable ? orig_.positions.data() : model_positions_) + 3 * i,
+            (deformable ? orig_.normals.data() : model_normals_) + 3 * i,
+            (deformable ? orig_.radii.data() : model_radii_) + i, !deformable};
+  }
+  // Original row o.
+  Ref ref(Index o) const {
+    const At a = at(o);
+    return {Vec3(a.p[0], a.p[1], a.p[2]), Vec3(a.n[0], a.n[1], a.n[2]), *a.r, a.zero};
+  }
+  // Asks for the cache lines ref(o) reads. Inlined: GCC takes an out-of-line function of prefetches alone for
+  // one without effects and drops its calls (RESULTS §68).
+  [[gnu::always_inline]] void prefetch_ref(Index o) const {
+    const At a = at(o);
+    __builtin_prefetch(a.p);
+    __builtin_prefetch(a.p + 2);
+    __builtin_prefetch(a.n);
+    __builtin_prefetch(a.n + 2);
+    __builtin_prefetch(a.r);
   }
   bool alive(Index o) const { return orig_.alive.empty() || orig_.alive[static_cast<std::size_t>(o)] != 0; }
   Index original_rows() const { return orig_.deformable.rows(); }
@@ -151,14 +201,6 @@ class RobustKernel {
   // `before` (the model before the move), when given.
   Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
                          const RigidRows* before = nullptr) const;
-  // The inside state of a point at p against the original model (its tree, bound model). Searched from the leaf
-  // the tree's descent reaches first (no leaf given: a cold KdTree::nearest_from, the same answer as nearest()).
-  bool inside_original(const Vec3& p) const {
-    std::uint32_t leaf = std::numeric_limits<std::uint32_t>::max();
-    const Ref k = ref(orig_.tree->nearest_from(p, leaf));
-    return (p - k.p).dot(k.n) < params_.threshold;
-  }
-
   // The original model's k-d tree over its alive rows (every row while all are alive), as reset, removals,
   // rigid moves and snapshot loads build it. Leaves of kOriginalLeafSize points: with the k = 1 leaf scan
   // of the tree (kdtree_search.hpp) 24 measured ~10 % faster than the default 10 and than 16 or 32 on the
@@ -198,21 +240,39 @@ class RobustKernel {
     set_inside(s, pr.inside);
     return made;
   }
-  // The thesis's test against the original model (Code 6.8). A forgotten inside state (kFirstUpdate) is
-  // re-derived at old_position only when the nearest original surfel to p1 is a zero surfel: against a
-  // deformable one no change counts, and the state is overwritten by p1's, so that query cannot change the
-  // result (an exact skip: RESULTS §50).
+  // The thesis's test against the original model (Code 6.8): its searches (search()), then what they found
+  // (classify()).
   Index test_original(State& s, const Vec3& p1, double& r_near) const {
+    return classify(s, p1, search(s, p1), r_near);
+  }
+  // The searches of a test at p1: the original surfel nearest to p1, from the state's leaf, and the one nearest
+  // to old_position when a forgotten inside state (kFirstUpdate) is to be re-derived there. That is only when
+  // the nearest to p1 is a zero surfel: against a deformable one no change counts, and the state is overwritten
+  // by p1's, so that query cannot change the result (an exact skip: RESULTS §50).
+  Probe search(const State& s, const Vec3& p1) const {
+    Probe f;
+    f.leaf = s.leaf;
+    f.near = orig_.tree->nearest_from(p1, f.leaf);
+    if (!orig_.deformable.test(f.near) && (s.flags & kFirstUpdate) != 0) {
+      std::uint32_t cold = std::numeric_limits<std::uint32_t>::max();  // searched from the descent's first leaf
+      f.near_old = orig_.tree->nearest_from(s.old_position, cold);
+    }
+    return f;
+  }
+  // The state after a test at p1 whose searches found `f`.
+  Index classify(State& s, const Vec3& p1, const Probe& f, double& r_near) const {
     const double w = params_.threshold;
-    const Ref k = ref(orig_.tree->nearest_from(p1, s.leaf));
+    s.leaf = f.leaf;
+    const Ref k = ref(f.near);
     Index made = 1;
     const Vec3 d = p1 - k.p;
     r_near = k.radius;
     s.sphere = {p1, sphere_rho2(d.squaredNorm(), k.radius, params_.sphere_margin)};
     const bool inside_now = d.dot(k.n) < w;
-    if (k.zero & ((s.flags & kFirstUpdate) != 0)) {
+    if (f.near_old >= 0) {
       ++made;
-      set_inside(s, inside_original(s.old_position));
+      const Ref k0 = ref(f.near_old);
+      set_inside(s, (s.old_position - k0.p).dot(k0.n) < w);
     }
     // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero).
     const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));

@@ -67,13 +67,32 @@ class TemporalKernel : public ZeroSetKernel {
       return 0;
     }
     if (inside_) return update_inside(s, pt);
-    const Index k = zero_.nearest_from(pt.p, s.leaf);
-    const SimpleTest t = test(k, pt, s.colliding(), !s.unbounded);
-    s.unbounded = 0;
-    s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};
-    s.hit = t.state;
-    s.depth = std::sqrt(t.dist2);
-    return 1;
+    return retest(s, pt, zero_.nearest_from(pt.p, s.leaf));
+  }
+  // Probes (kernel.hpp): the search of a test, found for a block of rows before their updates.
+  struct Probe {
+    Index near = -1;         // zero surfel nearest to the point (index into the zero copies)
+    std::uint32_t leaf = 0;  // the leaf holding it (State::leaf's next value)
+  };
+  bool probing() const { return !inside_; }
+  // update()'s search when the point left its sphere (true; the zero surfel found is being fetched), else false.
+  [[gnu::always_inline]] bool probe(const State& s, const TestPoint& pt, Probe& found) const {
+    if ((pt.p - s.sphere.center).squaredNorm() < s.sphere.rho2) return false;
+    found.leaf = s.leaf;
+    found.near = zero_.nearest_from(pt.p, found.leaf);
+    const auto k = static_cast<std::ptrdiff_t>(found.near);
+    __builtin_prefetch(zero_.positions.data() + 3 * k);
+    __builtin_prefetch(zero_.positions.data() + 3 * k + 2);
+    __builtin_prefetch(zero_.normals.data() + 3 * k);
+    __builtin_prefetch(zero_.normals.data() + 3 * k + 2);
+    __builtin_prefetch(zero_.radii.data() + k);
+    return true;
+  }
+  // update() with what probe() found (null when it returned false).
+  Index update(State& s, const TestPoint& pt, const Probe* found) const {
+    if (!found) return update(s, pt);
+    s.leaf = found->leaf;
+    return retest(s, pt, found->near);
   }
   // A point that leaves its sphere needs its nearest zero distance for its next sphere whether or not
   // the broad phase ruled it out (the step bound then keeps its state): Temporal ignores candidates.
@@ -98,6 +117,15 @@ class TemporalKernel : public ZeroSetKernel {
   }
 
  private:
+  // The thesis's test of a point that left its sphere against zero surfel k, its nearest.
+  Index retest(State& s, const TestPoint& pt, Index k) const {
+    const SimpleTest t = test(k, pt, s.colliding(), !s.unbounded);
+    s.unbounded = 0;
+    s.sphere = {pt.p, sphere_rho2(t.dist2, zero_.radii[k], params_.sphere_margin)};
+    s.hit = t.state;
+    s.depth = std::sqrt(t.dist2);
+    return 1;
+  }
   // The model when `inside` is not nearest or `swept` is on (else null: the thesis's test).
   void build_inside() {
     inside_.reset();
