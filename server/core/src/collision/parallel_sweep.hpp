@@ -107,21 +107,27 @@ struct ParallelSweep {
       const Index r = rows[q];
       const TestPoint pt = row_point(scene, previous, r);
       auto& s = kBySlot ? stored[q] : states[r];
-      typename Kernel::State before;
-      if constexpr (kJournal) before = s;
-      Index made;
-      if (kCandidate && !(*candidate)[r]) {
-        made = kernel.not_candidate(s, pt);
-      } else {
-        made = kernel.update(s, pt);
-      }
-      if constexpr (kJournal) journal->note(r, before, s, made, part);
-      hit[q] = s.colliding();  // read while the state is in cache
-      m_sum += made;
-      t += made > 0;
+      row_step<kJournal, kCandidate>(kernel, q, r, s, pt, candidate, hit, journal, part, t, m_sum,
+                                     [&] { return kernel.update(s, pt); });
     }
     tested += t;
     queries += m_sum;
+  }
+
+  // One row of a sweep: update() (`update`) or not_candidate(), the journal's note, the row's hit flag (read while
+  // the state is in cache), the tallies.
+  template <bool kJournal, bool kCandidate, typename Kernel, typename Update>
+  [[gnu::always_inline]] static void row_step(const Kernel& kernel, Index q, Index r, typename Kernel::State& s,
+                                              const TestPoint& pt, const std::vector<std::uint8_t>* candidate,
+                                              std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal,
+                                              std::size_t part, Index& t, Index& m_sum, Update update) {
+    typename Kernel::State before;
+    if constexpr (kJournal) before = s;
+    const Index made = kCandidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : update();
+    if constexpr (kJournal) journal->note(r, before, s, made, part);
+    hit[q] = s.colliding();
+    m_sum += made;
+    t += made > 0;
   }
 
   // rows_range() for a kernel with probes (kernel.hpp), kProbeBlock rows at a time: first the searches of the
@@ -152,18 +158,9 @@ struct ParallelSweep {
         const Index r = rows[q];
         const TestPoint pt = row_point(scene, previous, r);
         auto& s = kBySlot ? stored[q] : states[r];
-        typename Kernel::State before;
-        if constexpr (kJournal) before = s;
-        Index made;
-        if (kCandidate && !(*candidate)[r]) {
-          made = kernel.not_candidate(s, pt);
-        } else {
-          made = kernel.update(s, pt, probed[q - b] ? &found[q - b] : nullptr);
-        }
-        if constexpr (kJournal) journal->note(r, before, s, made, part);
-        hit[q] = s.colliding();
-        m_sum += made;
-        t += made > 0;
+        const auto* f = probed[q - b] ? &found[q - b] : nullptr;
+        row_step<kJournal, kCandidate>(kernel, q, r, s, pt, candidate, hit, journal, part, t, m_sum,
+                                       [&] { return kernel.update(s, pt, f); });
       }
     }
     tested += t;
