@@ -57,9 +57,10 @@
 //     CollisionDetector::ResetRows reset_rows() const;
 //     std::size_t memory_bytes() const;  // references only (states are counted by the driver)
 //
-//     // Optional probes, for a kernel whose test is searches and then reads of the rows they found (Robust): the
-//     // row sweep (parallel_sweep.hpp) then runs a block of rows in two passes, every search first, then the
-//     // updates, so that the rows found are fetched while the next searches run.
+//     // Optional probes, for a kernel whose test is searches and then reads of the rows they found (Robust,
+//     // Temporal): the row sweep (parallel_sweep.hpp) then runs a block of rows in two passes, every search
+//     // first, then the updates, so that the rows found are fetched while the next searches run. Rows the broad
+//     // phase ruled out are not probed (not_candidate()).
 //     struct Probe;           // what the searches of one row's test found
 //     bool probing() const;   // whether these settings test by probes (else update(s, pt) is called)
 //     // update()'s searches, when it will test the point (true); reads the state only.
