@@ -1,6 +1,8 @@
 #include "dds_handles.hpp"
 
+#include <cstdlib>
 #include <stdexcept>
+#include <string>
 
 namespace surfeledit::service::dds {
 
@@ -79,6 +81,18 @@ Qos protocol_qos() {
   Qos qos;
   qos.reliable(DDS_SECS(10)).keep_all().volatile_durability();
   return qos;
+}
+
+Entity make_domain(dds_domainid_t domain) {
+  if (domain == DDS_DOMAIN_DEFAULT) return Entity();
+  std::string config =
+      "<CycloneDDS><Domain id=\"any\"><General><MaxMessageSize>65500B</MaxMessageSize>"
+      "<FragmentSize>65000B</FragmentSize></General></Domain></CycloneDDS>";
+  // A list of sources, later ones overriding earlier ones: the user's configuration after the defaults.
+  if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr && *uri != '\0') config += std::string(",") + uri;
+  const dds_entity_t handle = dds_create_domain(domain, config.c_str());
+  if (handle == DDS_RETCODE_PRECONDITION_NOT_MET) return Entity();
+  return Entity(handle, "dds_create_domain");
 }
 
 Entity make_participant(dds_domainid_t domain, const std::vector<SecurityProperty>& properties) {

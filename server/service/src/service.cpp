@@ -59,6 +59,7 @@ constexpr dds_duration_t kServerLiveliness = DDS_MSECS(1000);
 Service::Impl::Impl(const ServiceConfig& c)
     : config(c),
       handler(handler_config(c)),
+      domain(dds::make_domain(static_cast<dds_domainid_t>(c.domain))),
       participant(dds::make_participant(static_cast<dds_domainid_t>(c.domain),
                                         c.security.empty() ? std::vector<SecurityProperty>{}
                                                            : security_properties(c.security))),

@@ -72,6 +72,7 @@ struct Service::Impl {
   Handler handler;
   std::atomic<bool> stopping{false};
   // Declaration order = creation order; destruction deletes children before the participant.
+  dds::Entity domain;  // created before the participant, with the server's transport defaults (dds::make_domain)
   dds::Entity participant;
   dds::Qos qos;
   dds::Entity request_topic;
