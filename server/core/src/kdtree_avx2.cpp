@@ -53,12 +53,20 @@ struct Avx2Scan {
     __m256d best = inf, best_slot = inf;
     __m256d slot = _mm256_setr_pd(a, a + 1.0, a + 2.0, a + 3.0);
     const __m256d four = _mm256_set1_pd(4.0);
-    for (std::uint32_t s = a; s < b; s += 4) {
+    // Whole vectors without a lane mask, then the last, partial one (if any) with it: the same updates.
+    std::uint32_t s = a;
+    for (; s + 4 <= b; s += 4) {
+      const __m256d d2 = dist2(t, q, s);
+      const __m256d lt = _mm256_cmp_pd(d2, best, _CMP_LT_OQ);
+      best = _mm256_blendv_pd(best, d2, lt);
+      best_slot = _mm256_blendv_pd(best_slot, slot, lt);
+      slot = _mm256_add_pd(slot, four);
+    }
+    if (s < b) {
       const __m256d d2 = dist2(t, q, s);
       const __m256d lt = _mm256_and_pd(_mm256_cmp_pd(d2, best, _CMP_LT_OQ), lanes(b - s));
       best = _mm256_blendv_pd(best, d2, lt);
       best_slot = _mm256_blendv_pd(best_slot, slot, lt);
-      slot = _mm256_add_pd(slot, four);
     }
     const __m256d m = lane_min(best);
     const __m256d k = lane_min(_mm256_blendv_pd(inf, best_slot, _mm256_cmp_pd(best, m, _CMP_EQ_OQ)));
