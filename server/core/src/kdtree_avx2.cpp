@@ -55,6 +55,27 @@ struct Avx2Scan {
     const __m256d four = _mm256_set1_pd(4.0);
     // Whole vectors without a lane mask, then the last, partial one (if any) with it: the same updates.
     std::uint32_t s = a;
+    if (b - a >= 8) {
+      __m256d best1 = inf, best_slot1 = inf;
+      __m256d slot1 = _mm256_add_pd(slot, four);
+      const __m256d eight = _mm256_set1_pd(8.0);
+      for (; s + 8 <= b; s += 8) {
+        const __m256d d0 = dist2(t, q, s), d1 = dist2(t, q, s + 4);
+        const __m256d lt0 = _mm256_cmp_pd(d0, best, _CMP_LT_OQ), lt1 = _mm256_cmp_pd(d1, best1, _CMP_LT_OQ);
+        best = _mm256_blendv_pd(best, d0, lt0);
+        best_slot = _mm256_blendv_pd(best_slot, slot, lt0);
+        best1 = _mm256_blendv_pd(best1, d1, lt1);
+        best_slot1 = _mm256_blendv_pd(best_slot1, slot1, lt1);
+        slot = _mm256_add_pd(slot, eight);
+        slot1 = _mm256_add_pd(slot1, eight);
+      }
+      // Lane by lane the (dist2, slot)-smaller of the two.
+      const __m256d take1 = _mm256_or_pd(_mm256_cmp_pd(best1, best, _CMP_LT_OQ),
+                                         _mm256_and_pd(_mm256_cmp_pd(best1, best, _CMP_EQ_OQ),
+                                                       _mm256_cmp_pd(best_slot1, best_slot, _CMP_LT_OQ)));
+      best = _mm256_blendv_pd(best, best1, take1);
+      best_slot = _mm256_blendv_pd(best_slot, best_slot1, take1);
+    }
     for (; s + 4 <= b; s += 4) {
       const __m256d d2 = dist2(t, q, s);
       const __m256d lt = _mm256_cmp_pd(d2, best, _CMP_LT_OQ);
