@@ -107,7 +107,8 @@ TEST(KdTreeScan, VectorScansEqualScalarOnRandomCloudsOffsetsAndScales) {
 }
 
 // Lattice queries at lattice points, cell centres and edge midpoints: up to eight equidistant points, so the
-// winner is decided by the tie rule alone.
+// winner is decided by the tie rule alone. Leaves of 13 and 48 points take the k = 1 scan's two accumulators
+// (blocks of eight, merged lane by lane) and its whole and partial last vectors, with ties across all of them.
 TEST(KdTreeScan, VectorScansBreakTiesAsScalar) {
   for (KdScan scan : vector_scans()) {
     for (const Vec3& off : {Vec3(0, 0, 0), Vec3(1e6, 1e6, -1e6)}) {
@@ -119,7 +120,7 @@ TEST(KdTreeScan, VectorScansBreakTiesAsScalar) {
         queries.row(3 * i + 1) = (base + Vec3(0.25, 0.25, 0.25)).transpose();
         queries.row(3 * i + 2) = (base + Vec3(0.25, 0.0, 0.0)).transpose();
       }
-      for (int leaf : {1, 2, 7, 16, 24}) expect_same_as_scalar(pts, queries, leaf, scan, 0.5);
+      for (int leaf : {1, 2, 7, 13, 16, 24, 48}) expect_same_as_scalar(pts, queries, leaf, scan, 0.5);
     }
   }
 }
