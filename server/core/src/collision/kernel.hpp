@@ -99,6 +99,20 @@ inline TestPoint row_point(const CollisionScene& scene, const Points& previous, 
   return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0)};
 }
 
+// The arrays row_point() reads, taken once for a sweep's loop: its states' stores (a one-byte flag may alias
+// anything) would otherwise make the compiler read the arrays' data pointers again for every row.
+struct StepRows {
+  const double* positions;  // #P by 3, row-major
+  const double* radii;      // #P
+  const double* previous;   // #P by 3, row-major
+  StepRows(const CollisionScene& scene, const Points& prev)
+      : positions(scene.positions.data()), radii(scene.radii.data()), previous(prev.data()) {}
+  [[gnu::always_inline]] TestPoint operator()(Index r) const {
+    const double* p = positions + 3 * r;
+    return {Vec3(p[0], p[1], p[2]), radii + r, previous + 3 * r};
+  }
+};
+
 // The zero surfel nearest to a point, as init() needs it.
 struct NearestZero {
   double dist2 = 0.0;   // squared distance to it

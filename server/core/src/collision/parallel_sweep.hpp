@@ -102,12 +102,16 @@ struct ParallelSweep {
                                                            journal, part, begin, end, tested, queries);
     }
     typename Kernel::State* const stored = states.stored_data();
+    const StepRows at(scene, previous);
+    const Index* const row = rows.data();
+    const std::uint8_t* const cand = candidate ? candidate->data() : nullptr;
+    std::uint8_t* const hits = hit.data();
     Index t = 0, m_sum = 0;
     for (Index q = begin; q < end; ++q) {
-      const Index r = rows[q];
-      const TestPoint pt = row_point(scene, previous, r);
+      const Index r = row[q];
+      const TestPoint pt = at(r);
       auto& s = kBySlot ? stored[q] : states[r];
-      row_step<kJournal, kCandidate>(kernel, q, r, s, pt, candidate, hit, journal, part, t, m_sum,
+      row_step<kJournal, kCandidate>(kernel, q, r, s, pt, cand, hits, journal, part, t, m_sum,
                                      [&] { return kernel.update(s, pt); });
     }
     tested += t;
@@ -118,12 +122,12 @@ struct ParallelSweep {
   // the state is in cache), the tallies.
   template <bool kJournal, bool kCandidate, typename Kernel, typename Update>
   [[gnu::always_inline]] static void row_step(const Kernel& kernel, Index q, Index r, typename Kernel::State& s,
-                                              const TestPoint& pt, const std::vector<std::uint8_t>* candidate,
-                                              std::vector<std::uint8_t>& hit, Journal<typename Kernel::State>* journal,
-                                              std::size_t part, Index& t, Index& m_sum, Update update) {
+                                              const TestPoint& pt, const std::uint8_t* candidate, std::uint8_t* hit,
+                                              Journal<typename Kernel::State>* journal, std::size_t part, Index& t,
+                                              Index& m_sum, Update update) {
     typename Kernel::State before;
     if constexpr (kJournal) before = s;
-    const Index made = kCandidate && !(*candidate)[r] ? kernel.not_candidate(s, pt) : update();
+    const Index made = kCandidate && !candidate[r] ? kernel.not_candidate(s, pt) : update();
     if constexpr (kJournal) journal->note(r, before, s, made, part);
     hit[q] = s.colliding();
     m_sum += made;
@@ -143,23 +147,27 @@ struct ParallelSweep {
                            Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
                            Index& tested, Index& queries) {
     typename Kernel::State* const stored = states.stored_data();
+    const StepRows at(scene, previous);
+    const Index* const row = rows.data();
+    const std::uint8_t* const cand = candidate ? candidate->data() : nullptr;
+    std::uint8_t* const hits = hit.data();
     typename Kernel::Probe found[kProbeBlock];
     bool probed[kProbeBlock];
     Index t = 0, m_sum = 0;
     for (Index b = begin; b < end; b += kProbeBlock) {
       const Index e = std::min(end, b + kProbeBlock);
       for (Index q = b; q < e; ++q) {
-        const Index r = rows[q];
+        const Index r = row[q];
         const auto& s = kBySlot ? stored[q] : states[r];
         if constexpr (kBySlot) __builtin_prefetch(stored + std::min(q + kAhead, end - 1));
-        probed[q - b] = !(kCandidate && !(*candidate)[r]) && kernel.probe(s, row_point(scene, previous, r), found[q - b]);
+        probed[q - b] = !(kCandidate && !cand[r]) && kernel.probe(s, at(r), found[q - b]);
       }
       for (Index q = b; q < e; ++q) {
-        const Index r = rows[q];
-        const TestPoint pt = row_point(scene, previous, r);
+        const Index r = row[q];
+        const TestPoint pt = at(r);
         auto& s = kBySlot ? stored[q] : states[r];
         const auto* f = probed[q - b] ? &found[q - b] : nullptr;
-        row_step<kJournal, kCandidate>(kernel, q, r, s, pt, candidate, hit, journal, part, t, m_sum,
+        row_step<kJournal, kCandidate>(kernel, q, r, s, pt, cand, hits, journal, part, t, m_sum,
                                        [&] { return kernel.update(s, pt, f); });
       }
     }
