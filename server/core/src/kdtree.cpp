@@ -146,7 +146,10 @@ struct KdTree::Impl {
       hi[d] -= origin[d];
     }
     kd::build(tree, P, std::move(rows), origin.data(), lo, hi, static_cast<std::uint32_t>(params.leaf_size));
-    if (params.cells) kd::build_cells(tree);
+    if (params.cells) {
+      kd::build_cells(tree);
+      if (search->fans) kd::build_fans(tree);
+    }
   }
 
   double eps_factor() const { return 1.0 + params.eps; }
@@ -365,7 +368,9 @@ RadiusResult KdTree::radius(const Points& queries, double radius) const {
 std::size_t KdTree::memory_bytes() const {
   const kd::Tree& t = impl_->tree;
   return sizeof(Impl) + t.coords.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
-         t.nodes.capacity() * sizeof(kd::Node) + t.cells.capacity() * sizeof(kd::Cell);
+         t.nodes.capacity() * sizeof(kd::Node) + t.cells.capacity() * sizeof(kd::Cell) +
+         t.fans.capacity() * sizeof(kd::Fan) + t.fan_blocks.capacity() * sizeof(kd::FanBlock) +
+         t.fan_of.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace surfeledit

@@ -120,10 +120,44 @@ struct Avx2Scan {
 // (lo0, lo1, lo2, hi0) and (hi0, hi1, hi2, lo2) from two 16-byte loads inside the cell (the second, from lo2,
 // rotated one lane), so lane 3 is a finite or infinite box coordinate, never the parent word (which, read as a
 // float, is a denormal that could cost a microcode assist); q's lane 3 is 0 and lane 3's results are ignored.
+// The second block of a fan of at most four lanes: no lane (cells with lo = +inf, hi = -inf).
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr FanBlock kEmptyBlock = {
+    {{kInf, kInf, kInf, kInf}, {kInf, kInf, kInf, kInf}, {kInf, kInf, kInf, kInf}},
+    {{-kInf, -kInf, -kInf, -kInf}, {-kInf, -kInf, -kInf, -kInf}, {-kInf, -kInf, -kInf, -kInf}},
+    {0, 0, 0, 0}};
+
 class Avx2Walk {
  public:
+  static constexpr bool kFans = true;
+  // bound() of every used lane of a fan (blocks: its blocks), a block of four lanes at a time: per lane the per-axis
+  // offsets (off[axis][lane]) and their sum (bound[lane]), with bound()'s operations; returns the used lanes whose
+  // bound is <= best. Both blocks are computed, a fan of one block reading an empty one for its second (a select,
+  // not a branch: how many lanes a fan has is not predictable).
+  unsigned fan_bounds(const Fan& f, const FanBlock* blocks, double best, double* bound, double (*off)[kFanLanes]) const {
+    static_assert(kFanLanes == 2 * kFanBlock, "a fan is two blocks");
+    const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
+    const FanBlock* block[2] = {blocks, f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock};
+    unsigned mask = 0;
+    for (int h = 0; h < 2; ++h) {
+      __m256d o[3];
+      for (int d = 0; d < 3; ++d) {
+        const __m256d lo = _mm256_cvtps_pd(_mm_load_ps(block[h]->lo[d]));
+        const __m256d hi = _mm256_cvtps_pd(_mm_load_ps(block[h]->hi[d]));
+        const __m256d g = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(lo, qs_[d]), _mm256_sub_pd(qs_[d], hi)), zero);
+        o[d] = _mm256_max_pd(_mm256_mul_pd(g, g), boxes_[d]);
+        _mm256_store_pd(off[d] + kFanBlock * h, o[d]);
+      }
+      const __m256d b = _mm256_add_pd(_mm256_add_pd(o[0], o[1]), o[2]);
+      _mm256_store_pd(bound + kFanBlock * h, b);
+      mask |= static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(b, vbest, _CMP_LE_OQ))) << (kFanBlock * h);
+    }
+    return mask & f.lanes;
+  }
   Avx2Walk(const double* q, const double* box)
-      : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)) {}
+      : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),
+        qs_{_mm256_set1_pd(q[0]), _mm256_set1_pd(q[1]), _mm256_set1_pd(q[2])},
+        boxes_{_mm256_set1_pd(box[0]), _mm256_set1_pd(box[1]), _mm256_set1_pd(box[2])} {}
   bool holds(const Cell& c, double best) const {
     __m256d lo, hi;
     load(c, lo, hi);
@@ -146,6 +180,7 @@ class Avx2Walk {
     hi = _mm256_cvtps_pd(_mm_permute_ps(_mm_loadu_ps(c.lo + 2), _MM_SHUFFLE(0, 3, 2, 1)));
   }
   __m256d q_, box_;
+  __m256d qs_[3], boxes_[3];  // q and the box offsets per axis, in every lane
 };
 
 }  // namespace

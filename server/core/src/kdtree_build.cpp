@@ -230,4 +230,70 @@ void build_cells(Tree& t) {
   }
 }
 
+// Pre-order: a node's depth is its parent's plus one. Each fan's frontier is collected depth first, left child
+// first, so its lanes are in pre-order.
+void build_fans(Tree& t) {
+  const std::size_t n = t.nodes.size();
+  t.fans.clear();
+  t.fan_blocks.clear();
+  t.fan_of.clear();
+  if (t.cells.size() != n || n < 2) return;
+  t.fan_of.assign(n, Tree::kNoFan);
+  std::vector<std::uint8_t> level(n, 0);  // depth modulo kFanLevels
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Node& nd = t.nodes[i];
+    if (nd.leaf()) continue;
+    level[i + 1] = level[nd.a] = static_cast<std::uint8_t>((level[i] + 1) % kFanLevels);
+  }
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  std::vector<std::pair<std::uint32_t, int>> stack;  // (node, levels below the fan's root)
+  std::vector<std::uint32_t> frontier;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (t.nodes[i].leaf() || level[i] != 0) continue;
+    frontier.clear();
+    stack.assign({{t.nodes[i].a, 1}, {i + 1, 1}});  // popped left first
+    while (!stack.empty()) {
+      const auto [m, below] = stack.back();
+      stack.pop_back();
+      const Node& nd = t.nodes[m];
+      if (nd.leaf() || below == kFanLevels) {
+        frontier.push_back(m);
+      } else {
+        stack.push_back({nd.a, below + 1});
+        stack.push_back({m + 1, below + 1});
+      }
+    }
+    Fan f;
+    f.cell = t.cells[i];
+    f.cell.parent &= Cell::kNoStop;
+    f.root = i;
+    f.first = static_cast<std::uint32_t>(t.fan_blocks.size());
+    const std::uint32_t fan = static_cast<std::uint32_t>(t.fans.size());
+    for (std::size_t k = 0; k < frontier.size(); k += kFanBlock) {
+      FanBlock b;
+      for (int d = 0; d < 3; ++d) {
+        std::fill_n(b.lo[d], kFanBlock, inf);
+        std::fill_n(b.hi[d], kFanBlock, -inf);
+      }
+      std::fill_n(b.node, kFanBlock, 0u);
+      for (std::size_t j = k; j < std::min(frontier.size(), k + kFanBlock); ++j) {
+        const std::uint32_t m = frontier[j];
+        const Cell& c = t.cells[m];
+        for (int d = 0; d < 3; ++d) {
+          b.lo[d][j - k] = c.lo[d];
+          b.hi[d][j - k] = c.hi[d];
+        }
+        b.node[j - k] = m;
+        f.lanes |= 1u << j;
+        t.fan_of[m] = fan * kFanLanes + static_cast<std::uint32_t>(j);
+      }
+      t.fan_blocks.push_back(b);
+    }
+    t.fans.push_back(f);
+  }
+  t.fans.shrink_to_fit();
+  t.fan_blocks.shrink_to_fit();
+  std::vector<Cell>().swap(t.cells);
+}
+
 }  // namespace surfeledit::kd

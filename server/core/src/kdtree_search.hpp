@@ -101,6 +101,26 @@ struct Cell {
   static constexpr std::uint32_t kNoStop = 0x80000000u;
 };
 
+// A fan: what the walk from a leaf (kdtree_walk.hpp) meets over kFanLevels of the tree's levels at once. For an
+// inner node R at a depth divisible by kFanLevels, its frontier is the nodes kFanLevels below R, or the leaves
+// above that: at most 2^kFanLevels nodes, holding all of R's points. Their cells are kept by coordinate in blocks of
+// kFanBlock lanes, so the walk tests them in vectors rather than one cell per level; R's own cell is kept with the
+// fan for the walk's stop test. A tree with fans keeps no per-node cells (the walk reads only these).
+inline constexpr int kFanLevels = 3;
+inline constexpr int kFanLanes = 1 << kFanLevels;
+inline constexpr int kFanBlock = 4;
+struct alignas(16) FanBlock {
+  float lo[3][kFanBlock];  // per axis, each lane's cell (Cell); unused lanes lo = +inf, hi = -inf
+  float hi[3][kFanBlock];
+  std::uint32_t node[kFanBlock];  // the lane's node; unused lanes 0
+};
+struct Fan {
+  Cell cell;                // R's cell; `parent` holds only its kNoStop flag
+  std::uint32_t root = 0;   // R
+  std::uint32_t first = 0;  // its first block in Tree::fan_blocks (lane k: block first + k / kFanBlock)
+  std::uint32_t lanes = 0;  // bit per used lane, in the frontier's pre-order
+};
+
 struct Tree {
   // Points in leaf order, local frame (minus `origin` of the owner), stored by coordinate: x of every slot, then
   // y, then z, each run `stride` = #N + kTail long; the kTail entries past the last slot are zero and only ever
@@ -111,7 +131,13 @@ struct Tree {
   std::vector<std::uint32_t> rows;  // slot -> caller's row
   std::vector<Node> nodes;          // pre-order; nodes[0] is the root when non-empty
   double box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};  // bounding box of all points, local frame
-  std::vector<Cell> cells;          // per node when built with cells (build_cells), else empty
+  std::vector<Cell> cells;          // per node when built with cells (build_cells) and without fans, else empty
+  // Fans for a walk that tests them in vectors (build_fans; empty otherwise), their blocks, and per node the fan it
+  // is a frontier node of and its lane (fan * kFanLanes + lane; kNoFan for the root and the nodes inside fans).
+  std::vector<Fan> fans;
+  std::vector<FanBlock> fan_blocks;
+  std::vector<std::uint32_t> fan_of;
+  static constexpr std::uint32_t kNoFan = std::numeric_limits<std::uint32_t>::max();
 
   std::size_t size() const { return rows.size(); }
   [[gnu::always_inline]] const double* xs() const { return coords.data(); }
@@ -201,7 +227,7 @@ class Descent {
       }
       const Node& leaf = nodes[ni];
       if constexpr (std::is_same_v<Set, NearestSet>) {
-        if (leaf.a != leaf.b && (t_.cells.empty() || cell_bound(t_.cells[ni]) <= set_.worst())) {
+        if (leaf.a != leaf.b && leaf_bound(ni) <= set_.worst()) {
           const std::uint32_t before = set_.slot;
           Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
           won_ = set_.slot != before ? ni : won_;
@@ -219,11 +245,21 @@ class Descent {
   // k = 1: the leaf whose scan last changed the winner (the winner's leaf), else kNone.
   std::uint32_t won() const { return won_; }
 
-  // A lower bound of the squared distance from q to the points in a cell's box (their tight box for a leaf).
-  double cell_bound(const Cell& c) const {
+  // A lower bound of the squared distance from q to the points of leaf `ni`: from its tight box, kept in its cell or,
+  // in a tree with fans, in its lane of the fan it is a frontier node of; 0 in a tree with neither.
+  double leaf_bound(std::uint32_t ni) const {
+    if (!t_.cells.empty()) return box_bound(t_.cells[ni].lo, t_.cells[ni].hi, 1);
+    if (t_.fans.empty()) return 0.0;
+    const std::uint32_t at = t_.fan_of[ni];
+    const FanBlock& b = t_.fan_blocks[t_.fans[at / kFanLanes].first + at % kFanLanes / kFanBlock];
+    return box_bound(&b.lo[0][at % kFanBlock], &b.hi[0][at % kFanBlock], kFanBlock);
+  }
+  // The same from a box whose axis d's faces are lo[d * stride] and hi[d * stride].
+  double box_bound(const float* lo, const float* hi, int stride) const {
     double d2 = 0.0;
     for (int d = 0; d < 3; ++d) {
-      const double g = std::max(std::max(static_cast<double>(c.lo[d]) - q_[d], q_[d] - static_cast<double>(c.hi[d])), 0.0);
+      const double g = std::max(
+          std::max(static_cast<double>(lo[d * stride]) - q_[d], q_[d] - static_cast<double>(hi[d * stride])), 0.0);
       d2 += g * g;
     }
     return d2;
@@ -276,5 +312,8 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
            const double* hi, std::uint32_t leaf);
 // Fills t.cells (one per node) for nearest_from (kdtree_build.cpp).
 void build_cells(Tree& t);
+// Fills t.fans, t.fan_blocks and t.fan_of from t.cells, then drops the cells (kdtree_build.cpp). A tree without an
+// inner node gets no fans and keeps its cells.
+void build_fans(Tree& t);
 
 }  // namespace surfeledit::kd

@@ -12,6 +12,7 @@ namespace surfeledit::kd {
 // squared offset of q from the tree's box (Descent::box_offsets).
 class ScalarWalk {
  public:
+  static constexpr bool kFans = false;  // climbs one level at a time
   ScalarWalk(const double* q, const double* box) : q_(q), box_(box) {}
   // True when cell c's box holds the ball of squared radius `best` around q strictly: per axis the gap from q to
   // each face is > 0 and its square (rounded) is > best. The smallest gap decides: for g > 0 rounding is
@@ -71,7 +72,7 @@ template <class Scan, class Walk>
 void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t& leaf) {
   using D = Descent<Scan, NearestSet>;
   D descent(t, q, set, 1.0);
-  if (t.cells.empty()) {
+  if (t.cells.empty() && t.fans.empty()) {
     descent.run();
     if (descent.won() != NearestSet::kNone) leaf = descent.won();
     return;
@@ -85,6 +86,36 @@ void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t
   if (start.a != start.b) {
     Scan::nearest(t, q, start.a, start.b, set);
     won = n;
+  }
+  if constexpr (Walk::kFans) {
+    if (!t.fans.empty()) {
+      // By fans: at each, every frontier node but the one the walk comes from is searched (nearest first) when its
+      // cell is within the best distance, then the walk goes on at the fan's root R, stopping there when R's cell
+      // holds the ball. The frontier holds all of R's points, so the argument above holds with a fan for a level.
+      std::uint32_t at = t.fan_of[n];
+      while (at != Tree::kNoFan) {
+        const Fan& fan = t.fans[at / kFanLanes];
+        alignas(32) double bound[kFanLanes], off[3][kFanLanes];
+        unsigned todo = walk.fan_bounds(fan, t.fan_blocks.data() + fan.first, set.best, bound, off) &
+                        ~(1u << (at % kFanLanes));
+        while (todo != 0) {
+          unsigned lane = static_cast<unsigned>(__builtin_ctz(todo));
+          for (unsigned rest = todo & (todo - 1); rest != 0; rest &= rest - 1) {
+            const unsigned l = static_cast<unsigned>(__builtin_ctz(rest));
+            lane = bound[l] < bound[lane] ? l : lane;
+          }
+          todo &= ~(1u << lane);
+          if (!(bound[lane] <= set.best)) continue;  // the best shrank since
+          const double o[3] = {off[0][lane], off[1][lane], off[2][lane]};
+          descent.run_from(t.fan_blocks[fan.first + lane / kFanBlock].node[lane % kFanBlock], o);
+          if (descent.won() != NearestSet::kNone) won = descent.won();
+        }
+        if (!(fan.cell.parent & Cell::kNoStop) && walk.holds(fan.cell, set.best)) break;
+        at = t.fan_of[fan.root];
+      }
+      if (set.slot != NearestSet::kNone) leaf = won;
+      return;
+    }
   }
   const Cell* cells = t.cells.data();
   while (n != 0) {
@@ -108,6 +139,7 @@ struct SearchFns {
   void (*knn)(const Tree&, const double* q, KnnSet&, double eps_factor);
   void (*radius)(const Tree&, const double* q, RadiusSet&, double eps_factor);
   void (*nearest_from)(const Tree&, const double* q, NearestSet&, std::uint32_t& leaf);  // exact only
+  bool fans;  // nearest_from walks by fans when the tree has them (build_fans)
 };
 
 template <class Scan, class Set>
@@ -118,7 +150,7 @@ void search_with(const Tree& t, const double* q, Set& set, double eps_factor) {
 template <class Scan, class Walk>
 constexpr SearchFns search_fns() {
   return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>,
-          &nearest_from<Scan, Walk>};
+          &nearest_from<Scan, Walk>, Walk::kFans};
 }
 
 // The AVX2 leaf scans' and walk's table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then
