@@ -2,8 +2,8 @@
 // root descent, bit for bit: random clouds, exact ties (duplicates, lattices, queries equidistant from 2-8
 // points), every possible start value (each node of the tree, non-leaf nodes and out-of-range values, which
 // start from the near-path leaf, a leaf of another tree), 1e6 offsets, 1e+-4 scales, and cuts whose float
-// bounds overlap; each with the baseline walk (KdScan::Scalar) and the vector one (Auto: AVX2 where the CPU
-// has it), which must also agree with each other on the winner's leaf.
+// bounds overlap; each with the baseline walk (KdScan::Scalar, one level at a time) and the vector one (Auto:
+// AVX2 where the CPU has it, by fans of three levels), which must also agree with each other on the winner's leaf.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -267,6 +267,26 @@ TEST(KdTreeFromLeaf, TreesWithoutCellsAndScans) {
   std::uint32_t bad = 0;
   EXPECT_THROW(vector.nearest_from(Vec3(std::nan(""), 0, 0), bad), Error);
   EXPECT_GT(KdTree(pts, with_cells(10)).memory_bytes(), no_cells.memory_bytes());
+}
+
+// With the AVX2 walk a tree keeps fans instead of per-node cells (so the tests above compare the two walks, not one
+// walk twice): its size differs from the scalar tree's over the same nodes, and each holds more than the tree
+// without either. One leaf (no inner node) gets no fans and walks by its cell.
+TEST(KdTreeFromLeaf, VectorWalkKeepsFansInsteadOfCells) {
+  if (!kd_scan_available(KdScan::Avx2)) GTEST_SKIP() << "no AVX2 on this CPU or build";
+  const Points pts = test::uniform_cloud(5000, 71, 1.0, Vec3::Zero());
+  KdTreeParams plain = with_cells(8, KdScan::Scalar);
+  plain.cells = false;
+  const std::size_t none = KdTree(pts, plain).memory_bytes();
+  const std::size_t cells = KdTree(pts, with_cells(8, KdScan::Scalar)).memory_bytes();
+  const std::size_t fans = KdTree(pts, with_cells(8, KdScan::Avx2)).memory_bytes();
+  EXPECT_GT(cells, none);
+  EXPECT_GT(fans, none);
+  EXPECT_NE(fans, cells);
+  const Points three = test::uniform_cloud(3, 72, 1.0, Vec3::Zero());
+  const KdTree one_leaf(three, with_cells(8, KdScan::Avx2));
+  std::uint32_t leaf = 0;
+  for (Eigen::Index i = 0; i < three.rows(); ++i) EXPECT_EQ(one_leaf.nearest_from(three.row(i).transpose(), leaf), i);
 }
 
 }  // namespace

@@ -31,8 +31,8 @@ struct KdTreeParams {
   double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
-  bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans of 8 cells
-                       // (~0.4 per leaf, 192 B each, and 4 B per node), else each node's cell and parent (28 B per node)
+  bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans (about 0.3 per
+                       // leaf: 40 B and 112 B per four cells) and 4 B per node, else each node's cell (28 B per node)
 };
 
 // kNN result for #Q queries: #Q by k, row-major. Rows with fewer than k hits
