@@ -53,7 +53,8 @@ struct Avx2Scan {
     __m256d best = inf, best_slot = inf;
     __m256d slot = _mm256_setr_pd(a, a + 1.0, a + 2.0, a + 3.0);
     const __m256d four = _mm256_set1_pd(4.0);
-    // Whole vectors without a lane mask, then the last, partial one (if any) with it: the same updates.
+    // Blocks of eight points into two independent minima (half the loop's dependency chain), merged lane by lane;
+    // then whole vectors of four; the lane mask only for the last, partial vector. The same winner as one pass.
     std::uint32_t s = a;
     if (b - a >= 8) {
       __m256d best1 = inf, best_slot1 = inf;
