@@ -53,7 +53,7 @@ inline std::uint32_t near_leaf(const Tree& t, const double* q) {
   return n;
 }
 
-// The exact nearest search that starts from a leaf (a tree with cells): `leaf`, or when it is not a leaf's node
+// The exact nearest search that starts from a leaf (a tree with cells or fans): `leaf`, or when it is not a leaf's node
 // index (a cold search: unset, stale from another tree) the near-path leaf of q (near_leaf), is scanned first,
 // then the walk goes up through its ancestors: at each, the other child's subtree is searched (the descent)
 // when its cell, clipped to the tree's box, is within the best distance (inclusive), and the walk stops at the
