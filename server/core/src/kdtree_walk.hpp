@@ -53,8 +53,8 @@ inline std::uint32_t near_leaf(const Tree& t, const double* q) {
   return n;
 }
 
-// The exact nearest search that starts from a leaf (a tree with cells or fans): `leaf`, or when it is not a leaf's node
-// index (a cold search: unset, stale from another tree) the near-path leaf of q (near_leaf), is scanned first,
+// The exact nearest search that starts from a leaf (a tree with cells or fans): `leaf`, or when it is not a leaf's
+// node index (a cold search: unset, stale from another tree) the near-path leaf of q (near_leaf), is scanned first,
 // then the walk goes up through its ancestors: at each, the other child's subtree is searched (the descent)
 // when its cell, clipped to the tree's box, is within the best distance (inclusive), and the walk stops at the
 // first node N whose box holds the ball strictly (Walk: ScalarWalk or the AVX2 one).
