@@ -135,7 +135,8 @@ class Avx2Walk {
   // offsets (off[axis][lane]) and their sum (bound[lane]), with bound()'s operations; returns the used lanes whose
   // bound is <= best. Both blocks are computed, a fan of one block reading an empty one for its second (a select,
   // not a branch: how many lanes a fan has is not predictable).
-  unsigned fan_bounds(const Fan& f, const FanBlock* blocks, double best, double* bound, double (*off)[kFanLanes]) const {
+  unsigned fan_bounds(const Fan& f, const FanBlock* blocks, double best, double* bound,
+                      double (*off)[kFanLanes]) const {
     static_assert(kFanLanes == 2 * kFanBlock, "a fan is two blocks");
     const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
     const FanBlock* block[2] = {blocks, f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock};
