@@ -116,11 +116,6 @@ struct Avx2Scan {
   }
 };
 
-// The walk's box tests (kdtree_walk.hpp's ScalarWalk) on the three axes at once: the same subtractions, min /
-// max, products and (scalar, x + y + z) sum per axis, so the same bits. A cell's six floats are read as lanes
-// (lo0, lo1, lo2, hi0) and (hi0, hi1, hi2, lo2) from two 16-byte loads inside the cell (the second, from lo2,
-// rotated one lane), so lane 3 is a finite or infinite box coordinate, never the parent word (which, read as a
-// float, is a denormal that could cost a microcode assist); q's lane 3 is 0 and lane 3's results are ignored.
 // The second block of a fan of at most four lanes: no lane (cells with lo = +inf, hi = -inf).
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr FanBlock kEmptyBlock = {
@@ -128,6 +123,11 @@ constexpr FanBlock kEmptyBlock = {
     {{-kInf, -kInf, -kInf, -kInf}, {-kInf, -kInf, -kInf, -kInf}, {-kInf, -kInf, -kInf, -kInf}},
     {0, 0, 0, 0}};
 
+// The walk's box tests (kdtree_walk.hpp's ScalarWalk) on the three axes at once: the same subtractions, min /
+// max, products and (scalar, x + y + z) sum per axis, so the same bits. A cell's six floats are read as lanes
+// (lo0, lo1, lo2, hi0) and (hi0, hi1, hi2, lo2) from two 16-byte loads inside the cell (the second, from lo2,
+// rotated one lane), so lane 3 is a finite or infinite box coordinate, never the parent word (which, read as a
+// float, is a denormal that could cost a microcode assist); q's lane 3 is 0 and lane 3's results are ignored.
 class Avx2Walk {
  public:
   static constexpr bool kFans = true;

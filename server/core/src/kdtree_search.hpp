@@ -140,6 +140,10 @@ struct Tree {
   static constexpr std::uint32_t kNoFan = std::numeric_limits<std::uint32_t>::max();
 
   std::size_t size() const { return rows.size(); }
+  // The block of fan f that holds its lane `lane`.
+  [[gnu::always_inline]] const FanBlock& lane_block(const Fan& f, std::uint32_t lane) const {
+    return fan_blocks[f.first + lane / kFanBlock];
+  }
   [[gnu::always_inline]] const double* xs() const { return coords.data(); }
   [[gnu::always_inline]] const double* ys() const { return coords.data() + stride; }
   [[gnu::always_inline]] const double* zs() const { return coords.data() + 2 * stride; }
@@ -251,7 +255,7 @@ class Descent {
     if (!t_.cells.empty()) return box_bound(t_.cells[ni].lo, t_.cells[ni].hi, 1);
     if (t_.fans.empty()) return 0.0;
     const std::uint32_t at = t_.fan_of[ni];
-    const FanBlock& b = t_.fan_blocks[t_.fans[at / kFanLanes].first + at % kFanLanes / kFanBlock];
+    const FanBlock& b = t_.lane_block(t_.fans[at / kFanLanes], at % kFanLanes);
     return box_bound(&b.lo[0][at % kFanBlock], &b.hi[0][at % kFanBlock], kFanBlock);
   }
   // The same from a box whose axis d's faces are lo[d * stride] and hi[d * stride].

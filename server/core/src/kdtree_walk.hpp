@@ -107,7 +107,7 @@ void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t
           todo &= ~(1u << lane);
           if (!(bound[lane] <= set.best)) continue;  // the best shrank since
           const double o[3] = {off[0][lane], off[1][lane], off[2][lane]};
-          descent.run_from(t.fan_blocks[fan.first + lane / kFanBlock].node[lane % kFanBlock], o);
+          descent.run_from(t.lane_block(fan, lane).node[lane % kFanBlock], o);
           if (descent.won() != NearestSet::kNone) won = descent.won();
         }
         if (!(fan.cell.parent & Cell::kNoStop) && walk.holds(fan.cell, set.best)) break;

@@ -94,13 +94,8 @@ struct TestPoint {
   Vec3 previous() const { return Vec3(prev[0], prev[1], prev[2]); }
 };
 
-// The TestPoint of row r of a step (`previous`: #P by 3, row-major).
-inline TestPoint row_point(const CollisionScene& scene, const Points& previous, Index r) {
-  return {row3(scene.positions, r), &scene.radii[r], &previous(r, 0)};
-}
-
-// The arrays row_point() reads, taken once for a sweep's loop: its states' stores (a one-byte flag may alias
-// anything) would otherwise make the compiler read the arrays' data pointers again for every row.
+// The TestPoints of a step's rows, from the arrays taken once for a sweep's loop: its states' stores (a one-byte
+// flag may alias anything) would otherwise make the compiler read the arrays' data pointers again for every row.
 struct StepRows {
   const double* positions;  // #P by 3, row-major
   const double* radii;      // #P
@@ -112,6 +107,11 @@ struct StepRows {
     return {Vec3(p[0], p[1], p[2]), radii + r, previous + 3 * r};
   }
 };
+
+// The TestPoint of row r of a step (`previous`: #P by 3, row-major), for a loop that reads one row at a time.
+inline TestPoint row_point(const CollisionScene& scene, const Points& previous, Index r) {
+  return StepRows(scene, previous)(r);
+}
 
 // The zero surfel nearest to a point, as init() needs it.
 struct NearestZero {
