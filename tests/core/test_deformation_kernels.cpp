@@ -4,11 +4,15 @@
 // whose lists end in every lane count -- so a journal replays to the same model on any x86-64 machine.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
+#include <set>
 
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "expect_error.hpp"
 
 namespace surfeledit {
 namespace {
@@ -95,6 +99,97 @@ TEST(DeformationKernels, Avx2MatchesBaselineBitForBit) {
     }
   }
   EXPECT_EQ(compared, 3 * 5 * 2 * 5);
+}
+
+// The step's scan of its rows (eight at a time with AVX2, one at a time in the baseline) refuses a bad row
+// wherever it sits -- every lane of the first blocks, the middle, the last rows -- before anything moves;
+// a valid row that does not move (lambda 0) leaves the step to the row-by-row pass with the same result;
+// and the centroid both scans sum is the mean of F1's positions.
+TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
+  const Scene sc = make_scene();
+  const std::size_t count = sc.fields.deformable.size();
+  ASSERT_GT(count, 100u);
+  std::set<std::size_t> where;
+  for (std::size_t k = 0; k < 18; ++k) where.insert(k);
+  for (std::size_t k = count / 2 - 4; k < count / 2 + 5; ++k) where.insert(k);
+  for (std::size_t k = count - 11; k < count; ++k) where.insert(k);
+  const Eigen::Index n = sc.arrays.positions.rows();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<StepKernel> kernels{StepKernel::Baseline};
+  if (step_kernel_available(StepKernel::Avx2)) kernels.push_back(StepKernel::Avx2);
+  DeformParams p;
+  p.translation = Vec3(0.01, -0.02, 0.03);
+  p.axis = Vec3(0.3, -1.0, 0.6);
+  p.angle = 0.2;
+  int refused = 0;
+  for (const StepKernel kernel : kernels) {
+    for (const std::size_t k : where) {
+      for (int kind = 0; kind < 7; ++kind) {
+        DeformationFields f = sc.fields;
+        const std::size_t row = static_cast<std::size_t>(f.deformable[k]);
+        std::string field = "fields";
+        switch (kind) {
+          case 0: f.regions[row] = Region::Zero; break;
+          case 1: f.blend(static_cast<Eigen::Index>(k), 0) = -0.25; break;
+          case 2: f.blend(static_cast<Eigen::Index>(k), 0) = 1.5; break;
+          case 3: f.blend(static_cast<Eigen::Index>(k), 0) = nan; break;
+          case 4:  // equal to its predecessor, or negative for the first row
+            f.deformable[k] = k > 0 ? f.deformable[k - 1] : -1;
+            field = "fields.deformable";
+            break;
+          case 5:
+            f.deformable[k] = static_cast<Index>(n);
+            field = "fields.deformable";
+            break;
+          case 6:  // below its predecessor (a gatherable row, unlike n)
+            f.deformable[k] = k > 0 ? f.deformable[k - 1] - 1 : std::numeric_limits<Index>::min();
+            field = "fields.deformable";
+            break;
+        }
+        Arrays a = sc.arrays;
+        testing_util::expect_error([&] { apply_step(f, p, a.positions, a.normals, nullptr, nullptr, 1, nullptr, kernel); },
+                                   ErrorCode::InvalidArgument, field);
+        EXPECT_TRUE(same_bits(a.positions, sc.arrays.positions)) << "kind " << kind << " at " << k;
+        EXPECT_TRUE(same_bits(a.normals, sc.arrays.normals)) << "kind " << kind << " at " << k;
+        ++refused;
+      }
+    }
+  }
+  EXPECT_EQ(refused, static_cast<int>(kernels.size() * where.size()) * 7);
+
+  // A blend row with lambda 0 is valid and stays where it is; both scans agree on everything else.
+  DeformationFields still = sc.fields;
+  std::size_t k0 = 13;  // a blend row inside a block of eight
+  while (k0 + 1 < count && still.regions[static_cast<std::size_t>(still.deformable[k0])] != Region::Blend) ++k0;
+  ASSERT_LT(k0 + 1, count);
+  still.blend.row(static_cast<Eigen::Index>(k0)).setZero();
+  std::vector<Arrays> results;
+  std::vector<DeformResult> steps;
+  for (const StepKernel kernel : kernels) {
+    for (const DeformationFields* f : {&sc.fields, static_cast<const DeformationFields*>(&still)}) {
+      results.push_back(sc.arrays);
+      steps.push_back(apply_step(*f, p, results.back().positions, results.back().normals, nullptr, nullptr, 1, nullptr, kernel));
+    }
+  }
+  EXPECT_EQ(steps[1].moved.size(), count - 1);
+  EXPECT_EQ(steps[1].moved[k0], sc.fields.deformable[k0 + 1]);
+  EXPECT_TRUE(results[1].positions.row(sc.fields.deformable[k0]) == sc.arrays.positions.row(sc.fields.deformable[k0]));
+  for (std::size_t m = 2; m < steps.size(); ++m) {
+    EXPECT_EQ(steps[m].moved, steps[m % 2].moved);
+    EXPECT_EQ(steps[m].center, steps[m % 2].center);
+    EXPECT_TRUE(same_bits(results[m].positions, results[m % 2].positions));
+  }
+  // The centroid against a long double sum of F1's positions.
+  long double sum[3] = {0, 0, 0};
+  std::size_t ones = 0;
+  for (const Index i : sc.fields.deformable) {
+    if (sc.fields.regions[static_cast<std::size_t>(i)] != Region::One) continue;
+    for (int c = 0; c < 3; ++c) sum[c] += sc.arrays.positions(i, c);
+    ++ones;
+  }
+  ASSERT_GT(ones, 0u);
+  for (const DeformResult& r : steps)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.center(c), static_cast<double>(sum[c] / ones), 1e-14);
 }
 
 // Auto picks an available kernel and gives its bits; an unavailable kernel is refused before anything moves.

@@ -12,6 +12,7 @@
 
 #include "deformation_checks.hpp"
 #include "deformation_kernel.hpp"
+#include "deformation_scan.hpp"
 #include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
@@ -20,29 +21,6 @@ using deformation_checks::checked_threads;
 using deformation_checks::fmt;
 
 namespace {
-
-// beta and beta' for one blend, inlined into the step's loops.
-template <Blend B>
-inline double beta(double l) {
-  if constexpr (B == Blend::Smooth) {
-    const double q = l * (l - 2.0);
-    return q * q;
-  } else if constexpr (B == Blend::Quadratic) {
-    return l * l;
-  } else {
-    return l;
-  }
-}
-template <Blend B>
-inline double beta_prime(double l) {
-  if constexpr (B == Blend::Smooth) {
-    return 4.0 * l * (l - 1.0) * (l - 2.0);
-  } else if constexpr (B == Blend::Quadratic) {
-    return 2.0 * l;
-  } else {
-    return 1.0;
-  }
-}
 
 // The validation / `moved` pass for one blend: checks every listed row (ascending, in range, deformable,
 // 0 <= lambda <= 1), collects the moved rows (s > 0) and their positions in `deformable`, and F1's centroid.
@@ -74,59 +52,52 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
       f1_sum += p - f1_ref;
       ++f1_count;
     }
-    if (beta<B>(l) > 0.0) {
+    if (detail::beta<B>(l) > 0.0) {
       result.moved.push_back(i);
       ks.push_back(static_cast<Index>(k));
     }
   }
 }
 
-// The usual step (no `only`): one branch-free pass that checks every deformable row as scan_rows does and
-// sums F1's centroid the same way (a row that is not F1 adds +0, which changes no sum that starts at +0).
-// True when every row is valid and moves (s > 0): `moved` is then fields.deformable itself. False: nothing
-// is known, scan_rows runs (and throws the error, naming the row).
-template <Blend B, bool need_centroid>
-bool scan_all_moving(const DeformationFields& fields, Eigen::Index n, const double* Pc, Vec3& f1_ref, Vec3& f1_sum,
-                     std::size_t& f1_count) {
-  const std::size_t count = fields.deformable.size();
-  const Index* rows = fields.deformable.data();
-  const Region* regions = fields.regions.data();
-  const double* F = fields.blend_row(0);
-  const std::ptrdiff_t fs = fields.blend_stride();
-  const bool stored = fs != 0;  // without stored rows every row must be F1
-  if constexpr (need_centroid) {  // the reference: the first F1 row
+// The usual step's scan (deformation_scan.hpp) one row at a time.
+template <Blend B, bool kCentroid>
+bool scan_baseline(detail::RowScan& s) {
+  return detail::scan_rows_from<B, kCentroid>(s, 0);
+}
+
+template <bool kCentroid>
+detail::ScanFn pick_scan(Blend blend, bool avx2) {
+  if (avx2) {
+    if (const detail::ScanFn f = detail::avx2_scan(blend, kCentroid)) return f;
+  }
+  switch (blend) {
+    case Blend::Smooth: return scan_baseline<Blend::Smooth, kCentroid>;
+    case Blend::Quadratic: return scan_baseline<Blend::Quadratic, kCentroid>;
+    case Blend::Linear: return scan_baseline<Blend::Linear, kCentroid>;
+  }
+  return nullptr;
+}
+
+// The usual step (no `only`): one branch-free scan checks every deformable row as scan_rows does and sums F1's
+// centroid the same way. True when every row is valid and moves (s > 0): `moved` is then fields.deformable
+// itself. False: nothing is known, scan_rows runs (and throws the error, naming the row).
+bool scan_all_moving(const DeformationFields& fields, Blend blend, bool avx2, bool need_centroid, Eigen::Index n,
+                     const double* Pc, Vec3& f1_ref, Vec3& f1_sum, std::size_t& f1_count) {
+  detail::RowScan s{fields.deformable.data(), fields.deformable.size(), n, fields.regions.data(),
+                    fields.blend_row(0),      fields.blend_stride(),    Pc};
+  if (need_centroid) {  // the reference: the first F1 row
     std::size_t k = 0;
-    while (k < count && !(rows[k] >= 0 && rows[k] < n && regions[rows[k]] == Region::One)) ++k;
-    if (k == count) return false;  // no F1 row: scan_rows finds the count 0
+    const Index* rows = s.rows;
+    while (k < s.count && !(rows[k] >= 0 && rows[k] < n && s.regions[rows[k]] == Region::One)) ++k;
+    if (k == s.count) return false;  // no F1 row: scan_rows finds the count 0
     const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(rows[k]);
-    f1_ref = Vec3(Pc[o], Pc[o + 1], Pc[o + 2]);
+    s.rx = Pc[o], s.ry = Pc[o + 1], s.rz = Pc[o + 2];
+    f1_ref = Vec3(s.rx, s.ry, s.rz);
   }
-  const double rx = f1_ref.x(), ry = f1_ref.y(), rz = f1_ref.z();
-  double sx = 0.0, sy = 0.0, sz = 0.0;
-  std::size_t ones = 0;
-  bool ok = true;
-  Index prev = -1;
-  for (std::size_t k = 0; k < count; ++k) {
-    const Index i = rows[k];
-    const bool in = (i > prev) & (i < n);
-    prev = i;
-    const Index j = in ? i : 0;  // a row that may be read
-    const Region region = regions[j];
-    const double l = F[fs * static_cast<std::ptrdiff_t>(k)];
-    ok &= in & (region != Region::Zero) & (stored | (region == Region::One)) & (l >= 0.0) & (l <= 1.0) &
-          (beta<B>(l) > 0.0);
-    if constexpr (need_centroid) {
-      const bool one = region == Region::One;
-      const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);
-      sx += one ? Pc[o] - rx : 0.0;
-      sy += one ? Pc[o + 1] - ry : 0.0;
-      sz += one ? Pc[o + 2] - rz : 0.0;
-      ones += one;
-    }
-  }
-  if (!ok) return false;
-  f1_sum = Vec3(sx, sy, sz);
-  f1_count = ones;
+  const detail::ScanFn scan = need_centroid ? pick_scan<true>(blend, avx2) : pick_scan<false>(blend, avx2);
+  if (!scan(s)) return false;
+  f1_sum = Vec3(s.sx, s.sy, s.sz);
+  f1_count = s.ones;
   return true;
 }
 
@@ -208,10 +179,10 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   std::size_t f1_count = 0;
   const bool need_centroid = !params.center;
   const IndexList* ks_in = only ? &only_ks : nullptr;
+  const bool avx2 = kernel == StepKernel::Avx2 || (kernel == StepKernel::Auto && step_kernel_available(StepKernel::Avx2));
   auto scan = [&](auto blend) {
     constexpr Blend B = decltype(blend)::value;
-    const bool all = !only && (need_centroid ? scan_all_moving<B, true>(fields, n, positions.data(), f1_ref, f1_sum, f1_count)
-                                             : scan_all_moving<B, false>(fields, n, positions.data(), f1_ref, f1_sum, f1_count));
+    const bool all = !only && scan_all_moving(fields, B, avx2, need_centroid, n, positions.data(), f1_ref, f1_sum, f1_count);
     if (all) {
       result.moved = fields.deformable;
       return true;
@@ -257,7 +228,6 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
                           kxz - sn * a.y(), kyz + sn * a.x(), cs + k * a.z() * a.z()};
     std::copy(r1, r1 + 9, sc.r1);
   }
-  const bool avx2 = kernel == StepKernel::Avx2 || (kernel == StepKernel::Auto && step_kernel_available(StepKernel::Avx2));
   const detail::BlockFn block = avx2 ? detail::avx2_block(params.blend, rotate, has_u)
                                      : detail::pick_block<detail::D2>(params.blend, rotate, has_u);
   // Every listed row moves (the usual case): blocks of consecutive positions, no index list.
