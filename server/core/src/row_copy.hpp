@@ -1,13 +1,15 @@
 // Copies of chosen rows of #P by 3 arrays (row-major: row r is the 3 doubles at data() + 3 r), the
 // session's per-step bulk moves: a step's before-image (session_history.cpp) and its `previous`
-// positions (edit_session.cpp). One thread: split over the step's two threads they were slower on the
-// shared machine (a descheduled worker stalls each region, RESULTS §46), as the detector's and the
-// deformation's small loops were (§36).
+// positions (session_step.cpp). Large copies are split over the step's threads: at 1M surfels a step's
+// before-image is ~14 MB, milliseconds of one thread's copying and page faults (RESULTS §70; at load 6-7
+// on two cores the split was slower, §46.3, at load 2 it is not).
 #pragma once
 
 #include <cstddef>
 #include <cstring>
 #include <vector>
+
+#include <omp.h>
 
 #include "surfeledit/core/types.hpp"
 
@@ -23,22 +25,44 @@ struct RowCopy {
   double* also = nullptr;        // null, or #P by 3: a second destination, row rows[k]
 };
 
-inline void run_row_copies(const std::vector<RowCopy>& copies) {
-  for (const RowCopy& c : copies) {
-    const Index* rows = c.rows->data();
-    const std::size_t n = c.rows->size();
-    if (c.also) {
-      double* const to2 = c.also;
-      for (std::size_t k = 0; k < n; ++k) {
-        const double* r = c.from + 3 * rows[k];
-        double* t = c.same_rows ? c.to + 3 * rows[k] : c.to + 3 * k;
-        std::memcpy(t, r, 3 * sizeof(double));
-        std::memcpy(to2 + 3 * rows[k], r, 3 * sizeof(double));
-      }
-    } else if (c.same_rows) {
-      for (std::size_t k = 0; k < n; ++k) std::memcpy(c.to + 3 * rows[k], c.from + 3 * rows[k], 3 * sizeof(double));
-    } else {
-      for (std::size_t k = 0; k < n; ++k) std::memcpy(c.to + 3 * k, c.from + 3 * rows[k], 3 * sizeof(double));
+// Rows [k0, k1) of one copy.
+inline void copy_range(const RowCopy& c, std::size_t k0, std::size_t k1) {
+  const Index* rows = c.rows->data();
+  if (c.also) {
+    double* const to2 = c.also;
+    for (std::size_t k = k0; k < k1; ++k) {
+      const double* r = c.from + 3 * rows[k];
+      double* t = c.same_rows ? c.to + 3 * rows[k] : c.to + 3 * k;
+      std::memcpy(t, r, 3 * sizeof(double));
+      std::memcpy(to2 + 3 * rows[k], r, 3 * sizeof(double));
+    }
+  } else if (c.same_rows) {
+    for (std::size_t k = k0; k < k1; ++k) std::memcpy(c.to + 3 * rows[k], c.from + 3 * rows[k], 3 * sizeof(double));
+  } else {
+    for (std::size_t k = k0; k < k1; ++k) std::memcpy(c.to + 3 * k, c.from + 3 * rows[k], 3 * sizeof(double));
+  }
+}
+
+// Rows copied (summed over the copies) from which `threads` > 1 split them: about a millisecond of one
+// thread's work, as for the deformation's loop (deformation_step.cpp).
+constexpr std::size_t kParallelMinRowCopies = 200000;
+
+// Runs the copies; with `threads` > 1 and enough rows, each copy's rows are split in equal consecutive
+// parts, one a thread (every row is written by exactly one thread: the same bytes either way).
+inline void run_row_copies(const std::vector<RowCopy>& copies, int threads = 1) {
+  std::size_t total = 0;
+  for (const RowCopy& c : copies) total += c.rows->size();
+  if (threads <= 1 || total < kParallelMinRowCopies) {
+    for (const RowCopy& c : copies) copy_range(c, 0, c.rows->size());
+    return;
+  }
+#pragma omp parallel num_threads(threads)
+  {
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+    for (const RowCopy& c : copies) {
+      const std::size_t n = c.rows->size();
+      copy_range(c, n * t / nt, n * (t + 1) / nt);
     }
   }
 }

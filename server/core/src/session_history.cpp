@@ -6,6 +6,7 @@
 
 #include "row_copy.hpp"
 #include "surfeledit/core/edit_session.hpp"
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
@@ -79,7 +80,7 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
   static const Points none(0, 3);  // (both branches lvalues: no copy of the model's tangents)
   take_rows(model_.has_tangents() ? a.tangent_u : none, turned, r.tangent_u, copies);
   take_rows(model_.has_tangents() ? a.tangent_v : none, turned, r.tangent_v, copies);
-  detail::run_row_copies(copies);
+  detail::run_row_copies(copies, resolve_threads(params_.threads));
   r.version_runs.clear();
   for (Index row : rows) {
     const std::uint64_t v = row_version_[row];
@@ -217,11 +218,34 @@ void EditSession::record(const char* op, const std::string& author, IdList touch
                          const IndexList* moved) {
   if (!std::is_sorted(touched.begin(), touched.end())) std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  record_shared(op, author, std::make_shared<const IdList>(std::move(touched)), std::move(before), moved);
+}
+
+void EditSession::record_shared(const char* op, const std::string& author, std::shared_ptr<const IdList> touched,
+                                SessionImage before, const IndexList* moved) {
   HistoryEntry e;
-  e.item = {version_, op, author, std::move(touched), false};
+  e.item = {version_, op, author, {}, false};
+  e.touched = std::move(touched);
   e.image = std::make_shared<SessionImage>(std::move(before));
-  if (!e.item.touched.empty()) mark_others_stale(moved);
+  if (!e.touched->empty()) mark_others_stale(moved);
   history_.push(std::move(e), history_limit());
+}
+
+std::shared_ptr<const IdList> EditSession::step_touched(const IndexList& moved) {
+  const std::shared_ptr<const IdList>& last = tool_->shared_touched;
+  if (last && last->size() == moved.size()) {
+    // Equal in row order means the ids in row order are ascending and unique, as `last` is.
+    bool same = true;
+    for (std::size_t k = 0; k < moved.size(); ++k) same &= (*last)[k] == model_.id_of(moved[k]);
+    if (same) return last;
+  }
+  IdList ids;
+  ids.reserve(moved.size());
+  for (const Index r : moved) ids.push_back(model_.id_of(r));
+  if (!std::is_sorted(ids.begin(), ids.end())) std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  tool_->shared_touched = std::make_shared<const IdList>(std::move(ids));
+  return tool_->shared_touched;
 }
 
 std::uint64_t EditSession::swap_entry(HistoryEntry& entry, const char* what) {

@@ -82,15 +82,15 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   if (version_ != version_before) mark_others_stale(moved);
   const auto t_record = std::chrono::steady_clock::now();
   if (tool_->journaling && before.rows) before.detector = tool_->detector->journal_image();
-  if (out.response != "cancelled" && !none) {
+  if (out.response == "merged") {
     IdList touched;
     touched.reserve(out.moved.size());
     for (Index r : out.moved) touched.push_back(model_.id_of(r));
-    if (out.response == "merged") {
-      const IdList removed = changes_since(version_before).removed;
-      touched.insert(touched.end(), removed.begin(), removed.end());
-    }
+    const IdList removed = changes_since(version_before).removed;
+    touched.insert(touched.end(), removed.begin(), removed.end());
     record("deform", author, std::move(touched), std::move(before), moved);
+  } else if (out.response != "cancelled" && !none) {
+    record_shared("deform", author, step_touched(out.moved), std::move(before), moved);
   }
   out.history_ms = capture_ms + ms_since(t_record);
   return out;
@@ -131,7 +131,8 @@ void EditSession::step_once(const DeformParams& params, StepResult& out, bool pr
   } else if (from_last_step) {
     // Nothing but this tool's last step changed the model since `previous` was taken: only the deformable
     // rows differ (at 1M surfels a whole copy is most of a millisecond per 300k rows it need not move).
-    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}});
+    detail::run_row_copies({{a.positions.data(), &tool_->fields->deformable, previous.data(), true}},
+                           resolve_threads(params_.threads));
   } else {
     previous = a.positions;  // same size as the last step's: no allocation
   }

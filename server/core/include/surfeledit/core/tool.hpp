@@ -87,6 +87,7 @@ struct Tool {
   std::uint64_t previous_at = 0;
   std::shared_ptr<const IndexList> shared_rows;  // the row list of its last rows image (shared by images)
   std::shared_ptr<const IndexList> shared_bent;  // the `bent` list of its last step's rows image (likewise)
+  std::shared_ptr<const IdList> shared_touched;  // the ids its last step touched (shared by history entries)
   // The detector is exactly as a reset from the model made it, and nothing changed since: while the
   // session's version is `fresh_at` (a nonzero version at which it was reset) and the detector object
   // is `fresh_object` (and the tool is not stale). A tool image then need not hold the detector.
