@@ -62,14 +62,17 @@ bool scan_avx2(RowScan& s) {
   const __m256i zero = _mm256_set1_epi32(static_cast<int>(Region::Zero)), one = _mm256_set1_epi32(static_cast<int>(Region::One));
   const __m256i previous_lane = _mm256_setr_epi32(7, 0, 1, 2, 3, 4, 5, 6);
   const bool stored = s.fs != 0;
+  double sx = s.sx, sy = s.sy, sz = s.sz;  // in registers (a store to `s` could alias the positions)
   std::size_t k = 0;
   for (; k + 8 <= s.count; k += 8) {
     const __m256i r = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s.rows + k));
     const __m256i gatherable = _mm256_andnot_si256(_mm256_cmpgt_epi32(r, lim), _mm256_cmpgt_epi32(r, minus_one));
     if (bits8(gatherable) != 0xFF) {
+      s.sx = sx, s.sy = sy, s.sz = sz;
       bool ok = true;
       for (std::size_t e = k + 8; k < e; ++k) ok &= scan_row<B, kCentroid>(s, k);
       if (!ok) return false;
+      sx = s.sx, sy = s.sy, sz = s.sz;
       k -= 8;  // the loop's step
       continue;
     }
@@ -88,13 +91,14 @@ bool scan_avx2(RowScan& s) {
     if constexpr (kCentroid) {
       for (int m = ones; m != 0; m &= m - 1) {
         const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(s.rows[k + static_cast<std::size_t>(__builtin_ctz(m))]);
-        s.sx += s.P[o] - s.rx;
-        s.sy += s.P[o + 1] - s.ry;
-        s.sz += s.P[o + 2] - s.rz;
-        ++s.ones;
+        sx += s.P[o] - s.rx;
+        sy += s.P[o + 1] - s.ry;
+        sz += s.P[o + 2] - s.rz;
       }
+      s.ones += static_cast<std::size_t>(__builtin_popcount(ones));
     }
   }
+  s.sx = sx, s.sy = sy, s.sz = sz;
   return scan_rows_from<B, kCentroid>(s, k);
 }
 

@@ -71,11 +71,14 @@ inline bool scan_row(RowScan& s, std::size_t k) {
   return ok;
 }
 
-// Rows [k, count) one at a time.
+// Rows [k, count) one at a time. The loop works on a copy of the scan: the sums then stay in registers
+// (a store to the caller's scan could alias the positions it reads).
 template <Blend B, bool kCentroid>
 inline bool scan_rows_from(RowScan& s, std::size_t k) {
+  RowScan t = s;
   bool ok = true;
-  for (; k < s.count; ++k) ok &= scan_row<B, kCentroid>(s, k);
+  for (; k < t.count; ++k) ok &= scan_row<B, kCentroid>(t, k);
+  s = t;
   return ok;
 }
 
