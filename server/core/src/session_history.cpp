@@ -55,12 +55,23 @@ std::shared_ptr<const IndexList> EditSession::step_bent_rows(const DeformParams&
   // Without rotation a row whose blend gradient is 0 keeps its normal and tangents bit for bit
   // (deformation_kernel.hpp: the flat path); F1 rows have lambda 1 and gradient 0 (DeformationFields).
   const DeformationFields& f = *tool_->fields;
+  // Shared while it does not change (step after step), like the row list: compared with the last list first,
+  // so a drag's steps build none (at 1M surfels ~1 MB each).
+  if (const IndexList* last = tool_->shared_bent.get()) {
+    std::size_t j = 0;
+    bool same = true;
+    for (const Index r : f.deformable) {
+      if (f.regions[static_cast<std::size_t>(r)] == Region::One) continue;
+      same = same && j < last->size() && (*last)[j] == r;
+      ++j;
+    }
+    if (same && j == last->size() && j != f.deformable.size()) return tool_->shared_bent;
+  }
   IndexList bent;
   for (const Index r : f.deformable)
     if (f.regions[static_cast<std::size_t>(r)] != Region::One) bent.push_back(r);
   if (bent.size() == f.deformable.size()) return nullptr;
-  // Shared while it does not change (step after step), like the row list.
-  if (!tool_->shared_bent || *tool_->shared_bent != bent) tool_->shared_bent = std::make_shared<const IndexList>(std::move(bent));
+  tool_->shared_bent = std::make_shared<const IndexList>(std::move(bent));
   return tool_->shared_bent;
 }
 
