@@ -192,6 +192,49 @@ TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.center(c), static_cast<double>(sum[c] / ones), 1e-14);
 }
 
+// DeformResult::finite, which the kernels compute as they write, against a pass over the moved rows: true after a
+// small step, false after one whose translation overflows (positions and the blend rows' normals), for every
+// kernel, with and without rotation, all rows, every second one or the F1 rows alone.
+TEST(DeformationKernels, FiniteFlagAgreesWithTheRowsWritten) {
+  const Scene sc = make_scene();
+  DeformationFields fields = sc.fields;
+  fields.box_extent = std::numeric_limits<double>::infinity();  // extent unknown: no reach check of the step
+  std::vector<StepKernel> kernels{StepKernel::Baseline};
+  if (step_kernel_available(StepKernel::Avx2)) kernels.push_back(StepKernel::Avx2);
+  IndexList half, ones;  // every second deformable row; the F1 rows (without rotation: the flat path alone)
+  for (std::size_t k = 0; k < sc.fields.deformable.size(); k += 2) half.push_back(sc.fields.deformable[k]);
+  for (const Index r : sc.fields.deformable)
+    if (sc.fields.regions[static_cast<std::size_t>(r)] == Region::One) ones.push_back(r);
+  auto all_finite = [](const Arrays& a, const IndexList& rows) {
+    for (const Index r : rows)
+      if (!a.positions.row(r).allFinite() || !a.normals.row(r).allFinite()) return false;
+    return true;
+  };
+  int checked = 0;
+  for (const StepKernel kernel : kernels) {
+    for (const double angle : {0.0, 0.3}) {
+      for (const IndexList* only : {static_cast<const IndexList*>(nullptr), static_cast<const IndexList*>(&half),
+                                    static_cast<const IndexList*>(&ones)}) {
+        for (const double x : {0.01, 1.7e308}) {  // the second overflows once added to a position of 1 or more
+          DeformParams p;
+          p.translation = Vec3(x, 0.0, 0.0);
+          p.axis = Vec3(0.0, 0.0, 1.0);
+          p.angle = angle;
+          Arrays a = sc.arrays;
+          for (int step = 0; step < 2; ++step) {
+            const DeformResult r = apply_step(fields, p, a.positions, a.normals, nullptr, nullptr, 1, only, kernel);
+            EXPECT_EQ(r.finite, all_finite(a, r.moved)) << "x " << x << " angle " << angle << " step " << step;
+            if (x > 1.0 && step == 1) EXPECT_FALSE(r.finite);
+            if (x < 1.0) EXPECT_TRUE(r.finite);
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, static_cast<int>(kernels.size()) * 2 * 3 * 2 * 2);
+}
+
 // Auto picks an available kernel and gives its bits; an unavailable kernel is refused before anything moves.
 TEST(DeformationKernels, AutoMatchesBaselineAndUnavailableKernelsAreRefused) {
   const Scene sc = make_scene();

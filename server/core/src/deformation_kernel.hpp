@@ -30,8 +30,9 @@ struct StepConstants {
 // One block: `count` (<= kStepBlock) rows at positions ks[0..count) of fields.deformable (`rows`), or, when
 // `ks` is null, at k0, k0 + 1, ...; F = the first blend row (fields.blend_row(0)), fs = the doubles between
 // blend rows (4, or 0 when one constant row stands for all: DeformationFields::blend_stride); P, N, U, V =
-// positions, normals, tangents (U and V null without tangents).
-using BlockFn = void (*)(const StepConstants&, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
+// positions, normals, tangents (U and V null without tangents). Returns whether every position and normal it
+// wrote is finite (DeformResult::finite).
+using BlockFn = bool (*)(const StepConstants&, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
                          Eigen::Index k0, int count, double* P, double* N, double* U, double* V);
 
 // The AVX2 kernel's block function (deformation_avx2.cpp); null when this build has none.
@@ -126,6 +127,20 @@ template <class T>
 inline void scatter(double* a, const std::ptrdiff_t* o, T v) {
   for (int i = 0; i < kLanes<T>; ++i) a[o[i]] = v[i];
 }
+// The sum of the lanes (NaN when one is).
+inline double lane_sum(double x) { return x; }
+template <class T>
+inline double lane_sum(T x) {
+  double out = 0.0;
+  for (int i = 0; i < kLanes<T>; ++i) out += x[i];
+  return out;
+}
+// 0 when x, y and z are finite, else NaN (x - x is NaN for an infinite or NaN x): summed over what a block
+// wrote, one test for all of it.
+template <class T>
+inline T non_finite(T x, T y, T z) {
+  return (x - x) + (y - y) + (z - z);
+}
 inline bool all(bool m) { return m; }
 inline bool all(int m) { return m != 0; }
 template <class M>
@@ -141,7 +156,7 @@ inline bool all(M m) {
 // the latter being J u x J v for an orthonormal tangent frame (u, v) of n.
 template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
 inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const std::ptrdiff_t* f, const double* F,
-                      double* P, double* N, double* U, double* V) {
+                      double* P, double* N, double* U, double* V, T& bad) {
   const T z{};
   constexpr int L = kLanes<T>;
   std::ptrdiff_t o1[L], o2[L], f1[L], f2[L], f3[L];
@@ -167,22 +182,27 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
   // sin/cos and the renormalisation. Which path a row takes depends on the row alone, never on its lane mate.
   if constexpr (!Rotate) {
     if (all(flat)) {
-      scatter(P, o, px + s * sc.tx), scatter(P, o1, py + s * sc.ty), scatter(P, o2, pz + s * sc.tz);
+      const T qx = px + s * sc.tx, qy = py + s * sc.ty, qz = pz + s * sc.tz;
+      scatter(P, o, qx), scatter(P, o1, qy), scatter(P, o2, qz);
+      bad += non_finite(qx, qy, qz);
       return;
     }
   } else if constexpr (Rigid) {
     // F1 (lambda 1, gradient 0): the step's one rotation, as a rigid motion.
     const double* r = sc.r1;
     const T e0 = px - sc.cx, e1 = py - sc.cy, e2 = pz - sc.cz;
-    scatter(P, o, r[0] * e0 + r[1] * e1 + r[2] * e2 + sc.cx + sc.tx);
-    scatter(P, o1, r[3] * e0 + r[4] * e1 + r[5] * e2 + sc.cy + sc.ty);
-    scatter(P, o2, r[6] * e0 + r[7] * e1 + r[8] * e2 + sc.cz + sc.tz);
+    const T qx = r[0] * e0 + r[1] * e1 + r[2] * e2 + sc.cx + sc.tx;
+    const T qy = r[3] * e0 + r[4] * e1 + r[5] * e2 + sc.cy + sc.ty;
+    const T qz = r[6] * e0 + r[7] * e1 + r[8] * e2 + sc.cz + sc.tz;
+    scatter(P, o, qx), scatter(P, o1, qy), scatter(P, o2, qz);
+    bad += non_finite(qx, qy, qz);
     for (double* X : {N, U, V}) {
       if (!Tangents && X != N) break;
       const T x0 = gather(X, o, z), x1 = gather(X, o1, z), x2 = gather(X, o2, z);
-      scatter(X, o, r[0] * x0 + r[1] * x1 + r[2] * x2);
-      scatter(X, o1, r[3] * x0 + r[4] * x1 + r[5] * x2);
-      scatter(X, o2, r[6] * x0 + r[7] * x1 + r[8] * x2);
+      const T y0 = r[0] * x0 + r[1] * x1 + r[2] * x2, y1 = r[3] * x0 + r[4] * x1 + r[5] * x2,
+              y2 = r[6] * x0 + r[7] * x1 + r[8] * x2;
+      scatter(X, o, y0), scatter(X, o1, y1), scatter(X, o2, y2);
+      if (X == N) bad += non_finite(y0, y1, y2);
     }
     return;
   }
@@ -211,6 +231,7 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
     px += s * sc.tx, py += s * sc.ty, pz += s * sc.tz;
   }
   scatter(P, o, px), scatter(P, o1, py), scatter(P, o2, pz);
+  bad += non_finite(px, py, pz);
   const T n0 = gather(N, o, z), n1 = gather(N, o1, z), n2 = gather(N, o2, z);
   const T gw = 1.0 + (g0 * w0 + g1 * w1 + g2 * w2), wn = w0 * n0 + w1 * n1 + w2 * n2;
   T m0 = gw * n0 - wn * g0, m1 = gw * n1 - wn * g1, m2 = gw * n2 - wn * g2;
@@ -224,11 +245,14 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
   const T sign = select((m0 * n0 + m1 * n1 + m2 * n2) < 0.0, splat(-1.0, z), splat(1.0, z));
   const T scale = select(flat, splat(1.0, z), sign / root(len2));
   if constexpr (Rotate) {
-    scatter(N, o, scale * (r00 * m0 + r01 * m1 + r02 * m2));
-    scatter(N, o1, scale * (r10 * m0 + r11 * m1 + r12 * m2));
-    scatter(N, o2, scale * (r20 * m0 + r21 * m1 + r22 * m2));
+    const T y0 = scale * (r00 * m0 + r01 * m1 + r02 * m2), y1 = scale * (r10 * m0 + r11 * m1 + r12 * m2),
+            y2 = scale * (r20 * m0 + r21 * m1 + r22 * m2);
+    scatter(N, o, y0), scatter(N, o1, y1), scatter(N, o2, y2);
+    bad += non_finite(y0, y1, y2);
   } else {
-    scatter(N, o, scale * m0), scatter(N, o1, scale * m1), scatter(N, o2, scale * m2);
+    const T y0 = scale * m0, y1 = scale * m1, y2 = scale * m2;
+    scatter(N, o, y0), scatter(N, o1, y1), scatter(N, o2, y2);
+    bad += non_finite(y0, y1, y2);
   }
   if constexpr (Tangents) {
     for (double* X : {U, V}) {
@@ -247,16 +271,18 @@ inline void step_rows(const StepConstants& sc, const std::ptrdiff_t* o, const st
 }
 
 // The rows ks[j], ks[j + 1], ... of a list of `count`, kLanes<T> at a time from `j` on while there are that
-// many left; returns the first row not done.
+// many left; returns the first row not done. Adds non_finite() of what it wrote to `bad`.
 template <class T, Blend B, bool Rotate, bool Tangents, bool Rigid>
 int step_lanes(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const std::ptrdiff_t* ks,
-               int j, int count, double* P, double* N, double* U, double* V) {
+               int j, int count, double* P, double* N, double* U, double* V, double& bad) {
   constexpr int L = kLanes<T>;
+  T acc{};
   for (; j + L <= count; j += L) {
     std::ptrdiff_t o[L], f[L];
     for (int i = 0; i < L; ++i) o[i] = 3 * static_cast<std::ptrdiff_t>(rows[ks[j + i]]), f[i] = fs * ks[j + i];
-    step_rows<T, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V);
+    step_rows<T, B, Rotate, Tangents, Rigid>(sc, o, f, F, P, N, U, V, acc);
   }
+  bad += lane_sum(acc);
   return j;
 }
 
@@ -264,17 +290,18 @@ int step_lanes(const StepConstants& sc, const Index* rows, const double* F, std:
 // the rows' positions in fields.deformable.
 template <class W, Blend B, bool Rotate, bool Tangents, bool Rigid>
 void step_list(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const std::ptrdiff_t* ks,
-               int count, double* P, double* N, double* U, double* V) {
-  int j = step_lanes<W, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, 0, count, P, N, U, V);
-  if constexpr (kLanes<W> > 2) j = step_lanes<D2, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V);
-  step_lanes<double, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V);
+               int count, double* P, double* N, double* U, double* V, double& bad) {
+  int j = step_lanes<W, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, 0, count, P, N, U, V, bad);
+  if constexpr (kLanes<W> > 2)
+    j = step_lanes<D2, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V, bad);
+  step_lanes<double, B, Rotate, Tangents, Rigid>(sc, rows, F, fs, ks, j, count, P, N, U, V, bad);
 }
 
 // One block of `count` (<= kStepBlock) rows, W at a time; with rotation, F1 rows (lambda 1, gradient 0) and
 // the others in separate lists. `ks` lists the rows' positions in fields.deformable, or is null for the
 // consecutive positions k0, k0 + 1, ...
 template <class W, Blend B, bool Rotate, bool Tangents>
-void step_block(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
+bool step_block(const StepConstants& sc, const Index* rows, const double* F, std::ptrdiff_t fs, const Index* ks,
                 Eigen::Index k0, int count, double* P, double* N, double* U, double* V) {
   std::ptrdiff_t general[kStepBlock], rigid[kStepBlock];
   int ng = 0, nr = 0;
@@ -285,8 +312,10 @@ void step_block(const StepConstants& sc, const Index* rows, const double* F, std
     if (one) rigid[nr++] = k;
     else general[ng++] = k;
   }
-  step_list<W, B, Rotate, Tangents, false>(sc, rows, F, fs, general, ng, P, N, U, V);
-  if (nr > 0) step_list<W, B, Rotate, Tangents, true>(sc, rows, F, fs, rigid, nr, P, N, U, V);
+  double bad = 0.0;
+  step_list<W, B, Rotate, Tangents, false>(sc, rows, F, fs, general, ng, P, N, U, V, bad);
+  if (nr > 0) step_list<W, B, Rotate, Tangents, true>(sc, rows, F, fs, rigid, nr, P, N, U, V, bad);
+  return bad == 0.0;
 }
 
 template <class W, Blend B>

@@ -244,18 +244,20 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
   auto run = [&](Eigen::Index b) {
     const Eigen::Index k0 = b * detail::kStepBlock;
     const int count = static_cast<int>(std::min<Eigen::Index>(detail::kStepBlock, n_moved - k0));
-    block(sc, rows, F, fs, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
+    return block(sc, rows, F, fs, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
   };
   // Several threads only for about a millisecond of one-thread work or more (~20 ns a row with a
   // rotation, RESULTS §24): below that, on a busy machine, waking a descheduled worker costs a scheduler
   // tick, more than the whole loop (RESULTS §35; the detector's rule is the same, row_detector.hpp).
   constexpr Eigen::Index kParallelMinMoved = 50000;
+  bool finite = true;
   if (nthreads == 1 || n_moved < kParallelMinMoved) {
-    for (Eigen::Index b = 0; b < n_blocks; ++b) run(b);
+    for (Eigen::Index b = 0; b < n_blocks; ++b) finite &= run(b);
   } else {
-#pragma omp parallel for schedule(static) num_threads(nthreads)
-    for (Eigen::Index b = 0; b < n_blocks; ++b) run(b);
+#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(&& : finite)
+    for (Eigen::Index b = 0; b < n_blocks; ++b) finite = run(b) && finite;
   }
+  result.finite = finite;
   return result;
 }
 

@@ -13,7 +13,7 @@ namespace surfeledit {
 namespace {
 
 // The first k (in list order) whose row rows[k] has a non-finite position or normal after a step; rows.size()
-// when none. `flat` (the fields' regions, or null): the step had no rotation, so the normals of F1 rows are
+// when none. Read only after a step whose kernel wrote a non-finite value (DeformResult::finite), to name it. `flat` (the fields' regions, or null): the step had no rotation, so the normals of F1 rows are
 // bit for bit what they were before it (deformation_kernel.hpp's flat path, as step_bent_rows relies on), and
 // finite as the model's are: only their positions are read.
 std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows, const std::vector<Region>* flat) {
@@ -145,7 +145,8 @@ void EditSession::step_once(const DeformParams& params, StepResult& out, bool pr
   out.deform_ms = ms_since(t_deform);
   // The bounds of validate(params, fields) keep a step finite on models of sane coordinates; anything
   // else is refused here, before the detector sees it (deform() then rolls the rows back).
-  const std::size_t bad = first_non_finite(a, r.moved, params.angle == 0.0 ? &tool_->fields->regions : nullptr);
+  const std::size_t bad =
+      r.finite ? r.moved.size() : first_non_finite(a, r.moved, params.angle == 0.0 ? &tool_->fields->regions : nullptr);
   if (bad < r.moved.size()) {
     throw Error(ErrorCode::InvalidArgument, "translation",
                 "the step would move surfel " + std::to_string(model_.id_of(r.moved[bad])) + " to a non-finite position");

@@ -104,8 +104,9 @@ std::optional<double> displacement_bound(const DeformParams& params);
 
 // What one step changed.
 struct DeformResult {
-  IndexList moved;   // rows whose position changed (s > 0), ascending
-  Vec3 center;       // the rotation centre used
+  IndexList moved;     // rows whose position changed (s > 0), ascending
+  Vec3 center;         // the rotation centre used
+  bool finite = true;  // every new position, and every normal the step changed, is finite (checked as written)
 };
 
 // The step's kernel: Auto takes AVX2 (four rows at a time) on a CPU that has it, else Baseline (SSE2 pairs on
