@@ -1,8 +1,9 @@
 // Copies of chosen rows of #P by 3 arrays (row-major: row r is the 3 doubles at data() + 3 r), the
 // session's per-step bulk moves: a step's before-image (session_history.cpp) and its `previous`
-// positions (session_step.cpp). Large copies are split over the step's threads: at 1M surfels a step's
-// before-image is ~14 MB, milliseconds of one thread's copying and page faults (RESULTS §70; at load 6-7
-// on two cores the split was slower, §46.3, at load 2 it is not).
+// positions (session_step.cpp). Large copies are split over the step's threads: at 1M surfels a drag step
+// copies ~7 MB of positions into its before-image and again into `previous`, milliseconds of one thread's
+// copying and page faults (RESULTS §70; at load 6-7 on two cores the split was slower, §46.3, at load 2 it
+// is not).
 #pragma once
 
 #include <cstddef>
