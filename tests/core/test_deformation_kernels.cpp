@@ -1,7 +1,9 @@
 // The deformation step's kernels (StepKernel): the AVX2 kernel (four rows at a time) gives the baseline's
 // (SSE2 pairs) bits in every configuration -- each blend, with and without rotation (small angles take the
 // sin/cos without range reduction, large ones with it), with and without tangents, every row or a subset
-// whose lists end in every lane count -- so a journal replays to the same model on any x86-64 machine.
+// whose lists end in every lane count -- so a journal replays to the same model on any x86-64 machine. The
+// step's row scans (eight rows at a time with AVX2, one at a time in the baseline) refuse every bad row and
+// agree on the centroid, and the kernels' finite flag agrees with the rows they wrote.
 #include <gtest/gtest.h>
 
 #include <cmath>
