@@ -63,11 +63,14 @@ def test_clients_in_separate_processes_edit_one_session(n: int, client: surfeled
         assert all(r["ready"] for r in ready)
         start = fresh_state(owner)  # after every client set its regions
         names = [r["client_id"] for r in ready]
+        # Every peer's join reaches the stream; the owner's own join may too (it can be published after the
+        # watcher subscribed), so it is allowed, not required.
+        allowed = set(names) | {client.client_id}
         joined = set()
         deadline = time.monotonic() + 10.0
-        while joined != set(names) and time.monotonic() < deadline:
+        while not set(names) <= joined and time.monotonic() < deadline:
             joined |= {ev.client for ev in watcher.presence(timeout=1.0) if ev.what == "join"}
-        assert joined == set(names), "a join did not reach the update stream"
+        assert set(names) <= joined <= allowed, f"joins seen {sorted(joined)}, peers {sorted(names)}"
         # Joins do not enter the model updates: nothing after the start before the first step.
         assert all(e.version <= start.version and e.cause in ("load", "regions") for e in watcher.poll())
         for p in peers:
