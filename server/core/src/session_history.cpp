@@ -12,6 +12,13 @@ namespace surfeledit {
 
 namespace {
 
+// `ids` made ascending and unique, and shared (an entry's touched ids).
+std::shared_ptr<const IdList> shared_ascending(IdList ids) {
+  if (!std::is_sorted(ids.begin(), ids.end())) std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return std::make_shared<const IdList>(std::move(ids));
+}
+
 // Sizes `out` for rows `rows` of `a` (#rows by 3, its buffer reused when the size fits; empty when `a` is
 // empty) and adds the copy that fills it (and row rows[k] of `also`, #P by 3, when given).
 void take_rows(const Points& a, const IndexList& rows, Points& out, std::vector<detail::RowCopy>& copies,
@@ -227,9 +234,7 @@ std::size_t EditSession::history_limit() const {
 
 void EditSession::record(const char* op, const std::string& author, IdList touched, SessionImage before,
                          const IndexList* moved) {
-  if (!std::is_sorted(touched.begin(), touched.end())) std::sort(touched.begin(), touched.end());
-  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-  record_shared(op, author, std::make_shared<const IdList>(std::move(touched)), std::move(before), moved);
+  record_shared(op, author, shared_ascending(std::move(touched)), std::move(before), moved);
 }
 
 void EditSession::record_shared(const char* op, const std::string& author, std::shared_ptr<const IdList> touched,
@@ -253,9 +258,7 @@ std::shared_ptr<const IdList> EditSession::step_touched(const IndexList& moved) 
   IdList ids;
   ids.reserve(moved.size());
   for (const Index r : moved) ids.push_back(model_.id_of(r));
-  if (!std::is_sorted(ids.begin(), ids.end())) std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  tool_->shared_touched = std::make_shared<const IdList>(std::move(ids));
+  tool_->shared_touched = shared_ascending(std::move(ids));
   return tool_->shared_touched;
 }
 

@@ -13,9 +13,10 @@ namespace surfeledit {
 namespace {
 
 // The first k (in list order) whose row rows[k] has a non-finite position or normal after a step; rows.size()
-// when none. Read only after a step whose kernel wrote a non-finite value (DeformResult::finite), to name it. `flat` (the fields' regions, or null): the step had no rotation, so the normals of F1 rows are
-// bit for bit what they were before it (deformation_kernel.hpp's flat path, as step_bent_rows relies on), and
-// finite as the model's are: only their positions are read.
+// when none. Run only after a step whose kernel wrote a non-finite value (DeformResult::finite), to name the
+// row. `flat` (the fields' regions, or null): the step had no rotation, so the normals of F1 rows are bit for
+// bit what they were before it (deformation_kernel.hpp's flat path, as step_bent_rows relies on), and finite
+// as the model's are: only their positions are read.
 std::size_t first_non_finite(const SurfelArrays& a, const IndexList& rows, const std::vector<Region>* flat) {
   const double* P = a.positions.data();
   const double* N = a.normals.data();
@@ -82,15 +83,17 @@ StepResult EditSession::deform(const DeformParams& params, const std::string& au
   if (version_ != version_before) mark_others_stale(moved);
   const auto t_record = std::chrono::steady_clock::now();
   if (tool_->journaling && before.rows) before.detector = tool_->detector->journal_image();
-  if (out.response == "merged") {
-    IdList touched;
-    touched.reserve(out.moved.size());
-    for (Index r : out.moved) touched.push_back(model_.id_of(r));
-    const IdList removed = changes_since(version_before).removed;
-    touched.insert(touched.end(), removed.begin(), removed.end());
-    record("deform", author, std::move(touched), std::move(before), moved);
-  } else if (out.response != "cancelled" && !none) {
-    record_shared("deform", author, step_touched(out.moved), std::move(before), moved);
+  if (out.response != "cancelled" && !none) {
+    if (out.response == "merged") {
+      IdList touched;
+      touched.reserve(out.moved.size());
+      for (Index r : out.moved) touched.push_back(model_.id_of(r));
+      const IdList removed = changes_since(version_before).removed;
+      touched.insert(touched.end(), removed.begin(), removed.end());
+      record("deform", author, std::move(touched), std::move(before), moved);
+    } else {
+      record_shared("deform", author, step_touched(out.moved), std::move(before), moved);
+    }
   }
   out.history_ms = capture_ms + ms_since(t_record);
   return out;
