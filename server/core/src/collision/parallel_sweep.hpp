@@ -125,8 +125,8 @@ struct ParallelSweep {
                                               const TestPoint& pt, const std::uint8_t* candidate, std::uint8_t* hit,
                                               Journal<typename Kernel::State>* journal, std::size_t part, Index& t,
                                               Index& m_sum, Update update) {
-    typename Kernel::State before;
-    if constexpr (kJournal) before = s;
+    typename Journal<typename Kernel::State>::Image before;
+    if constexpr (kJournal) before = Journal<typename Kernel::State>::Image::of(s);
     const Index made = kCandidate && !candidate[r] ? kernel.not_candidate(s, pt) : update();
     if constexpr (kJournal) journal->note(r, before, s, made, part);
     hit[q] = s.colliding();

@@ -22,6 +22,18 @@ struct Journal {
     Index row;    // model row
     State state;  // its state when the journal started
   };
+  // A state's bytes as taken before an update, in 8-byte words. A plain State copy lets the compiler store its
+  // small fields one by one, and the wider loads of note()'s comparison then cannot be forwarded from those
+  // stores: a stall of every journaled row (RESULTS §71).
+  struct Image {
+    static_assert(sizeof(State) % 8 == 0, "a state is a whole number of 8-byte words");
+    std::uint64_t word[sizeof(State) / 8];
+    [[gnu::always_inline]] static Image of(const State& s) {
+      Image b;
+      std::memcpy(b.word, &s, sizeof(State));
+      return b;
+    }
+  };
   bool on = false;
   bool save = false;                       // keep states (else only `tested`)
   std::vector<std::uint8_t> tested;        // #P: 1 = the kernel made a query for the row since the start
@@ -54,14 +66,16 @@ struct Journal {
   }
   // Called with a row's state before and after one update that made `queries` queries, in part `part` of
   // the sweep; different bytes: the row changed.
-  void note(Index r, const State& before, const State& after, Index queries, std::size_t part) {
+  void note(Index r, const Image& before, const State& after, Index queries, std::size_t part) {
     if (queries > 0) tested[static_cast<std::size_t>(r)] = 1;
-    if (!save || std::memcmp(&before, &after, sizeof(State)) == 0) return;
+    if (!save || std::memcmp(before.word, &after, sizeof(State)) == 0) return;
     if (sweeps > 1) {
       if (saved[static_cast<std::size_t>(r)]) return;
       saved[static_cast<std::size_t>(r)] = 1;
     }
-    parts[part].push_back({r, before});
+    Saved& e = parts[part].emplace_back();
+    e.row = r;
+    std::memcpy(static_cast<void*>(&e.state), before.word, sizeof(State));
   }
   std::size_t count() const {
     std::size_t n = 0;
