@@ -99,11 +99,15 @@ SessionImage EditSession::capture_rows(const IndexList& rows, bool subset, bool 
   take_rows(model_.has_tangents() ? a.tangent_u : none, turned, r.tangent_u, copies);
   take_rows(model_.has_tangents() ? a.tangent_v : none, turned, r.tangent_v, copies);
   detail::run_row_copies(copies, resolve_threads(params_.threads));
+  // Runs of equal versions along `rows`, each counted in a local (an increment of the run in memory made every row
+  // wait on the last one's store: RESULTS §71).
   r.version_runs.clear();
-  for (Index row : rows) {
-    const std::uint64_t v = row_version_[row];
-    if (!r.version_runs.empty() && r.version_runs.back().first == v) ++r.version_runs.back().second;
-    else r.version_runs.emplace_back(v, 1u);
+  for (std::size_t i = 0; i < rows.size();) {
+    const std::uint64_t v = row_version_[static_cast<std::size_t>(rows[i])];
+    std::size_t j = i + 1;
+    while (j < rows.size() && row_version_[static_cast<std::size_t>(rows[j])] == v) ++j;
+    r.version_runs.emplace_back(v, static_cast<std::uint32_t>(j - i));
+    i = j;
   }
   image.rows = std::move(r);
   image.tool = tool_id_;
