@@ -49,6 +49,13 @@ inline double beta(double l) {
   }
 }
 
+// Whether a listed deformable row's region and lambda are valid: not F0, 0 <= lambda <= 1, and F1 when the fields
+// store no blend rows (`stored_blend` false). Bitwise, so that a scan using it stays branch-free; the row-by-row
+// pass that names a bad row (deformation_step.cpp) asks the same.
+inline bool valid_row(Region region, double l, bool stored_blend) {
+  return (region != Region::Zero) & (stored_blend | (region == Region::One)) & (l >= 0.0) & (l <= 1.0);
+}
+
 // Row k of a scan, branch-free: whether it is valid and moves; adds it to the centroid when it is F1.
 template <Blend B, bool kCentroid>
 inline bool scan_row(RowScan& s, std::size_t k) {
@@ -58,8 +65,7 @@ inline bool scan_row(RowScan& s, std::size_t k) {
   const Index j = in ? i : 0;  // a row that may be read
   const Region region = s.regions[j];
   const double l = s.F[s.fs * static_cast<std::ptrdiff_t>(k)];
-  const bool ok = in & (region != Region::Zero) & ((s.fs != 0) | (region == Region::One)) & (l >= 0.0) &
-                  (l <= 1.0) & (beta<B>(l) > 0.0);
+  const bool ok = in & valid_row(region, l, s.fs != 0) & (beta<B>(l) > 0.0);
   if constexpr (kCentroid) {  // a row that is not F1 adds +0, which changes no sum that starts at +0
     const bool one = region == Region::One;
     const std::ptrdiff_t o = 3 * static_cast<std::ptrdiff_t>(j);

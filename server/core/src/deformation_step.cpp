@@ -40,7 +40,7 @@ void scan_rows(const DeformationFields& fields, const IndexList* ks_in, Eigen::I
     prev = i;
     const Region region = fields.regions[static_cast<std::size_t>(i)];
     const double l = fields.blend_row(k)[0];
-    if (region == Region::Zero || !(l >= 0.0 && l <= 1.0) || (fields.blend.rows() == 0 && region != Region::One)) {
+    if (!detail::valid_row(region, l, fields.blend.rows() != 0)) {
       throw Error(ErrorCode::InvalidArgument, "fields",
                   "row " + std::to_string(i) + " is listed as deformable with region " +
                       std::to_string(static_cast<int>(region)) + " and lambda " + fmt(l));
