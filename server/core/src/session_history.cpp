@@ -62,21 +62,28 @@ std::shared_ptr<const IndexList> EditSession::step_bent_rows(const DeformParams&
   // Without rotation a row whose blend gradient is 0 keeps its normal and tangents bit for bit
   // (deformation_kernel.hpp: the flat path); F1 rows have lambda 1 and gradient 0 (DeformationFields).
   const DeformationFields& f = *tool_->fields;
-  // Shared while it does not change (step after step), like the row list: compared with the last list first,
-  // so a drag's steps build none (at 1M surfels ~1 MB each).
-  if (const IndexList* last = tool_->shared_bent.get()) {
-    std::size_t j = 0;
-    bool same = true;
-    for (const Index r : f.deformable) {
-      if (f.regions[static_cast<std::size_t>(r)] == Region::One) continue;
-      same = same && j < last->size() && (*last)[j] == r;
-      ++j;
-    }
-    if (same && j == last->size() && j != f.deformable.size()) return tool_->shared_bent;
-  }
+  // Shared while it does not change (step after step), like the row list: one pass compares it with the last list
+  // and only starts a new one where they part, so a drag's steps build none (at 1M surfels ~1 MB each).
+  const IndexList* last = tool_->shared_bent.get();
+  std::size_t same = 0;  // leading bent rows equal to the last list's
+  bool parted = last == nullptr;
   IndexList bent;
-  for (const Index r : f.deformable)
-    if (f.regions[static_cast<std::size_t>(r)] != Region::One) bent.push_back(r);
+  for (const Index r : f.deformable) {
+    if (f.regions[static_cast<std::size_t>(r)] == Region::One) continue;
+    if (!parted) {
+      if (same < last->size() && (*last)[same] == r) {
+        ++same;
+        continue;
+      }
+      parted = true;
+      bent.assign(last->begin(), last->begin() + static_cast<std::ptrdiff_t>(same));
+    }
+    bent.push_back(r);
+  }
+  if (!parted) {  // the bent rows are the last list's first `same`
+    if (same == last->size()) return same == f.deformable.size() ? nullptr : tool_->shared_bent;
+    bent.assign(last->begin(), last->begin() + static_cast<std::ptrdiff_t>(same));
+  }
   if (bent.size() == f.deformable.size()) return nullptr;
   tool_->shared_bent = std::make_shared<const IndexList>(std::move(bent));
   return tool_->shared_bent;
