@@ -16,6 +16,8 @@ from pathlib import Path
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.util import duration
 
+from . import wire_arrays
+
 __all__ = ["proto", "TOPIC_REQUEST", "TOPIC_REPLY", "TOPIC_UPDATE", "request_qos", "reply_qos", "update_qos",
            "request_writer_qos", "reply_reader_qos", "request_partition", "reply_partition",
            "COMPACT_UPDATE_PARTITION", "CLIENT_LIVELINESS_S", "REPO_ROOT"]
@@ -107,3 +109,6 @@ try:
     from . import _proto as proto
 except ImportError:  # pragma: no cover - depends on whether the build ran
     proto = _generate_in_memory()
+
+# The surfels' geometry of updates and state pages (nested in replies) arrives as numpy arrays (wire_arrays.py).
+wire_arrays.install([proto.Update, proto.StatePage])

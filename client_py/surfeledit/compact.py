@@ -36,7 +36,7 @@ def octahedral_decode(uv: np.ndarray) -> np.ndarray:
 
 
 def _blob(octets: Any) -> bytes:
-    """The bytes of a ``sequence<octet>`` field (cyclonedds-python reads it as a list of ints)."""
+    """The bytes of a ``sequence<octet>`` field (a uint8 array, wire_arrays.py, or the binding's list of ints)."""
     return octets if isinstance(octets, (bytes, bytearray)) else bytes(octets)
 
 

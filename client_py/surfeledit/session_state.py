@@ -50,7 +50,7 @@ class StateOps:
             offset = int(page.offset) + len(page.ids)
             if offset >= int(page.total):
                 return version, pages
-            if not page.ids:
+            if len(page.ids) == 0:
                 raise errors.InternalServerError(f"empty state page at offset {offset} of {page.total}", "state")
 
     def _fetch(self, changes_only: bool, since: int) -> Changes:
