@@ -25,14 +25,24 @@ def is_compact(sample: Any) -> bool:
 
 
 def octahedral_decode(uv: np.ndarray) -> np.ndarray:
-    """Unit normals ``(N, 3)`` of octahedral coordinates ``uv`` ``(N, 2)`` int16 (times 32767)."""
+    """Unit normals ``(N, 3)`` of octahedral coordinates ``uv`` ``(N, 2)`` int16 (times 32767).
+
+    Column by column, without masked copies or reductions along rows (each measured slower than the arithmetic):
+    the lower half folds onto the upper as (1 - |y|, 1 - |x|) with the signs of (x, y), then each row is divided by
+    its length, summed as x^2 + y^2 + z^2 in that order."""
     xy = np.asarray(uv, dtype=np.float64).reshape(-1, 2) / 32767.0
-    z = 1.0 - np.abs(xy).sum(axis=1)
+    x, y = xy[:, 0], xy[:, 1]
+    ax, ay = np.abs(x), np.abs(y)
+    z = 1.0 - (ax + ay)
     lower = z < 0.0
-    sign = np.where(xy[lower] < 0.0, -1.0, 1.0)
-    xy[lower] = (1.0 - np.abs(xy[lower][:, ::-1])) * sign
-    n = np.column_stack([xy, z])
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+    fx = np.where(lower, (1.0 - ay) * np.where(x < 0.0, -1.0, 1.0), x)
+    fy = np.where(lower, (1.0 - ax) * np.where(y < 0.0, -1.0, 1.0), y)
+    length = np.sqrt((fx * fx + fy * fy) + z * z)
+    n = np.empty((len(z), 3))
+    n[:, 0] = fx / length
+    n[:, 1] = fy / length
+    n[:, 2] = z / length
+    return n
 
 
 def _blob(octets: Any) -> bytes:
