@@ -110,5 +110,6 @@ try:
 except ImportError:  # pragma: no cover - depends on whether the build ran
     proto = _generate_in_memory()
 
-# The surfels' geometry of updates and state pages (nested in replies) arrives as numpy arrays (wire_arrays.py).
-wire_arrays.install([proto.Update, proto.StatePage])
+# The surfels' geometry of updates and state pages (nested in replies) arrives as numpy arrays, and uploads' chunks
+# are sent from arrays (wire_arrays.py).
+wire_arrays.install([proto.Update, proto.StatePage, proto.LoadChunk])

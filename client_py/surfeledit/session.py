@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Dict, List, Optional, Union
 
 import numpy as np
 
-from . import errors
+from . import errors, wire_arrays
 from ._protocol import proto
 from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, readonly, vec3
 from .results import Backoff, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State, StepResult
@@ -220,14 +220,16 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
         rad = as_radii(radii, pos.shape[0])
         total = pos.shape[0]
         chunk = self.client.max_chunk_surfels
+        # Arrays go out as blocks of bytes where the binding allows it (wire_arrays.py), else as lists.
+        seq = (lambda a: a) if wire_arrays.sends_arrays(proto.LoadChunk) else (lambda a: a.tolist())
         self._request(proto.Op.OP_LOAD_BEGIN, load_begin=proto.LoadBegin(total=total, has_radii=rad is not None))
         for off in range(0, total, chunk):
             end = min(total, off + chunk)
             self._request(proto.Op.OP_LOAD_CHUNK, load_chunk=proto.LoadChunk(
                 offset=off,
-                positions=pos[off:end].ravel().tolist(),
-                normals=nrm[off:end].ravel().tolist(),
-                radii=rad[off:end].tolist() if rad is not None else []))
+                positions=seq(np.ascontiguousarray(pos[off:end]).ravel()),
+                normals=seq(np.ascontiguousarray(nrm[off:end]).ravel()),
+                radii=seq(rad[off:end]) if rad is not None else []))
 
     def load_file(self, path: Union[str, Path]) -> "proto.SessionInfo":
         """Loads a file on the server (.ply, .pcd, .obj) as the new model: a path below the server's

@@ -5,7 +5,8 @@ object per number, which the client then turns back into an array. For an update
 18 MB) that decoding is most of what a Python watcher pays (bench/RESULTS.md §71-§72). :func:`install` makes the
 listed topic types read those sequences straight into numpy arrays instead: the same numbers, the same wire format,
 only what a decoded sample holds changes (an ``ndarray`` of the sequence's type, native byte order, writable, where
-the binding gave a ``list``). Sending is unchanged (a list or an array is written alike).
+the binding gave a ``list``). Sending takes lists as before and, for these types, 1-D arrays of the element type,
+written as one block of bytes (:func:`sends_arrays`; the same bytes as the list).
 
 The binding offers no public hook for this: :func:`install` replaces, in the types' built decoders, the decoder of
 each plain sequence of numbers by :class:`_ArraySequence`, which reads the same bytes through the buffer's public
@@ -16,7 +17,7 @@ replaced and samples keep their lists: every reader of these fields goes through
 from __future__ import annotations
 
 import logging
-from typing import Any, Iterable
+from typing import Any, Iterable, Set
 
 import numpy as np
 
@@ -45,7 +46,21 @@ if _SequenceMachine is not None:
                 raise TypeError(f"sequence element {self.code!r} is {self.size} bytes on the wire")
 
         def serialize(self, buffer: Any, value: Any, *args: Any, **kwargs: Any) -> Any:
-            return super().serialize(buffer, value.tolist() if isinstance(value, np.ndarray) else value, *args, **kwargs)
+            # A 1-D array of exactly the element type goes out as one block of bytes; anything else as the binding
+            # writes it (other arrays as lists, so that their values are checked as the binding checks them).
+            if not isinstance(value, np.ndarray):
+                return super().serialize(buffer, value, *args, **kwargs)
+            if value.ndim != 1 or value.dtype.newbyteorder("=") != self.dtype:
+                return super().serialize(buffer, value.tolist(), *args, **kwargs)
+            if self.max_length is not None and len(value) > self.max_length:
+                raise ValueError(f"sequence of {len(value)} elements exceeds its bound {self.max_length}")
+            buffer.align(4)
+            buffer.write("I", 4, len(value))
+            if len(value):
+                buffer.align(self.alignment)
+                order = "<" if buffer.endianness == _Endianness.Little else ">"
+                buffer.write_bytes(np.ascontiguousarray(value, self.dtype.newbyteorder(order)).tobytes())
+            return None
 
         def deserialize(self, buffer: Any, *args: Any, **kwargs: Any) -> np.ndarray:
             buffer.align(4)
@@ -58,6 +73,15 @@ if _SequenceMachine is not None:
             raw = buffer.read_bytes(self.size * length)
             order = "<" if buffer.endianness == _Endianness.Little else ">"
             return np.frombuffer(raw, self.dtype.newbyteorder(order)).astype(self.dtype)
+
+
+_installed: Set[Any] = set()
+
+
+def sends_arrays(cls: Any) -> bool:
+    """Whether samples of ``cls`` may carry 1-D numpy arrays in their number sequences (install() gave it the array
+    decoder): an array of the element type is then written as one block. Otherwise pass lists."""
+    return cls in _installed
 
 
 def install(types: Iterable[Any]) -> int:
@@ -87,4 +111,5 @@ def install(types: Iterable[Any]) -> int:
                         _log.debug("%s.%s keeps the binding's list decoder: %s", cls.__name__, field, exc)
                         continue
                     replaced += 1
+                    _installed.add(cls)
     return replaced
