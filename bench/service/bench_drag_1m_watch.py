@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Dict, List
@@ -29,19 +28,14 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parents[1] / "tests" / "python"))
 sys.path.insert(0, str(HERE))
 import benchlib  # noqa: E402
-from common import connect_when_up, start_server  # noqa: E402
-from service.conftest import free_domain  # noqa: E402
+from common import served_client  # noqa: E402
 
 from surfeledit import scenario as S  # noqa: E402
 
 
 def run(exe: str, sc: S.Scenario, watch: bool) -> Dict[str, List[float]]:
-    domain = free_domain()
-    log = Path(tempfile.mkstemp(prefix="bench-drag-1m-watch-", suffix=".log")[1])
-    srv = start_server(Path(exe), domain, None, log)
     out: Dict[str, List[float]] = {"rtt": [], "seen": [], "total": []}
-    try:
-        client = connect_when_up(domain)
+    with served_client(Path(exe), "bench-drag-1m-watch-") as client:
         backend = S.RemoteBackend(client, "drag1m")
         backend.start(sc.scene)
         backend.configure(algorithm="temporal", threads=2, knn_eps=0.0)
@@ -66,11 +60,6 @@ def run(exe: str, sc: S.Scenario, watch: bool) -> Dict[str, List[float]]:
             if watcher is not None:
                 watcher.close()
         backend.close()
-        client.close()
-    finally:
-        srv.terminate()
-        srv.wait(timeout=30)
-        log.unlink(missing_ok=True)
     return out
 
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Dict, List
@@ -27,8 +26,7 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parents[1] / "tests" / "python"))
 sys.path.insert(0, str(HERE))
 import benchlib  # noqa: E402
-from common import connect_when_up, start_server  # noqa: E402
-from service.conftest import free_domain  # noqa: E402
+from common import served_client  # noqa: E402
 
 import surfeledit  # noqa: E402
 
@@ -49,12 +47,8 @@ def main() -> int:
     exe = benchlib.build_dir(args.build_dir) / "server" / "app" / "surfeledit-server"
     model = sphere(args.surfels)
     print(f"# {benchlib.machine_line()}; client from {Path(surfeledit.__file__).parent}", flush=True)
-    domain = free_domain()
-    log = Path(tempfile.mkstemp(prefix="bench-upload-", suffix=".log")[1])
-    srv = start_server(exe, domain, None, log)
     times: Dict[str, List[float]] = {"upload": [], "upload_cpu": [], "state": [], "state_cpu": []}
-    try:
-        client = connect_when_up(domain)
+    with served_client(exe, "bench-upload-") as client:
         for k in range(args.repetitions):
             session = client.open_session(f"upload{k}")
             w, c = time.perf_counter(), time.thread_time()
@@ -68,11 +62,6 @@ def main() -> int:
             if not np.array_equal(state.positions, model["positions"]):
                 raise RuntimeError("the state read back differs from the model uploaded")
             session.close()
-        client.close()
-    finally:
-        srv.terminate()
-        srv.wait(timeout=30)
-        log.unlink(missing_ok=True)
     med = {k: statistics.median(v) for k, v in times.items()}
     print(f"{args.surfels:,} surfels, {args.repetitions} repetitions: upload {med['upload']:.0f} ms (client CPU "
           f"{med['upload_cpu']:.0f}), state read back {med['state']:.0f} ms (client CPU {med['state_cpu']:.0f}); "

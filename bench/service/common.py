@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
+import tempfile
 import time
 from pathlib import Path
-from typing import Optional
+from typing import Iterator, Optional
 
 import surfeledit
 
@@ -34,3 +36,24 @@ def start_server(exe: Path, domain: int, security: Optional[Path], log: Path) ->
             raise RuntimeError(f"surfeledit-server did not start:\n{log.read_text()[-2000:]}")
         time.sleep(0.05)
     return srv
+
+
+@contextlib.contextmanager
+def served_client(exe: Path, log_prefix: str) -> Iterator[surfeledit.Client]:
+    """A client of surfeledit-server `exe` started on a free DDS domain (its output in a temporary log); the client
+    is closed, the server stopped and the log removed on leaving, whatever happens."""
+    from service.conftest import free_domain  # the benches put tests/python on sys.path
+
+    domain = free_domain()
+    log = Path(tempfile.mkstemp(prefix=log_prefix, suffix=".log")[1])
+    srv = start_server(exe, domain, None, log)
+    try:
+        client = connect_when_up(domain)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        srv.terminate()
+        srv.wait(timeout=30)
+        log.unlink(missing_ok=True)
