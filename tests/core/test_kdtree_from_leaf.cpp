@@ -2,14 +2,15 @@
 // root descent, bit for bit: random clouds, exact ties (duplicates, lattices, queries equidistant from 2-8
 // points), every possible start value (each node of the tree, non-leaf nodes and out-of-range values, which
 // start from the near-path leaf, a leaf of another tree), 1e6 offsets, 1e+-4 scales, and cuts whose float
-// bounds overlap; each with the baseline walk (KdScan::Scalar, one level at a time) and the vector one (Auto:
-// AVX2 where the CPU has it, by fans of three levels), which must also agree with each other on the winner's leaf.
+// bounds overlap; each with the baseline walk (KdScan::Scalar, one level at a time) and each vector one the CPU has
+// (AVX2 and its AVX-512VL build, by fans of three levels), which must also agree with each other on the winner's leaf.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "random_data.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -26,8 +27,13 @@ KdTreeParams with_cells(int leaf_size, KdScan scan = KdScan::Auto) {
   return p;
 }
 
-// The baseline leaf scan and walk, and the vector ones where the CPU has them.
-const KdScan kScans[] = {KdScan::Scalar, KdScan::Auto};
+// The baseline leaf scan and walk, and each vector one this CPU has (AVX2, its AVX-512VL build).
+const std::vector<KdScan> kScans = [] {
+  std::vector<KdScan> out{KdScan::Scalar};
+  for (KdScan s : {KdScan::Avx2, KdScan::Avx512})
+    if (kd_scan_available(s)) out.push_back(s);
+  return out;
+}();
 
 // The rows at the smallest squared distance from q (brute force over every row; `offset` is subtracted from
 // both sides first, as the tree works relative to its points' centroid, so far from the origin the comparison
@@ -219,19 +225,25 @@ TEST(KdTreeFromLeaf, ScalarAndVectorWalksAgree) {
   for (const double scale : {1e-4, 1e4}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
       const Points pts = test::uniform_cloud(1500, 71, scale, offset);
-      const KdTree scalar(pts, with_cells(8, KdScan::Scalar)), vector(pts, with_cells(8));
+      const KdTree scalar(pts, with_cells(8, KdScan::Scalar));
       const Points queries = test::uniform_cloud(25, 72, 1.3 * scale, offset);
-      for (Eigen::Index i = 0; i < queries.rows(); ++i)
-        for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, queries.row(i).transpose(), s);
+      for (KdScan scan : kScans) {
+        const KdTree vector(pts, with_cells(8, scan));
+        for (Eigen::Index i = 0; i < queries.rows(); ++i)
+          for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, queries.row(i).transpose(), s);
+      }
     }
   }
   constexpr int m = 6;
   Points lattice(2 * m * m * m, 3);
   for (int i = 0; i < 2 * m * m * m; ++i) lattice.row(i) << i % m, (i / m) % m, (i / (m * m)) % m;
-  const KdTree scalar(lattice, with_cells(3, KdScan::Scalar)), vector(lattice, with_cells(3));
-  for (int i = 0; i < 30; ++i) {
-    const Vec3 q(0.5 * (i % 11), 0.5 * ((i * 7) % 11), 0.5 * ((i * 3) % 11) - 1.0);
-    for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, q, s);
+  const KdTree scalar(lattice, with_cells(3, KdScan::Scalar));
+  for (KdScan scan : kScans) {
+    const KdTree vector(lattice, with_cells(3, scan));
+    for (int i = 0; i < 30; ++i) {
+      const Vec3 q(0.5 * (i % 11), 0.5 * ((i * 7) % 11), 0.5 * ((i * 3) % 11) - 1.0);
+      for (std::uint32_t s : every_start(scalar)) agree(scalar, vector, q, s);
+    }
   }
 }
 

@@ -1,4 +1,4 @@
-// The k-d tree's leaf scans (KdScan: scalar, AVX2): every scan available on this CPU gives the scalar scan's
+// The k-d tree's leaf scans (KdScan: scalar, AVX2, AVX-512VL): every scan available on this CPU gives the scalar scan's
 // rows and squared distances bit for bit (ties, 1e6 offsets, tiny and huge scales, leaves of one point, the
 // masked lanes past a leaf's end), and the scalar scan agrees with brute force.
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@ namespace {
 
 std::vector<KdScan> vector_scans() {
   std::vector<KdScan> out;
-  for (KdScan s : {KdScan::Avx2})
+  for (KdScan s : {KdScan::Avx2, KdScan::Avx512})
     if (kd_scan_available(s)) out.push_back(s);
   return out;
 }
@@ -79,6 +79,9 @@ TEST(KdTreeScan, ScalarAndAutoAreAlwaysAvailable) {
   EXPECT_TRUE(kd_scan_available(KdScan::Scalar));
   // The AVX2 scan needs the CPU's AVX2 (and a build for x86-64).
   if (!__builtin_cpu_supports("avx2")) EXPECT_FALSE(kd_scan_available(KdScan::Avx2));
+  // Its AVX-512VL build needs AVX-512F, VL and DQ.
+  if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512vl") || !__builtin_cpu_supports("avx512dq"))
+    EXPECT_FALSE(kd_scan_available(KdScan::Avx512));
   // A scan that does not exist is refused with a typed error naming the field.
   KdTreeParams p;
   p.scan = static_cast<KdScan>(9);

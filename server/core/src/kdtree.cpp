@@ -53,14 +53,17 @@ double checked_radius2(double radius) {
 
 const kd::SearchFns* search_for(KdScan scan) {
   static const kd::SearchFns scalar = kd::search_fns<kd::ScalarScan, kd::ScalarWalk>();
-  const bool avx2 = kd_scan_available(KdScan::Avx2);
   switch (scan) {
     case KdScan::Auto:
-      return avx2 ? kd::avx2_search() : &scalar;
+      if (kd_scan_available(KdScan::Avx512)) return kd::avx512_search();
+      return kd_scan_available(KdScan::Avx2) ? kd::avx2_search() : &scalar;
     case KdScan::Scalar:
       return &scalar;
     case KdScan::Avx2:
-      if (avx2) return kd::avx2_search();
+      if (kd_scan_available(scan)) return kd::avx2_search();
+      break;
+    case KdScan::Avx512:
+      if (kd_scan_available(scan)) return kd::avx512_search();
       break;
   }
   throw Error(ErrorCode::InvalidArgument, "scan",
@@ -82,6 +85,9 @@ bool kd_scan_available(KdScan scan) {
       return true;
     case KdScan::Avx2:
       return kd::avx2_search() != nullptr && __builtin_cpu_supports("avx2");
+    case KdScan::Avx512:
+      return kd::avx512_search() != nullptr && __builtin_cpu_supports("avx512f") &&
+             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
   }
   return false;
 }

@@ -5,10 +5,15 @@
 // (kd_scan_available). The scan type has internal linkage, so the descent instantiated here (Descent<Avx2Scan,
 // .>) is this file's own; the shared helpers it inlines (the sets' add / worst) are forced inline, so no AVX
 // copy of them can stand in for the baseline's at link time.
+// kdtree_avx512.cpp builds this file again for AVX-512VL under another entry name (SURFELEDIT_KD_ENTRY).
 #include "kdtree_walk.hpp"
 
 #if defined(__AVX2__) && !defined(__FMA__)
 #include <immintrin.h>
+#endif
+
+#ifndef SURFELEDIT_KD_ENTRY
+#define SURFELEDIT_KD_ENTRY avx2_search
 #endif
 
 namespace surfeledit::kd {
@@ -48,6 +53,9 @@ struct Avx2Scan {
   // lexicographic (dist2, slot) minimum, the scalar scan's winner, without a branch. A leaf whose every point is
   // at +inf (overflow) leaves every lane empty; the scalar scan then offers its first point, and so does this one.
   static void nearest(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
+#if defined(__AVX512F__) && !defined(NO_SCAN8)
+    return nearest8(t, qp, a, b, set);
+#endif
     const Query q(qp);
     const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
     __m256d best = inf, best_slot = inf;
@@ -96,6 +104,32 @@ struct Avx2Scan {
     set.add(_mm256_cvtsd_f64(m), ks < std::numeric_limits<double>::infinity() ? static_cast<std::uint32_t>(ks) : a);
   }
 
+#if defined(__AVX512F__)
+  // nearest() eight points at a time (the AVX-512 build): the same per-lane first strict minimum and the same
+  // (dist2, slot) choice among the lanes; the last, partial vector's loads and compares masked.
+  static void nearest8(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
+    const __m512d qx = _mm512_set1_pd(qp[0]), qy = _mm512_set1_pd(qp[1]), qz = _mm512_set1_pd(qp[2]);
+    const __m512d inf = _mm512_set1_pd(std::numeric_limits<double>::infinity());
+    __m512d best = inf, best_slot = inf;
+    __m512d slot = _mm512_add_pd(_mm512_set1_pd(a), _mm512_setr_pd(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m512d eight = _mm512_set1_pd(8.0);
+    for (std::uint32_t s = a; s < b; s += 8) {
+      const __mmask8 in = b - s >= 8 ? __mmask8(0xff) : static_cast<__mmask8>((1u << (b - s)) - 1u);
+      const __m512d dx = _mm512_sub_pd(qx, _mm512_maskz_loadu_pd(in, t.xs() + s));
+      const __m512d dy = _mm512_sub_pd(qy, _mm512_maskz_loadu_pd(in, t.ys() + s));
+      const __m512d dz = _mm512_sub_pd(qz, _mm512_maskz_loadu_pd(in, t.zs() + s));
+      const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
+      const __mmask8 lt = _mm512_mask_cmp_pd_mask(in, d2, best, _CMP_LT_OQ);
+      best = _mm512_mask_mov_pd(best, lt, d2);
+      best_slot = _mm512_mask_mov_pd(best_slot, lt, slot);
+      slot = _mm512_add_pd(slot, eight);
+    }
+    const double m = _mm512_reduce_min_pd(best);
+    const double ks = _mm512_mask_reduce_min_pd(_mm512_cmp_pd_mask(best, _mm512_set1_pd(m), _CMP_EQ_OQ), best_slot);
+    set.add(m, ks < std::numeric_limits<double>::infinity() ? static_cast<std::uint32_t>(ks) : a);
+  }
+#endif
+
   // Any other set: the points that could enter it (dist2 <= its worst at the vector's start, which only
   // shrinks), in slot order; add() re-checks each against the worst as it is then, as the scalar scan does.
   template <class Set>
@@ -138,6 +172,27 @@ class Avx2Walk {
   unsigned fan_bounds(const Fan& f, const FanBlock* blocks, double best, double* bound,
                       double (*off)[kFanLanes]) const {
     static_assert(kFanLanes == 2 * kFanBlock, "a fan is two blocks");
+#if defined(__AVX512F__) && !defined(NO_FAN8)
+    // The AVX-512 build: both blocks' lanes in one vector of eight, the same operations per lane.
+    {
+      const FanBlock* second = f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock;
+      const __m512d zero = _mm512_setzero_pd();
+      __m512d o[3];
+      for (int d = 0; d < 3; ++d) {
+        const __m512d lo = _mm512_cvtps_pd(
+            _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->lo[d])), _mm_load_ps(second->lo[d]), 1));
+        const __m512d hi = _mm512_cvtps_pd(
+            _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->hi[d])), _mm_load_ps(second->hi[d]), 1));
+        const __m512d qd = _mm512_broadcast_f64x4(qs_[d]);
+        const __m512d g = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(lo, qd), _mm512_sub_pd(qd, hi)), zero);
+        o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), _mm512_broadcast_f64x4(boxes_[d]));
+        _mm512_storeu_pd(off[d], o[d]);
+      }
+      const __m512d bsum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
+      _mm512_storeu_pd(bound, bsum);
+      return static_cast<unsigned>(_mm512_cmp_pd_mask(bsum, _mm512_set1_pd(best), _CMP_LE_OQ)) & f.lanes;
+    }
+#endif
     const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
     const FanBlock* block[2] = {blocks, f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock};
     unsigned mask = 0;
@@ -187,12 +242,12 @@ class Avx2Walk {
 
 }  // namespace
 
-const SearchFns* avx2_search() {
+const SearchFns* SURFELEDIT_KD_ENTRY() {
   static const SearchFns fns = search_fns<Avx2Scan, Avx2Walk>();
   return &fns;
 }
 #else
-const SearchFns* avx2_search() { return nullptr; }
+const SearchFns* SURFELEDIT_KD_ENTRY() { return nullptr; }
 #endif
 
 }  // namespace surfeledit::kd

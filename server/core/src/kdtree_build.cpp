@@ -230,6 +230,27 @@ void build_cells(Tree& t) {
   }
 }
 
+// Per node its stop box for the walk (Fan::cell): each ancestor's cut bounds it at the FAR child's extent (a left
+// child's upper face is the cut's hi, <= every coordinate of the right child; a right child's lower face the cut's
+// lo), so every point outside the node lies beyond one of its faces, whatever the children's extents (no kNoStop).
+// Wider than the node's cell by each cut's gap: a query just outside a surface's points (above a plate's top
+// face, between two rows of samples) is held one level sooner. Pre-order, as build_cells.
+static std::vector<Cell> stop_cells(const Tree& t) {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  std::vector<Cell> stop(t.nodes.size(), Cell{{-inf, -inf, -inf}, {inf, inf, inf}, 0});
+  for (std::uint32_t i = 0; i < t.nodes.size(); ++i) {
+    const Node& nd = t.nodes[i];
+    if (nd.leaf()) continue;
+    const std::uint32_t d = nd.b & 3u;
+    Cell left = stop[i], right = stop[i];
+    left.hi[d] = std::min(left.hi[d], nd.hi);
+    right.lo[d] = std::max(right.lo[d], nd.lo);
+    stop[i + 1] = left;
+    stop[nd.a] = right;
+  }
+  return stop;
+}
+
 // Pre-order: a node's depth is its parent's plus one. Each fan's frontier is collected depth first, left child
 // first, so its lanes are in pre-order.
 void build_fans(Tree& t) {
@@ -246,6 +267,7 @@ void build_fans(Tree& t) {
     level[i + 1] = level[nd.a] = static_cast<std::uint8_t>((level[i] + 1) % kFanLevels);
   }
   constexpr float inf = std::numeric_limits<float>::infinity();
+  const std::vector<Cell> stop = stop_cells(t);
   std::vector<std::pair<std::uint32_t, int>> stack;  // (node, levels below the fan's root)
   std::vector<std::uint32_t> frontier;
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -264,9 +286,8 @@ void build_fans(Tree& t) {
       }
     }
     Fan f;
-    f.cell = t.cells[i];
-    f.cell.parent &= Cell::kNoStop;
-    f.root = i;
+    f.cell = stop[i];
+    f.up = i;  // R until every fan is made (below)
     f.first = static_cast<std::uint32_t>(t.fan_blocks.size());
     const std::uint32_t fan = static_cast<std::uint32_t>(t.fans.size());
     for (std::size_t k = 0; k < frontier.size(); k += kFanBlock) {
@@ -291,6 +312,7 @@ void build_fans(Tree& t) {
     }
     t.fans.push_back(f);
   }
+  for (Fan& f : t.fans) f.up = t.fan_of[f.up];  // each R's lane was set by its parent fan, made before it (pre-order)
   t.fans.shrink_to_fit();
   t.fan_blocks.shrink_to_fit();
   std::vector<Cell>().swap(t.cells);

@@ -115,8 +115,8 @@ struct alignas(16) FanBlock {
   std::uint32_t node[kFanBlock];  // the lane's node; unused lanes 0
 };
 struct Fan {
-  Cell cell;                // R's cell; `parent` holds only its kNoStop flag
-  std::uint32_t root = 0;   // R
+  Cell cell;                // R's stop box (kdtree_build.cpp's stop_cells: faces at the far side of each cut); parent 0
+  std::uint32_t up = 0;     // R's own lane in its parent fan (Tree::fan_of of R): where the walk goes on; kNoFan at the root
   std::uint32_t first = 0;  // its first block in Tree::fan_blocks (lane k: block first + k / kFanBlock)
   std::uint32_t lanes = 0;  // bit per used lane, in the frontier's pre-order
 };

@@ -110,8 +110,8 @@ void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t
           descent.run_from(t.lane_block(fan, lane).node[lane % kFanBlock], o);
           if (descent.won() != NearestSet::kNone) won = descent.won();
         }
-        if (!(fan.cell.parent & Cell::kNoStop) && walk.holds(fan.cell, set.best)) break;
-        at = t.fan_of[fan.root];
+        if (walk.holds(fan.cell, set.best)) break;
+        at = fan.up;
       }
       if (set.slot != NearestSet::kNone) leaf = won;
       return;
@@ -154,7 +154,9 @@ constexpr SearchFns search_fns() {
 }
 
 // The AVX2 leaf scans' and walk's table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then
-// never chosen). The caller checks the CPU (__builtin_cpu_supports).
+// never chosen). avx512_search(): the same file built for AVX-512VL (kdtree_avx512.cpp); nullptr when built without.
+// The caller checks the CPU (__builtin_cpu_supports).
 const SearchFns* avx2_search();
+const SearchFns* avx512_search();
 
 }  // namespace surfeledit::kd
