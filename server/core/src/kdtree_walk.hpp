@@ -90,8 +90,10 @@ void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t
   if constexpr (Walk::kFans) {
     if (!t.fans.empty()) {
       // By fans: at each, every frontier node but the one the walk comes from is searched (nearest first) when its
-      // cell is within the best distance, then the walk goes on at the fan's root R, stopping there when R's cell
-      // holds the ball. The frontier holds all of R's points, so the argument above holds with a fan for a level.
+      // cell is within the best distance, then the walk goes on at the fan's root R, stopping there when R's stop box
+      // holds the ball. The frontier holds all of R's points, so the argument above holds with a fan for a level; the
+      // stop box's faces are at the far side of each ancestor's cut (kdtree_build.cpp's stop_cells), which every point
+      // outside R lies beyond, so it may be wider than R's cell and needs no kNoStop.
       std::uint32_t at = t.fan_of[n];
       while (at != Tree::kNoFan) {
         const Fan& fan = t.fans[at / kFanLanes];
