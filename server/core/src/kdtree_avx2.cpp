@@ -124,8 +124,14 @@ struct Avx2Scan {
       best_slot = _mm512_mask_mov_pd(best_slot, lt, slot);
       slot = _mm512_add_pd(slot, eight);
     }
+    // A leaf none of whose lanes reaches the set's best offers nothing set.add() would take (most leaves of a
+    // descent): no reduction across the lanes then.
+    if (_mm512_cmp_pd_mask(best, _mm512_set1_pd(set.best), _CMP_LE_OQ) == 0) return;
     const double m = _mm512_reduce_min_pd(best);
-    const double ks = _mm512_mask_reduce_min_pd(_mm512_cmp_pd_mask(best, _mm512_set1_pd(m), _CMP_EQ_OQ), best_slot);
+    const __mmask8 at_m = _mm512_cmp_pd_mask(best, _mm512_set1_pd(m), _CMP_EQ_OQ);
+    // One lane at the minimum (no tie across lanes): its slot, else the smallest of theirs.
+    const double ks = (at_m & (at_m - 1)) == 0 ? _mm512_cvtsd_f64(_mm512_maskz_compress_pd(at_m, best_slot))
+                                               : _mm512_mask_reduce_min_pd(at_m, best_slot);
     set.add(m, ks < std::numeric_limits<double>::infinity() ? static_cast<std::uint32_t>(ks) : a);
   }
 #endif
