@@ -171,7 +171,7 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
 
 std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions) {
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
-  params.leaf_size = kOriginalLeafSize;
+  params.leaf_size = kFromLeafSize;
   params.cells = true;  // each test's search starts at the leaf of the point's last nearest (State::leaf)
   std::shared_ptr<const KdTree> tree;
   if (orig_.alive.empty() || std::all_of(orig_.alive.begin(), orig_.alive.end(), [](std::uint8_t a) { return a != 0; })) {

@@ -202,11 +202,7 @@ class RobustKernel {
   Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
                          const RigidRows* before = nullptr) const;
   // The original model's k-d tree over its alive rows (every row while all are alive), as reset, removals,
-  // rigid moves and snapshot loads build it. Leaves of kOriginalLeafSize points: with the k = 1 leaf scan
-  // of the tree (kdtree_search.hpp) 24 measured ~10 % faster than the default 10 and than 16 or 32 on the
-  // piercing scene, with fewer nodes (RESULTS §39); with the AVX2 leaf scan (RESULTS §44) 48 measured 6-7 %
-  // faster than 24 and 2-5 % faster than 32, 64 the same as 48 (RESULTS §49).
-  static constexpr int kOriginalLeafSize = 48;
+  // rigid moves and snapshot loads build it; leaves of kFromLeafSize points (collision_detail.hpp).
   std::shared_ptr<const KdTree> original_tree(const Points& positions);
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
