@@ -13,7 +13,8 @@
 // BM_IdleDrag/<hierarchy>: one iteration = one step of +-1e-4 (a hundredth of the spacing) from the start
 //   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
-// BM_Preprocess: one iteration = configure(algorithm robust), i.e. one detector reset.
+// BM_Preprocess/<tilted>: one iteration = configure(algorithm robust), i.e. one detector reset; tilted 1: the scene
+//   turned as BM_DetectRunTilted's.
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
 //   session, no history; the detect input carries the translation's displacement bound, as EditSession's).
@@ -170,7 +171,7 @@ void BM_IdleDrag(benchmark::State& state) {
 }
 
 void BM_Preprocess(benchmark::State& state) {
-  const Piercing& scene = Piercing::get();
+  const Piercing& scene = Piercing::get(state.range(0) != 0);
   auto session = scene.session(true, false);
   double preprocess = 0.0;
   for (auto _ : state) {
@@ -312,7 +313,7 @@ BENCHMARK(BM_DetectRunTilted)->DenseRange(0, 1)->Arg(12)->Unit(benchmark::kMilli
 BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Preprocess)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Preprocess)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

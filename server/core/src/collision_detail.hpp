@@ -67,13 +67,13 @@ inline KdTreeParams nearest_tree_params(double eps) {
   return p;
 }
 
-// Leaves of the k-d trees whose searches start from a leaf (KdTree::nearest_from: Temporal's zero tree, Robust's
-// original model). Both measured on the piercing scene upright and tilted (bench_robust_step's BM_DetectRun and
+// Leaves of the k-d trees the detectors ask for each point's one nearest surfel, exactly: those whose searches start
+// from a leaf (KdTree::nearest_from: Temporal's zero tree, Robust's original model) and Robust's seed tree. Measured on the piercing scene upright and tilted (bench_robust_step's BM_DetectRun and
 // BM_DetectRunTilted), at spacings 0.01 and 0.0137, against 48 (RESULTS §73): 128 points 0.97-1.02x upright and
 // 1.16-1.47x tilted, where a far point's search meets many loose axis-aligned leaf boxes of the tilted plate and
 // larger leaves mean fewer of them; 96 0.95-1.05x and 1.14-1.33x. (Earlier, upright only: 48 1.23x the default 10,
 // RESULTS §63; with the AVX2 scan 48 over 24 and 32, §49.)
-inline constexpr int kFromLeafSize = 128;
+inline constexpr int kNearestLeafSize = 128;
 
 // The zero region as the Simple / Improved / Temporal detectors see it: a private copy of the zero
 // surfels (they do not move), their k-d tree and their boundary marks (§4.1).
@@ -90,11 +90,11 @@ struct ZeroSet {
   // Copies the zero rows of `scene` and builds the tree (approximate search `eps`; with cells when
   // `with_cells` and eps == 0). Throws InvalidArgument when there are none.
   void build(const CollisionScene& scene, const IndexList& zero_rows, double eps, bool with_cells = false);
-  // The parameters `tree` is built with (eps; cells and kFromLeafSize when `cells` and exact).
+  // The parameters `tree` is built with (eps; cells and kNearestLeafSize when `cells` and exact).
   KdTreeParams tree_params() const {
     KdTreeParams p = nearest_tree_params(knn_eps);
     p.cells = cells && knn_eps == 0.0;
-    if (p.cells) p.leaf_size = kFromLeafSize;
+    if (p.cells) p.leaf_size = kNearestLeafSize;
     return p;
   }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other

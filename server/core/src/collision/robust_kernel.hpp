@@ -202,7 +202,7 @@ class RobustKernel {
   Points original_points(const CollisionScene& scene, const IndexList* moved = nullptr,
                          const RigidRows* before = nullptr) const;
   // The original model's k-d tree over its alive rows (every row while all are alive), as reset, removals,
-  // rigid moves and snapshot loads build it; leaves of kFromLeafSize points (collision_detail.hpp).
+  // rigid moves and snapshot loads build it; leaves of kNearestLeafSize points (collision_detail.hpp).
   std::shared_ptr<const KdTree> original_tree(const Points& positions);
 
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
