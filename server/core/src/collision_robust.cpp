@@ -86,23 +86,11 @@ void RobustKernel::build_inside() {
 
 void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
                         int threads, RowStates<State>& states) const {
-  // One batch: answered along a Morton curve, each query warm-started from the previous answer, on `threads`
-  // (exact, so the answers do not depend on the order or the threads). Leaves of kNearestLeafSize: the seed's
-  // queries are the deformable points, mostly far from the zero surface (RESULTS §73: the tilted piercing scene's
-  // reset 594 -> 230 ms with both, 24 -> 22 ms upright).
+  // Leaves of kNearestLeafSize: the seed's queries are mostly far from the zero surface (RESULTS §73).
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
-  params.threads = threads;
   params.leaf_size = kNearestLeafSize;
   const KdTree zero_tree(scene.positions, zero_rows, params);
-  Points queries(static_cast<Index>(deformable.size()), 3);
-  for (std::size_t q = 0; q < deformable.size(); ++q) queries.row(static_cast<Index>(q)) = scene.positions.row(deformable[q]);
-  const KnnResult nearest = zero_tree.knn(queries, 1);
-  for (std::size_t q = 0; q < deformable.size(); ++q) {
-    const Index r = deformable[q];
-    const Vec3 p = row3(scene.positions, r);
-    const Index k = nearest.indices(static_cast<Index>(q), 0);
-    states[r] = init(p, NearestZero{(p - row3(scene.positions, k)).squaredNorm(), scene.radii[k]});
-  }
+  seed_states(*this, scene.positions, deformable, threads, zero_tree, scene.positions, scene.radii, states);
 }
 
 void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {

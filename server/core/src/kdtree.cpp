@@ -273,7 +273,7 @@ void KdTree::radius(const Vec3& q, double radius, IndexList& indices, std::vecto
   }
 }
 
-KnnResult KdTree::knn(const Points& queries, int k) const {
+KnnResult KdTree::knn(const Points& queries, int k, int threads) const {
   check_k(k);
   require_finite(queries, "queries");
   const Eigen::Index nq = queries.rows();
@@ -294,7 +294,7 @@ KnnResult KdTree::knn(const Points& queries, int k) const {
   const std::vector<std::uint32_t> order = impl.order_for(queries);
   const bool warm = impl.params.eps == 0.0;
   const double eps_factor = impl.eps_factor();
-#pragma omp parallel num_threads(resolve_threads(impl.params.threads))
+#pragma omp parallel num_threads(resolve_threads(threads > 0 ? threads : impl.params.threads))
   {
     std::vector<std::uint32_t> slots(kk), prev(kk);
     std::size_t n_prev = 0;

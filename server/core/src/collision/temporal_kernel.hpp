@@ -51,8 +51,7 @@ class TemporalKernel : public ZeroSetKernel {
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             RowStates<State>& states) const {
-    seed_states(*this, scene.positions, deformable, threads, [&](const Vec3& p) { return nearest_zero(zero_, p); },
-                states);
+    seed_states(*this, scene.positions, deformable, threads, *zero_.tree, zero_.positions, zero_.radii, states);
   }
   State init(const Vec3& p, const NearestZero& z) const {
     State s;

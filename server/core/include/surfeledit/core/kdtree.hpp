@@ -83,10 +83,10 @@ class KdTree {
   // All points within real distance `radius` (inclusive) of q, ascending by distance.
   void radius(const Vec3& q, double radius, IndexList& indices, std::vector<double>& dist2) const;
 
-  // Batch versions, multithreaded over queries (`params().threads`); thread-safe, const. The queries
-  // are answered in Morton-curve order when the tree holds >= 2^16 points (cache reuse), and written back in
-  // the caller's order.
-  KnnResult knn(const Points& queries, int k) const;
+  // Batch versions, multithreaded over queries (`params().threads`; knn: `threads` when > 0); thread-safe, const.
+  // The queries are answered in Morton-curve order when the tree holds >= 2^16 points (cache reuse), and written
+  // back in the caller's order.
+  KnnResult knn(const Points& queries, int k, int threads = 0) const;
   RadiusResult radius(const Points& queries, double radius) const;
 
   // Bytes held by the tree (points copy 24 B and row map 4 B per point, nodes 16 B each, cells 28 B each).
