@@ -68,8 +68,9 @@ inline KdTreeParams nearest_tree_params(double eps) {
 }
 
 // Leaves of the k-d trees the detectors ask for each point's one nearest surfel, exactly: those whose searches start
-// from a leaf (KdTree::nearest_from: Temporal's zero tree, Robust's original model) and Robust's seed tree. Measured on the piercing scene upright and tilted (bench_robust_step's BM_DetectRun and
-// BM_DetectRunTilted), at spacings 0.01 and 0.0137, against 48 (RESULTS §73): 128 points 0.97-1.02x upright and
+// from a leaf (KdTree::nearest_from: Temporal's zero tree, Robust's original model) and Robust's seed tree. Measured
+// on the piercing scene upright and tilted (bench_robust_step's BM_DetectRun and BM_DetectRunTilted), at spacings
+// 0.01 and 0.0137, against 48 (RESULTS §73): 128 points 0.97-1.02x upright and
 // 1.16-1.47x tilted, where a far point's search meets many loose axis-aligned leaf boxes of the tilted plate and
 // larger leaves mean fewer of them; 96 0.95-1.05x and 1.14-1.33x. (Earlier, upright only: 48 1.23x the default 10,
 // RESULTS §63; with the AVX2 scan 48 over 24 and 32, §49.)

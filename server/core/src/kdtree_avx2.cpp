@@ -53,7 +53,7 @@ struct Avx2Scan {
   // lexicographic (dist2, slot) minimum, the scalar scan's winner, without a branch. A leaf whose every point is
   // at +inf (overflow) leaves every lane empty; the scalar scan then offers its first point, and so does this one.
   static void nearest(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
-#if defined(__AVX512F__) && !defined(NO_SCAN8)
+#if defined(__AVX512F__)
     return nearest8(t, qp, a, b, set);
 #endif
     const Query q(qp);
@@ -178,7 +178,7 @@ class Avx2Walk {
   unsigned fan_bounds(const Fan& f, const FanBlock* blocks, double best, double* bound,
                       double (*off)[kFanLanes]) const {
     static_assert(kFanLanes == 2 * kFanBlock, "a fan is two blocks");
-#if defined(__AVX512F__) && !defined(NO_FAN8)
+#if defined(__AVX512F__)
     // The AVX-512 build: both blocks' lanes in one vector of eight, the same operations per lane.
     {
       const FanBlock* second = f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock;

@@ -21,8 +21,8 @@ enum class KdScan : std::uint8_t {
   Auto = 0,    // the widest this CPU has
   Scalar = 1,  // one point at a time (any CPU)
   Avx2 = 2,    // four points at a time (CPUs with AVX2)
-  Avx512 = 3,  // the AVX2 scan built for AVX-512VL (CPUs with AVX-512F, VL and DQ): the same code, compiled to mask
-               // registers and 32 vector registers (RESULTS §73)
+  Avx512 = 3,  // the AVX2 scan's source built for AVX-512 (CPUs with AVX-512F, VL and DQ): eight points and a fan's
+               // eight cells per vector, the same operations per lane (RESULTS §73)
 };
 // Whether `scan` can run on this CPU and build (Auto and Scalar always can).
 bool kd_scan_available(KdScan scan);
