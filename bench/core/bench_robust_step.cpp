@@ -50,7 +50,7 @@ constexpr double kBall = 0.691;        // ball radius
 constexpr int kSteps = 50;             // steps of the scenario
 
 // The piercing scene, sampled once per process (as surfeledit.scenes.piercing(scale=1, seed=1)); tilted, the
-// same scene turned by kTilt (positions, normals and the push), so that no surface of the plate lies along an axis
+// same scene turned by tilt() (positions, normals and the push), so that no surface of the plate lies along an axis
 // of the k-d trees' boxes.
 struct Piercing {
   SurfelArrays arrays;
@@ -80,8 +80,12 @@ struct Piercing {
     for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
   }
   static const Piercing& get(bool tilted = false) {
-    static const Piercing upright(false), turned(true);
-    return tilted ? turned : upright;
+    if (tilted) {
+      static const Piercing turned(true);
+      return turned;
+    }
+    static const Piercing upright(false);
+    return upright;
   }
   // One step of the scenario's push (the ball through the plate in kSteps steps).
   Vec3 push() const {
