@@ -96,6 +96,7 @@ struct ZeroSet {
     KdTreeParams p = nearest_tree_params(knn_eps);
     p.cells = cells && knn_eps == 0.0;
     if (p.cells) p.leaf_size = kNearestLeafSize;
+    p.frames = p.cells;
     return p;
   }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other

@@ -89,6 +89,7 @@ void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable
   // Leaves of kNearestLeafSize: the seed's queries are mostly far from the zero surface (RESULTS §73).
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kNearestLeafSize;
+  params.frames = true;
   const KdTree zero_tree(scene.positions, zero_rows, params);
   seed_states(*this, scene.positions, deformable, threads, zero_tree, scene.positions, scene.radii, states);
 }
@@ -169,6 +170,7 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
 std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions) {
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kNearestLeafSize;
+  params.frames = true;
   params.cells = true;  // each test's search starts at the leaf of the point's last nearest (State::leaf)
   std::shared_ptr<const KdTree> tree;
   if (orig_.alive.empty() || std::all_of(orig_.alive.begin(), orig_.alive.end(), [](std::uint8_t a) { return a != 0; })) {

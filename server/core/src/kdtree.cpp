@@ -152,6 +152,7 @@ struct KdTree::Impl {
       hi[d] -= origin[d];
     }
     kd::build(tree, P, std::move(rows), origin.data(), lo, hi, static_cast<std::uint32_t>(params.leaf_size));
+    if (params.frames) kd::build_frames(tree);
     if (params.cells) {
       kd::build_cells(tree);
       if (search->fans) kd::build_fans(tree);
@@ -376,7 +377,7 @@ std::size_t KdTree::memory_bytes() const {
   return sizeof(Impl) + t.coords.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
          t.nodes.capacity() * sizeof(kd::Node) + t.cells.capacity() * sizeof(kd::Cell) +
          t.fans.capacity() * sizeof(kd::Fan) + t.fan_blocks.capacity() * sizeof(kd::FanBlock) +
-         t.fan_of.capacity() * sizeof(std::uint32_t);
+         t.fan_of.capacity() * sizeof(std::uint32_t) + t.frames.capacity() * sizeof(kd::NodeFrame);
 }
 
 }  // namespace surfeledit

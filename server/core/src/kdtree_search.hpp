@@ -16,6 +16,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <type_traits>
@@ -121,6 +122,17 @@ struct Fan {
   std::uint32_t lanes = 0;  // bit per used lane, in the frontier's pre-order
 };
 
+// A node's oriented box (build_frames; trees built with KdTreeParams::frames): its points' principal axes and
+// centroid (floats), and per axis half the extent of the points' projections, widened for rounding. On a tilted surface a node's
+// axis-aligned box reaches far into the space beside its points; this box does not, so a search ball that meets
+// the first but not the second skips the node (Descent::frame_bound; RESULTS §73). Kept only where it is much
+// thinner than the points' axis-aligned box (`half[0]` is NaN otherwise, and the test is skipped).
+struct NodeFrame {
+  float c[3];        // centroid, local frame
+  float axis[3][3];  // the axes (rows), unit and orthogonal up to float rounding
+  float half[3];     // per axis: >= |(p - c) . axis| for every point p of the node, rounding included; NaN: unused
+};
+
 struct Tree {
   // Points in leaf order, local frame (minus `origin` of the owner), stored by coordinate: x of every slot, then
   // y, then z, each run `stride` = #N + kTail long; the kTail entries past the last slot are zero and only ever
@@ -137,6 +149,7 @@ struct Tree {
   std::vector<Fan> fans;
   std::vector<FanBlock> fan_blocks;
   std::vector<std::uint32_t> fan_of;
+  std::vector<NodeFrame> frames;  // per node when built with KdTreeParams::frames (build_frames), else empty
   static constexpr std::uint32_t kNoFan = std::numeric_limits<std::uint32_t>::max();
 
   std::size_t size() const { return rows.size(); }
@@ -202,6 +215,9 @@ class Descent {
   void run_from(std::uint32_t start, const double* off) {
     Far cell{start, 0.0, {off[0], off[1], off[2]}};
     cell.d2 = cell.off[0] + cell.off[1] + cell.off[2];
+    if constexpr (std::is_same_v<Set, NearestSet>) {
+      if (frame_bound(start) > set_.worst()) return;
+    }
     const Node* nodes = t_.nodes.data();
     std::size_t depth = 0;
     if (!(cell.d2 * eps_ <= set_.worst())) return;
@@ -231,7 +247,7 @@ class Descent {
       }
       const Node& leaf = nodes[ni];
       if constexpr (std::is_same_v<Set, NearestSet>) {
-        if (leaf.a != leaf.b && leaf_bound(ni) <= set_.worst()) {
+        if (leaf.a != leaf.b && leaf_bound(ni) <= set_.worst() && frame_bound(ni) <= set_.worst()) {
           const std::uint32_t before = set_.slot;
           Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
           won_ = set_.slot != before ? ni : won_;
@@ -242,7 +258,8 @@ class Descent {
       do {
         if (depth == 0) return;
         cell = stack_[--depth];
-      } while (!(cell.d2 * eps_ <= set_.worst()));
+      } while (!(cell.d2 * eps_ <= set_.worst()) ||
+               (std::is_same_v<Set, NearestSet> && frame_bound(cell.node) > set_.worst()));
     }
   }
 
@@ -257,6 +274,26 @@ class Descent {
     const std::uint32_t at = t_.fan_of[ni];
     const FanBlock& b = t_.lane_block(t_.fans[at / kFanLanes], at % kFanLanes);
     return box_bound(&b.lo[0][at % kFanBlock], &b.hi[0][at % kFanBlock], kFanBlock);
+  }
+  // A lower bound of the computed dist2 of every point of node ni from its oriented box (NodeFrame); 0 without
+  // one. Per axis the gap of q's projection beyond the half extent, less the projection's rounding error (a few ulps
+  // of |q - c|: 1e-15 of its 1-norm); the float axes are orthonormal only to ~1e-7, so the sum of the squared gaps
+  // is at most (1 + 1e-6) |q - p|^2, and it is scaled down by more than that.
+  double frame_bound(std::uint32_t ni) const {
+    if (t_.frames.empty()) return 0.0;
+    const NodeFrame& f = t_.frames[ni];
+    if (!(f.half[0] >= 0.0f)) return 0.0;  // NaN: no frame kept
+    const double d[3] = {q_[0] - static_cast<double>(f.c[0]), q_[1] - static_cast<double>(f.c[1]),
+                         q_[2] - static_cast<double>(f.c[2])};
+    const double slack = 1e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+    double b = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double x = d[0] * static_cast<double>(f.axis[k][0]) + d[1] * static_cast<double>(f.axis[k][1]) +
+                       d[2] * static_cast<double>(f.axis[k][2]);
+      const double g = std::max(std::abs(x) - static_cast<double>(f.half[k]) - slack, 0.0);
+      b += g * g;
+    }
+    return b * (1.0 - 2e-6);
   }
   // The same from a box whose axis d's faces are lo[d * stride] and hi[d * stride].
   double box_bound(const float* lo, const float* hi, int stride) const {
@@ -316,6 +353,8 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
            const double* hi, std::uint32_t leaf);
 // Fills t.cells (one per node) for nearest_from (kdtree_build.cpp).
 void build_cells(Tree& t);
+// Fills t.frames (one per node) from the points (kdtree_frames.cpp).
+void build_frames(Tree& t);
 // Fills t.fans, t.fan_blocks and t.fan_of from t.cells, then drops the cells (kdtree_build.cpp). A tree without an
 // inner node gets no fans and keeps its cells.
 void build_fans(Tree& t);

@@ -33,6 +33,8 @@ struct KdTreeParams {
   double eps = 0.0;    // approximate kNN / nearest (eps >= 0): a returned neighbour's squared
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
+  bool frames = false;  // keep an oriented box per node where it is much thinner than the points' axis-aligned box
+                        // (60 B per node): exact k = 1 searches then skip more of a surface tilted against the axes
   bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans (about 0.3 per
                        // leaf: 40 B and 112 B per four cells) and 4 B per node, else each node's cell (28 B per node)
 };

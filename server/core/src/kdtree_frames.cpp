@@ -1,0 +1,134 @@
+// The k-d tree's oriented node boxes (KdTreeParams::frames, kdtree_search.hpp's NodeFrame): built bottom-up from
+// the points' moments, with half extents that bound every point's exact projection on the stored float axes.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+#include "kdtree_search.hpp"
+
+namespace surfeledit::kd {
+
+// Each node's principal axes (eigenvectors of its points' covariance) and centroid, rounded to float, and per axis a
+// half extent that bounds every point's exact projection on the stored axes. Bottom-up (reverse pre-order), so the
+// build stays linear: a leaf's moments and box from its points, its half extents from its points' projections
+// (computed with the float axes, plus the product's rounding error, a few ulps of |p - c|: 2e-15 of its 1-norm,
+// rounded up to a float); an inner node's moments and box as its children's sums, its half extents from each child's
+// 8 box corners or 8 oriented-box corners, whichever bounds the child tighter on that axis (an oriented box holds
+// its points only up to its float axes' error, ~1e-7 of its size: 1e-6 of the sum of its half extents is added, and
+// its corners' rounding).
+// Kept (else half[0] = NaN) where the thinnest half extent is under kThinner of the thinnest half side of the points'
+// axis-aligned box: the surface is tilted against the axes there.
+void build_frames(Tree& t) {
+  constexpr double kThinner = 0.5;
+  const std::size_t n = t.nodes.size();
+  struct Sums {
+    double count = 0.0;
+    Eigen::Vector3d s = Eigen::Vector3d::Zero(), lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();  // sum of p p^T
+  };
+  std::vector<Sums> sums(n);
+  std::vector<NodeFrame> frame(n);  // every node's frame, kept or not (its parent reads its corners)
+  t.frames.assign(n, NodeFrame{});
+  // The 8 corners of the box centre c +- half along the three axes (rows of `axis`), in doubles.
+  auto corners = [](const double* c, const double (*axis)[3], const double* half, Eigen::Vector3d* out) {
+    for (int k = 0; k < 8; ++k)
+      for (int d = 0; d < 3; ++d)
+        out[k][d] = c[d] + ((k & 1) ? half[0] : -half[0]) * axis[0][d] + ((k & 2) ? half[1] : -half[1]) * axis[1][d] +
+                    ((k & 4) ? half[2] : -half[2]) * axis[2][d];
+  };
+  for (std::size_t i = n; i-- > 0;) {
+    const Node& nd = t.nodes[i];
+    Sums& z = sums[i];
+    if (nd.leaf()) {
+      double sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+      for (std::uint32_t s = nd.a; s < nd.b; ++s) {
+        const double x = t.xs()[s], y = t.ys()[s], w = t.zs()[s];
+        sx += x, sy += y, sz += w;
+        xx += x * x, xy += x * y, xz += x * w, yy += y * y, yz += y * w, zz += w * w;
+        z.lo = z.lo.cwiseMin(Eigen::Vector3d(x, y, w));
+        z.hi = z.hi.cwiseMax(Eigen::Vector3d(x, y, w));
+      }
+      z.count = static_cast<double>(nd.b - nd.a);
+      z.s = Eigen::Vector3d(sx, sy, sz);
+      z.m << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+    } else {
+      const Sums &l = sums[i + 1], &r = sums[nd.a];
+      z.count = l.count + r.count;
+      z.s = l.s + r.s;
+      z.m = l.m + r.m;
+      z.lo = l.lo.cwiseMin(r.lo);
+      z.hi = l.hi.cwiseMax(r.hi);
+    }
+    NodeFrame& g = frame[i];
+    g.half[0] = t.frames[i].half[0] = std::numeric_limits<float>::quiet_NaN();
+    if (z.count < 2.0) continue;
+    const Eigen::Vector3d mean = z.s / z.count;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(z.m / z.count - mean * mean.transpose());
+    double c[3], axis[3][3], half[3];
+    for (int d = 0; d < 3; ++d) {
+      g.c[d] = static_cast<float>(mean[d]);
+      c[d] = static_cast<double>(g.c[d]);
+      for (int k = 0; k < 3; ++k) {
+        g.axis[k][d] = static_cast<float>(eig.eigenvectors()(d, k));
+        axis[k][d] = static_cast<double>(g.axis[k][d]);
+      }
+    }
+    auto extent = [&](const Eigen::Vector3d& p, int k) {
+      const double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+      return std::abs(d[0] * axis[k][0] + d[1] * axis[k][1] + d[2] * axis[k][2]) +
+             2e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+    };
+    for (int k = 0; k < 3; ++k) half[k] = 0.0;
+    if (nd.leaf()) {
+      for (std::uint32_t s = nd.a; s < nd.b; ++s) {
+        const double d[3] = {t.xs()[s] - c[0], t.ys()[s] - c[1], t.zs()[s] - c[2]};
+        const double err = 2e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+        for (int k = 0; k < 3; ++k)
+          half[k] = std::max(half[k], std::abs(d[0] * axis[k][0] + d[1] * axis[k][1] + d[2] * axis[k][2]) + err);
+      }
+    } else {
+      for (const std::uint32_t child : {static_cast<std::uint32_t>(i + 1), nd.a}) {
+        const Sums& cz = sums[child];
+        if (cz.count == 0.0) continue;
+        Eigen::Vector3d box[8], oriented[8];  // the child's axis-aligned box's corners (exact), its oriented box's
+        for (int k = 0; k < 8; ++k)
+          box[k] = Eigen::Vector3d((k & 1) ? cz.hi[0] : cz.lo[0], (k & 2) ? cz.hi[1] : cz.lo[1], (k & 4) ? cz.hi[2] : cz.lo[2]);
+        const NodeFrame& cf = frame[child];
+        const bool has = cf.half[0] >= 0.0f;
+        double margin = 0.0;
+        if (has) {
+          const double cc[3] = {cf.c[0], cf.c[1], cf.c[2]};
+          const double ca[3][3] = {{cf.axis[0][0], cf.axis[0][1], cf.axis[0][2]},
+                                   {cf.axis[1][0], cf.axis[1][1], cf.axis[1][2]},
+                                   {cf.axis[2][0], cf.axis[2][1], cf.axis[2][2]}};
+          const double ch[3] = {cf.half[0], cf.half[1], cf.half[2]};
+          corners(cc, ca, ch, oriented);
+          // The float axes' error, and the corners' own rounding (a few ulps of |c| + the half extents).
+          margin = 1e-6 * (ch[0] + ch[1] + ch[2]) +
+                   2e-15 * (std::abs(cc[0]) + std::abs(cc[1]) + std::abs(cc[2]) + 3.0 * (ch[0] + ch[1] + ch[2]));
+        }
+        for (int k = 0; k < 3; ++k) {
+          double by_box = 0.0, by_frame = 0.0;
+          for (int q = 0; q < 8; ++q) by_box = std::max(by_box, extent(box[q], k));
+          if (has)
+            for (int q = 0; q < 8; ++q) by_frame = std::max(by_frame, extent(oriented[q], k) + margin);
+          half[k] = std::max(half[k], has ? std::min(by_box, by_frame) : by_box);
+        }
+      }
+    }
+    double thinnest = HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      float hf = static_cast<float>(half[k]);
+      if (static_cast<double>(hf) < half[k]) hf = std::nextafter(hf, std::numeric_limits<float>::infinity());
+      g.half[k] = hf;
+      thinnest = std::min(thinnest, half[k]);
+    }
+    if (thinnest < kThinner * 0.5 * (z.hi - z.lo).minCoeff()) t.frames[i] = g;
+  }
+}
+
+}  // namespace surfeledit::kd
