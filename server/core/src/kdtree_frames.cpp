@@ -19,7 +19,7 @@ namespace surfeledit::kd {
 // 8 box corners or 8 oriented-box corners, whichever bounds the child tighter on that axis (an oriented box holds
 // its points only up to its float axes' error, ~1e-7 of its size: 1e-6 of the sum of its half extents is added, and
 // its corners' rounding).
-// Kept (else half[0] = NaN) where the thinnest half extent is under kThinner of the thinnest half side of the points'
+// Kept (else half[0] = NaN; an inner node kept gets kFramed in Node::b) where the thinnest half extent is under kThinner of the thinnest half side of the points'
 // axis-aligned box: the surface is tilted against the axes there.
 void build_frames(Tree& t) {
   constexpr double kThinner = 0.5;
@@ -127,7 +127,10 @@ void build_frames(Tree& t) {
       g.half[k] = hf;
       thinnest = std::min(thinnest, half[k]);
     }
-    if (thinnest < kThinner * 0.5 * (z.hi - z.lo).minCoeff()) t.frames[i] = g;
+    if (thinnest < kThinner * 0.5 * (z.hi - z.lo).minCoeff()) {
+      t.frames[i] = g;
+      if (!t.nodes[i].leaf()) t.nodes[i].b |= kFramed;
+    }
   }
 }
 

@@ -25,6 +25,7 @@
 namespace surfeledit::kd {
 
 inline constexpr std::uint32_t kInner = 0x80000000u;  // Node::b flag of an inner node (its low bits: the axis)
+inline constexpr std::uint32_t kFramed = 4u;  // Node::b flag of an inner node that keeps an oriented box (NodeFrame)
 
 // 16 bytes. The cut bounds are floats rounded OUTWARD from the children's extents (lo up, hi down), so a
 // cell bound computed from them never exceeds the true one: pruning stays conservative and exact.
@@ -244,10 +245,15 @@ class Descent {
         // (an incremental mind2 - saved + cut could, by an ulp, and prune a tie).
         f.d2 = f.off[0] + f.off[1] + f.off[2];
         ni = left_near ? ni + 1 : nd.a;
+        if constexpr (std::is_same_v<Set, NearestSet>) {
+          // The near child too is beyond the best (an inner one with an oriented box: its flag is on this node's
+          // line, read next anyway; a leaf is tested below).
+          if ((nodes[ni].b & (kInner | kFramed)) == (kInner | kFramed) && frame_bound(ni) > set_.worst()) break;
+        }
       }
       const Node& leaf = nodes[ni];
       if constexpr (std::is_same_v<Set, NearestSet>) {
-        if (leaf.a != leaf.b && leaf_bound(ni) <= set_.worst() && frame_bound(ni) <= set_.worst()) {
+        if (leaf.leaf() && leaf.a != leaf.b && leaf_bound(ni) <= set_.worst() && frame_bound(ni) <= set_.worst()) {
           const std::uint32_t before = set_.slot;
           Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
           won_ = set_.slot != before ? ni : won_;
@@ -281,6 +287,8 @@ class Descent {
   // is at most (1 + 1e-6) |q - p|^2, and it is scaled down by more than that.
   double frame_bound(std::uint32_t ni) const {
     if (t_.frames.empty()) return 0.0;
+    const Node& nd = t_.nodes[ni];
+    if (!nd.leaf() && !(nd.b & kFramed)) return 0.0;
     const NodeFrame& f = t_.frames[ni];
     if (!(f.half[0] >= 0.0f)) return 0.0;  // NaN: no frame kept
     const double d[3] = {q_[0] - static_cast<double>(f.c[0]), q_[1] - static_cast<double>(f.c[1]),
