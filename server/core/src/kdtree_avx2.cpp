@@ -54,8 +54,8 @@ struct Avx2Scan {
   // at +inf (overflow) leaves every lane empty; the scalar scan then offers its first point, and so does this one.
   static void nearest(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
 #if defined(__AVX512F__)
-    return nearest8(t, qp, a, b, set);
-#endif
+    nearest8(t, qp, a, b, set);  // the AVX-512 build
+#else
     const Query q(qp);
     const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
     __m256d best = inf, best_slot = inf;
@@ -102,6 +102,7 @@ struct Avx2Scan {
     const __m256d k = lane_min(_mm256_blendv_pd(inf, best_slot, _mm256_cmp_pd(best, m, _CMP_EQ_OQ)));
     const double ks = _mm256_cvtsd_f64(k);
     set.add(_mm256_cvtsd_f64(m), ks < std::numeric_limits<double>::infinity() ? static_cast<std::uint32_t>(ks) : a);
+#endif
   }
 
 #if defined(__AVX512F__)
@@ -180,25 +181,23 @@ class Avx2Walk {
     static_assert(kFanLanes == 2 * kFanBlock, "a fan is two blocks");
 #if defined(__AVX512F__)
     // The AVX-512 build: both blocks' lanes in one vector of eight, the same operations per lane.
-    {
-      const FanBlock* second = f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock;
-      const __m512d zero = _mm512_setzero_pd();
-      __m512d o[3];
-      for (int d = 0; d < 3; ++d) {
-        const __m512d lo = _mm512_cvtps_pd(
-            _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->lo[d])), _mm_load_ps(second->lo[d]), 1));
-        const __m512d hi = _mm512_cvtps_pd(
-            _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->hi[d])), _mm_load_ps(second->hi[d]), 1));
-        const __m512d qd = _mm512_broadcast_f64x4(qs_[d]);
-        const __m512d g = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(lo, qd), _mm512_sub_pd(qd, hi)), zero);
-        o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), _mm512_broadcast_f64x4(boxes_[d]));
-        _mm512_storeu_pd(off[d], o[d]);
-      }
-      const __m512d bsum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
-      _mm512_storeu_pd(bound, bsum);
-      return static_cast<unsigned>(_mm512_cmp_pd_mask(bsum, _mm512_set1_pd(best), _CMP_LE_OQ)) & f.lanes;
+    const FanBlock* second = f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock;
+    const __m512d zero = _mm512_setzero_pd();
+    __m512d o[3];
+    for (int d = 0; d < 3; ++d) {
+      const __m512d lo = _mm512_cvtps_pd(
+          _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->lo[d])), _mm_load_ps(second->lo[d]), 1));
+      const __m512d hi = _mm512_cvtps_pd(
+          _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->hi[d])), _mm_load_ps(second->hi[d]), 1));
+      const __m512d qd = _mm512_broadcast_f64x4(qs_[d]);
+      const __m512d g = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(lo, qd), _mm512_sub_pd(qd, hi)), zero);
+      o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), _mm512_broadcast_f64x4(boxes_[d]));
+      _mm512_storeu_pd(off[d], o[d]);
     }
-#endif
+    const __m512d bsum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
+    _mm512_storeu_pd(bound, bsum);
+    return static_cast<unsigned>(_mm512_cmp_pd_mask(bsum, _mm512_set1_pd(best), _CMP_LE_OQ)) & f.lanes;
+#else
     const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
     const FanBlock* block[2] = {blocks, f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock};
     unsigned mask = 0;
@@ -216,6 +215,7 @@ class Avx2Walk {
       mask |= static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(b, vbest, _CMP_LE_OQ))) << (kFanBlock * h);
     }
     return mask & f.lanes;
+#endif
   }
   Avx2Walk(const double* q, const double* box)
       : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),

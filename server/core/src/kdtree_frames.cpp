@@ -77,47 +77,41 @@ void build_frames(Tree& t) {
         axis[k][d] = static_cast<double>(g.axis[k][d]);
       }
     }
-    auto extent = [&](const Eigen::Vector3d& p, int k) {
-      const double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
-      return std::abs(d[0] * axis[k][0] + d[1] * axis[k][1] + d[2] * axis[k][2]) +
-             2e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+    // Widens reach[0..2] to p's projections on the three axes, each plus its rounding error (2e-15 of |p - c|_1).
+    auto reach_of = [&](double x, double y, double w, double* reach) {
+      const double d[3] = {x - c[0], y - c[1], w - c[2]};
+      const double err = 2e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+      for (int k = 0; k < 3; ++k)
+        reach[k] = std::max(reach[k], std::abs(d[0] * axis[k][0] + d[1] * axis[k][1] + d[2] * axis[k][2]) + err);
     };
     for (int k = 0; k < 3; ++k) half[k] = 0.0;
     if (nd.leaf()) {
-      for (std::uint32_t s = nd.a; s < nd.b; ++s) {
-        const double d[3] = {t.xs()[s] - c[0], t.ys()[s] - c[1], t.zs()[s] - c[2]};
-        const double err = 2e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
-        for (int k = 0; k < 3; ++k)
-          half[k] = std::max(half[k], std::abs(d[0] * axis[k][0] + d[1] * axis[k][1] + d[2] * axis[k][2]) + err);
-      }
+      for (std::uint32_t s = nd.a; s < nd.b; ++s) reach_of(t.xs()[s], t.ys()[s], t.zs()[s], half);
     } else {
       for (const std::uint32_t child : {static_cast<std::uint32_t>(i + 1), nd.a}) {
         const Sums& cz = sums[child];
         if (cz.count == 0.0) continue;
-        Eigen::Vector3d box[8], oriented[8];  // the child's axis-aligned box's corners (exact), its oriented box's
+        double by_box[3] = {0.0, 0.0, 0.0};  // from the child's axis-aligned box's corners (exact)
         for (int k = 0; k < 8; ++k)
-          box[k] = Eigen::Vector3d((k & 1) ? cz.hi[0] : cz.lo[0], (k & 2) ? cz.hi[1] : cz.lo[1], (k & 4) ? cz.hi[2] : cz.lo[2]);
+          reach_of((k & 1) ? cz.hi[0] : cz.lo[0], (k & 2) ? cz.hi[1] : cz.lo[1], (k & 4) ? cz.hi[2] : cz.lo[2], by_box);
         const NodeFrame& cf = frame[child];
-        const bool has = cf.half[0] >= 0.0f;
-        double margin = 0.0;
-        if (has) {
-          const double cc[3] = {cf.c[0], cf.c[1], cf.c[2]};
-          const double ca[3][3] = {{cf.axis[0][0], cf.axis[0][1], cf.axis[0][2]},
-                                   {cf.axis[1][0], cf.axis[1][1], cf.axis[1][2]},
-                                   {cf.axis[2][0], cf.axis[2][1], cf.axis[2][2]}};
-          const double ch[3] = {cf.half[0], cf.half[1], cf.half[2]};
-          corners(cc, ca, ch, oriented);
-          // The float axes' error, and the corners' own rounding (a few ulps of |c| + the half extents).
-          margin = 1e-6 * (ch[0] + ch[1] + ch[2]) +
-                   2e-15 * (std::abs(cc[0]) + std::abs(cc[1]) + std::abs(cc[2]) + 3.0 * (ch[0] + ch[1] + ch[2]));
+        if (!(cf.half[0] >= 0.0f)) {  // no oriented box (a single point)
+          for (int k = 0; k < 3; ++k) half[k] = std::max(half[k], by_box[k]);
+          continue;
         }
-        for (int k = 0; k < 3; ++k) {
-          double by_box = 0.0, by_frame = 0.0;
-          for (int q = 0; q < 8; ++q) by_box = std::max(by_box, extent(box[q], k));
-          if (has)
-            for (int q = 0; q < 8; ++q) by_frame = std::max(by_frame, extent(oriented[q], k) + margin);
-          half[k] = std::max(half[k], has ? std::min(by_box, by_frame) : by_box);
-        }
+        const double cc[3] = {cf.c[0], cf.c[1], cf.c[2]};
+        const double ca[3][3] = {{cf.axis[0][0], cf.axis[0][1], cf.axis[0][2]},
+                                 {cf.axis[1][0], cf.axis[1][1], cf.axis[1][2]},
+                                 {cf.axis[2][0], cf.axis[2][1], cf.axis[2][2]}};
+        const double ch[3] = {cf.half[0], cf.half[1], cf.half[2]};
+        Eigen::Vector3d oriented[8];
+        corners(cc, ca, ch, oriented);
+        double by_frame[3] = {0.0, 0.0, 0.0};  // from its oriented box's corners
+        for (const Eigen::Vector3d& q : oriented) reach_of(q[0], q[1], q[2], by_frame);
+        // The float axes' error, and the corners' own rounding (a few ulps of |c| + the half extents).
+        const double margin = 1e-6 * (ch[0] + ch[1] + ch[2]) +
+                              2e-15 * (std::abs(cc[0]) + std::abs(cc[1]) + std::abs(cc[2]) + 3.0 * (ch[0] + ch[1] + ch[2]));
+        for (int k = 0; k < 3; ++k) half[k] = std::max(half[k], std::min(by_box[k], by_frame[k] + margin));
       }
     }
     double thinnest = HUGE_VAL;
