@@ -5,7 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <random>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "random_data.hpp"
 #include "surfeledit/core/kdtree.hpp"
@@ -70,6 +74,39 @@ inline void expect_radius_matches(const Points& points, const Vec3& q, double r,
       EXPECT_LE(d2[j - 1], d2[j]);
     }
   }
+}
+
+// A side x side lattice of spacing h on the plane z = 0 (or, `bent`, on a cylinder of radius side * h / 2 about
+// the x axis), jittered by 1e-3 h (seeded), turned by a rotation no face of the axes' boxes survives, scaled and
+// moved to `offset`; `turn`: another rotation (the identity: the plane along the axes).
+inline Points turned_surface(int side, double h, bool bent, double scale, const Vec3& offset,
+                             const Mat3& turn = Eigen::AngleAxisd(0.7, Vec3(0.4, -0.3, 0.85).normalized()).toRotationMatrix()) {
+  std::mt19937_64 rng(91);
+  std::uniform_real_distribution<double> jitter(-1e-3 * h, 1e-3 * h);
+  const double radius = 0.5 * side * h;
+  Points p(side * side, 3);
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      const double u = (i - side / 2) * h + jitter(rng), v = (j - side / 2) * h + jitter(rng);
+      Vec3 x(u, v, jitter(rng));
+      if (bent) x = Vec3(u, radius * std::sin(v / radius), radius * (1.0 - std::cos(v / radius)));
+      p.row(i * side + j) = (offset + scale * (turn * x)).transpose();
+    }
+  }
+  return p;
+}
+
+// Queries at 0 to 40 spacings from the surface's middle region (either side), seeded.
+inline Points queries_about(const Points& surface, int n, double h, double scale) {
+  std::mt19937_64 rng(92);
+  std::uniform_int_distribution<Eigen::Index> row(0, surface.rows() - 1);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), far(0.0, 40.0);
+  Points q(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
+    q.row(i) = surface.row(row(rng)) + (far(rng) * h * scale * dir).transpose();
+  }
+  return q;
 }
 
 }  // namespace surfeledit::test

@@ -4,50 +4,13 @@
 // with the same row and dist2 bits as the same tree without frames, and its distance is the brute-force minimum.
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "kdtree_truth.hpp"
 #include "surfeledit/core/kdtree.hpp"
 
 namespace surfeledit {
 namespace {
-
-// A side x side lattice of spacing h on the plane z = 0 (or, `bent`, on a cylinder of radius side * h / 2 about
-// the x axis), jittered by 1e-3 h (seeded), turned by a rotation no face of the axes' boxes survives, scaled and
-// moved to `offset`.
-Points turned_surface(int side, double h, bool bent, double scale, const Vec3& offset) {
-  std::mt19937_64 rng(91);
-  std::uniform_real_distribution<double> jitter(-1e-3 * h, 1e-3 * h);
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Vec3(0.4, -0.3, 0.85).normalized()).toRotationMatrix();
-  const double radius = 0.5 * side * h;
-  Points p(side * side, 3);
-  for (int i = 0; i < side; ++i) {
-    for (int j = 0; j < side; ++j) {
-      const double u = (i - side / 2) * h + jitter(rng), v = (j - side / 2) * h + jitter(rng);
-      Vec3 x(u, v, jitter(rng));
-      if (bent) x = Vec3(u, radius * std::sin(v / radius), radius * (1.0 - std::cos(v / radius)));
-      p.row(i * side + j) = (offset + scale * (turn * x)).transpose();
-    }
-  }
-  return p;
-}
-
-// Queries at 0 to 40 spacings from the surface's middle region (either side), seeded.
-Points queries_about(const Points& surface, int n, double h, double scale) {
-  std::mt19937_64 rng(92);
-  std::uniform_int_distribution<Eigen::Index> row(0, surface.rows() - 1);
-  std::uniform_real_distribution<double> u(-1.0, 1.0), far(0.0, 40.0);
-  Points q(n, 3);
-  for (int i = 0; i < n; ++i) {
-    const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
-    q.row(i) = surface.row(row(rng)) + (far(rng) * h * scale * dir).transpose();
-  }
-  return q;
-}
 
 KdTreeParams params(bool frames, KdScan scan) {
   KdTreeParams p;
@@ -64,8 +27,8 @@ TEST(KdTreeFrames, SameAnswersAsWithoutFramesAndBruteForceOnTurnedSurfaces) {
   for (const bool bent : {false, true}) {
     for (const double scale : {1e-4, 1.0, 1e4}) {
       for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -1e6, 1e6)}) {
-        const Points pts = turned_surface(90, h, bent, scale, offset);
-        const Points queries = queries_about(pts, 120, h, scale);
+        const Points pts = test::turned_surface(90, h, bent, scale, offset);
+        const Points queries = test::queries_about(pts, 120, h, scale);
         for (const KdScan scan : {KdScan::Scalar, KdScan::Auto}) {
           const KdTree with(pts, params(true, scan)), without(pts, params(false, scan));
           ASSERT_GT(with.memory_bytes(), without.memory_bytes());  // the frames are there

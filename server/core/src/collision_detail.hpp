@@ -97,6 +97,7 @@ struct ZeroSet {
     p.cells = cells && knn_eps == 0.0;
     if (p.cells) p.leaf_size = kNearestLeafSize;
     p.frames = p.cells;
+    p.align = p.cells;
     return p;
   }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other

@@ -99,6 +99,8 @@ constexpr std::size_t kCurveMinPoints = 1 << 16;
 struct KdTree::Impl {
   KdTreeParams params;
   Vec3 origin = Vec3::Zero();  // centroid of the tree's points, world units
+  bool turned = false;         // the local frame is turned (KdTreeParams::align found a tighter box)
+  double turn[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  // rows: the local frame's axes in world coordinates
   kd::Tree tree;
   const kd::SearchFns* search = nullptr;  // the descent with params.scan's leaf scan
 
@@ -151,7 +153,40 @@ struct KdTree::Impl {
       lo[d] -= origin[d];  // subtracting a constant is monotonic: these are the local box's corners exactly
       hi[d] -= origin[d];
     }
-    kd::build(tree, P, std::move(rows), origin.data(), lo, hi, static_cast<std::uint32_t>(params.leaf_size));
+    std::vector<double> local_points;  // the turned points, when a turned frame is taken
+    if (params.align && kd::choose_turn(P, rows, origin.data(), turn)) {
+      // Every point turned (relative to the origin), numbered 0 .. n - 1 in `rows`' order; kept when their box is
+      // clearly smaller than the axis-aligned one.
+      turned = true;
+      local_points.resize(3 * n);
+      double tlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, thi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+      for (std::size_t i = 0; i < n; ++i) {
+        double* x = local_points.data() + 3 * i;
+        local(points.row(rows[i]).transpose(), x);
+        for (int d = 0; d < 3; ++d) {
+          tlo[d] = std::min(tlo[d], x[d]);
+          thi[d] = std::max(thi[d], x[d]);
+        }
+      }
+      turned = kd::floored_volume(tlo, thi) < kd::kTurnedVolume * kd::floored_volume(lo, hi);
+      if (turned) {
+        std::copy_n(tlo, 3, lo);
+        std::copy_n(thi, 3, hi);
+      } else {
+        turn[0][0] = turn[1][1] = turn[2][2] = 1.0;
+        turn[0][1] = turn[0][2] = turn[1][0] = turn[1][2] = turn[2][0] = turn[2][1] = 0.0;
+      }
+    }
+    if (turned) {
+      // The tree gets the rows the turned points stand for after its build.
+      std::vector<std::uint32_t> seq(n);
+      for (std::size_t i = 0; i < n; ++i) seq[i] = static_cast<std::uint32_t>(i);
+      const double zero[3] = {0.0, 0.0, 0.0};
+      kd::build(tree, local_points.data(), std::move(seq), zero, lo, hi, static_cast<std::uint32_t>(params.leaf_size));
+      for (std::uint32_t& r : tree.rows) r = rows[r];
+    } else {
+      kd::build(tree, P, std::move(rows), origin.data(), lo, hi, static_cast<std::uint32_t>(params.leaf_size));
+    }
     if (params.frames) kd::build_frames(tree);
     if (params.cells) {
       kd::build_cells(tree);
@@ -160,8 +195,15 @@ struct KdTree::Impl {
   }
 
   double eps_factor() const { return 1.0 + params.eps; }
+  // Where q is in the tree's frame: relative to the origin, and turned when the tree is (`turned`: its points went
+  // through this same function, so a query at a point's place is at that point's local place exactly).
   void local(const Vec3& q, double* out) const {
-    for (int d = 0; d < 3; ++d) out[d] = q[d] - origin[d];
+    if (!turned) {
+      for (int d = 0; d < 3; ++d) out[d] = q[d] - origin[d];
+      return;
+    }
+    const double t[3] = {q[0] - origin[0], q[1] - origin[1], q[2] - origin[2]};
+    for (int k = 0; k < 3; ++k) out[k] = turn[k][0] * t[0] + turn[k][1] * t[1] + turn[k][2] * t[2];
   }
 
   // The order a batch is answered in: along the curve for a tree larger than the caches (scene 300k,
@@ -185,8 +227,10 @@ struct KdTree::Impl {
     std::vector<std::uint32_t> code(nq), order(nq);
     for (std::size_t i = 0; i < nq; ++i) {
       std::uint32_t c = 0;
+      double lq[3];
+      local(queries.row(static_cast<Eigen::Index>(i)).transpose(), lq);
       for (int d = 0; d < 3; ++d) {
-        const double x = (queries(static_cast<Eigen::Index>(i), d) - origin[d] - tree.box_lo[d]) * scale[d];
+        const double x = (lq[d] - tree.box_lo[d]) * scale[d];
         c |= kd::spread10(static_cast<std::uint32_t>(std::clamp(x, 0.0, 1023.0))) << d;
       }
       code[i] = c;
@@ -207,6 +251,12 @@ KdTree& KdTree::operator=(KdTree&&) noexcept = default;
 
 Index KdTree::size() const { return static_cast<Index>(impl_->tree.size()); }
 const KdTreeParams& KdTree::params() const { return impl_->params; }
+Mat3 KdTree::axes() const {
+  Mat3 r;
+  for (int i = 0; i < 3; ++i)
+    for (int d = 0; d < 3; ++d) r(i, d) = impl_->turn[i][d];
+  return r;
+}
 
 Index KdTree::nearest(const Vec3& q, double* dist2) const {
   return nearest_within(q, std::numeric_limits<double>::infinity(), dist2);

@@ -361,6 +361,19 @@ void build(Tree& t, const double* points, std::vector<std::uint32_t> rows, const
            const double* hi, std::uint32_t leaf);
 // Fills t.cells (one per node) for nearest_from (kdtree_build.cpp).
 void build_cells(Tree& t);
+// A turned frame is kept when the box of the points along it has under this share of their axis-aligned box's volume
+// (KdTreeParams::align): a clearly better fit, since a turned frame costs each query a product with it and rounds
+// its distances differently.
+inline constexpr double kTurnedVolume = 0.7;
+// A box's volume from its corners, each side taken as at least 1e-3 of the longest: a flat or linear point set still
+// compares by its other sides, and an exactly flat one is not infinitely better than a nearly flat one.
+double floored_volume(const double lo[3], const double hi[3]);
+// Axes along which the surfaces of the listed `rows` of `points` (world units; `origin`: their centroid) lie, as the
+// rows of `turn`: those along which the coordinates of a fixed-seed sample are the most concentrated (a flat
+// part's points along its normal fall into few bins), found about the sample's principal axes; false (turn untouched)
+// when the world axes are as good. The caller keeps them only when the points' box along them is under kTurnedVolume
+// of the axis-aligned box (kdtree_align.cpp).
+bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, const double* origin, double turn[3][3]);
 // Fills t.frames (one per node) from the points (kdtree_frames.cpp).
 void build_frames(Tree& t);
 // Fills t.fans, t.fan_blocks and t.fan_of from t.cells, then drops the cells (kdtree_build.cpp). A tree without an

@@ -35,6 +35,10 @@ struct KdTreeParams {
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
   bool frames = false;  // keep an oriented box per node where it is much thinner than the points' axis-aligned box
                         // (60 B per node): exact k = 1 searches then skip more of a surface tilted against the axes
+  bool align = false;   // turn the tree's frame to the axes of the smallest box found around the points, when that box
+                        // has under 0.7 of the axis-aligned one's volume (a model tilted as a whole: its surfaces then
+                        // lie along the cuts). Distances are then computed in that frame: they round differently
+                        // (~1e-16 relative) and ties within that may go either way; an upright model is not turned
   bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans (about 0.3 per
                        // leaf: 40 B and 112 B per four cells) and 4 B per node, else each node's cell (28 B per node)
 };
@@ -66,6 +70,8 @@ class KdTree {
 
   Index size() const;  // number of points in the tree
   const KdTreeParams& params() const;
+  // The tree's local axes in world coordinates, as rows: the identity unless `align` turned them.
+  Mat3 axes() const;
 
   // Nearest point to q; returns -1 when the tree is empty. `dist2` gets the squared distance.
   Index nearest(const Vec3& q, double* dist2 = nullptr) const;
