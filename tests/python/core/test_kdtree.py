@@ -107,3 +107,36 @@ def test_batch_knn_at_million_offset_matches_scipy(scale: float) -> None:
         np.testing.assert_allclose(np.sqrt(dist2), ref_d, rtol=0, atol=4 * delta)
         recomputed = np.linalg.norm(local[idx] - queries_local[:, None, :], axis=2)
         np.testing.assert_allclose(recomputed, ref_d, rtol=0, atol=4 * delta)
+
+
+def test_align_turns_a_tilted_slab_and_matches_scipy() -> None:
+    """align=True on a two-sided slab turned against the axes: the tree's axes are orthonormal and one of them is the
+    slab's normal, and k = 1 and k = 6 answers are scipy's (the turned frame rounds differently: ~1e-16 of the size).
+    The same slab upright keeps the world axes and the same answers as without align."""
+    rng = np.random.default_rng(17)
+    u, v = np.meshgrid(np.arange(80) * 0.01, np.arange(80) * 0.01)
+    face = np.c_[u.ravel(), v.ravel(), 1e-4 * rng.standard_normal(u.size)]
+    slab = np.r_[face, face + [0.0, 0.0, 0.08]]
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    c, s = np.cos(0.6), np.sin(0.6)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    turn = np.eye(3) + s * k + (1 - c) * k @ k  # Rodrigues
+    tilted = slab @ turn.T + [5.0, -3.0, 2.0]
+    queries = tilted[rng.integers(0, len(tilted), 500)] + 0.2 * rng.standard_normal((500, 3))
+    tree = core.KdTree(tilted, leaf_size=32, align=True)
+    axes = tree.axes
+    np.testing.assert_allclose(axes @ axes.T, np.eye(3), atol=1e-14)
+    assert np.abs(axes @ (turn @ [0.0, 0.0, 1.0])).max() > np.cos(1e-3)
+    ref = cKDTree(tilted)
+    for kk in (1, 6):
+        idx, dist2 = tree.knn(queries, kk)
+        ref_d, _ = ref.query(queries, kk)
+        ref_d = np.asarray(ref_d).reshape(len(queries), kk)
+        np.testing.assert_allclose(np.sqrt(dist2), ref_d, rtol=1e-12, atol=1e-13)
+        recomputed = np.linalg.norm(tilted[idx] - queries[:, None, :], axis=2)
+        np.testing.assert_allclose(recomputed, ref_d, rtol=1e-12, atol=1e-13)
+    upright = slab + [5.0, -3.0, 2.0]
+    plain, turned = core.KdTree(upright, leaf_size=32), core.KdTree(upright, leaf_size=32, align=True)
+    np.testing.assert_array_equal(turned.axes, np.eye(3))
+    for a, b in zip(plain.knn(queries, 6), turned.knn(queries, 6)):
+        np.testing.assert_array_equal(a, b)
