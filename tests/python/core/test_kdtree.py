@@ -16,7 +16,10 @@ def _clouds():
     line[:, 0] = rng.random(200)
     plane = np.c_[rng.random((300, 2)), np.zeros(300)]
     dup = np.repeat(rng.random((30, 3)), 5, axis=0)
+    direction = np.array([0.48, -0.6, 0.64])
     return {
+        "tilted_line": rng.random((300, 1)) * direction + 1e-9 * rng.standard_normal((300, 3)),
+        "tilted_plane": rng.random((400, 1)) * direction + rng.random((400, 1)) * np.array([0.8, 0.6, 0.0]),
         "random": rng.random((5000, 3)),
         "collinear": line,
         "coplanar": plane,
@@ -28,13 +31,17 @@ def _clouds():
 
 @pytest.mark.parametrize("name", list(_clouds()))
 @pytest.mark.parametrize("leaf_size", [1, 10, 50])
-def test_knn_matches_scipy(name: str, leaf_size: int) -> None:
+@pytest.mark.parametrize("align", [False, True])
+def test_knn_matches_scipy(name: str, leaf_size: int, align: bool) -> None:
     pts = _clouds()[name]
     rng = np.random.default_rng(1)
     lo, hi = pts.min(0), pts.max(0)
     queries = lo + (hi - lo + 1e-9) * rng.random((300, 3))
     k = min(8, len(pts))
-    idx, dist2 = core.KdTree(pts, leaf_size=leaf_size).knn(queries, k)
+    tree = core.KdTree(pts, leaf_size=leaf_size, align=align)
+    if name.startswith("tilted") and align:
+        assert not np.allclose(tree.axes, np.eye(3))  # turned: the answers below come from the turned frame
+    idx, dist2 = tree.knn(queries, k)
     ref_d, _ = cKDTree(pts).query(queries, k)
     ref_d = np.asarray(ref_d).reshape(len(queries), k)
     # Ties may pick different points: compare distances, and that indices give those distances.
