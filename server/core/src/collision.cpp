@@ -219,6 +219,7 @@ void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deform
   for (std::size_t k = 0; k < rows.size(); ++k) zero_of_row[rows[k]] = static_cast<Index>(k);
   KdTreeParams tp;
   tp.threads = threads;
+  tp.align = true;  // as the detectors' nearest trees (nearest_tree_params)
   const KdTree whole(scene.positions, tp);
   Points queries(static_cast<Eigen::Index>(deformable.size()), 3);
   for (std::size_t q = 0; q < deformable.size(); ++q) queries.row(q) = scene.positions.row(deformable[q]);

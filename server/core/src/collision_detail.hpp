@@ -60,10 +60,13 @@ IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const
 // deformable itself; InvalidArgument ("parents") otherwise.
 void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
 
-// Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact).
+// Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact), and a turned frame for a scene
+// tilted as a whole (KdTreeParams::align: on the tilted piercing scene Simple's step 394 -> 13 ms, Robust's and
+// Temporal's 2.2-2.3x faster; an upright scene keeps the world axes and its bits; RESULTS §74).
 inline KdTreeParams nearest_tree_params(double eps) {
   KdTreeParams p;
   p.eps = eps;
+  p.align = true;
   return p;
 }
 
@@ -97,7 +100,6 @@ struct ZeroSet {
     p.cells = cells && knn_eps == 0.0;
     if (p.cells) p.leaf_size = kNearestLeafSize;
     p.frames = p.cells;
-    p.align = p.cells;
     return p;
   }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other

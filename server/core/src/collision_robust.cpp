@@ -90,7 +90,6 @@ void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kNearestLeafSize;
   params.frames = true;
-  params.align = true;
   const KdTree zero_tree(scene.positions, zero_rows, params);
   seed_states(*this, scene.positions, deformable, threads, zero_tree, scene.positions, scene.radii, states);
 }
@@ -172,7 +171,6 @@ std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& position
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kNearestLeafSize;
   params.frames = true;
-  params.align = true;
   params.cells = true;  // each test's search starts at the leaf of the point's last nearest (State::leaf)
   std::shared_ptr<const KdTree> tree;
   if (orig_.alive.empty() || std::all_of(orig_.alive.begin(), orig_.alive.end(), [](std::uint8_t a) { return a != 0; })) {

@@ -36,7 +36,7 @@ Tally ImprovedSweep::run(const SimpleKernel& kernel, const IndexList& rows, RowS
     sum_dist2 += t.dist2;
     if (!(t.dist2 > mean_dist2_)) continue;
     // No zero surfel lies strictly inside B(p1, |d|): every deformable surfel in it shares s1's state.
-    if (!moving) moving = std::make_unique<KdTree>(scene.positions, rows);
+    if (!moving) moving = std::make_unique<KdTree>(scene.positions, rows, nearest_tree_params(0.0));
     const double reach = std::sqrt(t.dist2);
     moving->radius(p1, reach * (1.0 + 1e-9) + 1e-300, hits, hit_dist2);
     for (Index j : hits) {
