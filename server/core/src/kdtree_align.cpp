@@ -187,7 +187,7 @@ bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, c
       best.row(normal) = m.transpose();
       best.row(i) = (best.row(i) - best.row(i).dot(best.row(normal)) * best.row(normal)).normalized();
       best.row(j) = best.row(normal).cross(best.row(i));
-      if (best.row(j).dot(along) != best.row(j).dot(along)) return false;  // not finite
+      if (!best.allFinite()) return false;
     }
   }
   double small;
