@@ -76,6 +76,19 @@ inline void expect_radius_matches(const Points& points, const Vec3& q, double r,
   }
 }
 
+// The shape of the detectors' exact nearest trees (leaves of 128, cells for nearest_from), one thread, with or without
+// oriented node boxes (`frames`) and a turned frame (`align`), scanned by `scan`.
+inline KdTreeParams nearest_params(KdScan scan, bool frames, bool align) {
+  KdTreeParams p;
+  p.leaf_size = 128;
+  p.threads = 1;
+  p.cells = true;
+  p.frames = frames;
+  p.align = align;
+  p.scan = scan;
+  return p;
+}
+
 // A side x side lattice of spacing h on the plane z = 0 (or, `bent`, on a cylinder of radius side * h / 2 about
 // the x axis), jittered by 1e-3 h (seeded), turned by a rotation no face of the axes' boxes survives, scaled and
 // moved to `offset`; `turn`: another rotation (the identity: the plane along the axes).

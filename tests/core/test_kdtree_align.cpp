@@ -16,17 +16,6 @@ namespace {
 
 const Mat3 kTurn = Eigen::AngleAxisd(0.7, Vec3(0.4, -0.3, 0.85).normalized()).toRotationMatrix();
 
-KdTreeParams params(bool align, KdScan scan) {
-  KdTreeParams p;
-  p.leaf_size = 128;
-  p.threads = 1;
-  p.cells = true;
-  p.frames = true;
-  p.align = align;
-  p.scan = scan;
-  return p;
-}
-
 // The plane (or cylinder) sampled twice, the second copy `gap` spacings along its normal: a plate's two faces.
 Points slab(int side, double h, double gap, double scale, const Vec3& offset, const Mat3& turn) {
   const Points top = test::turned_surface(side, h, false, scale, offset, turn);
@@ -50,7 +39,7 @@ TEST(KdTreeAlign, TurnedSurfacesGetTheirAxesAndBruteForceAnswers) {
         const double size = 0.9 * scale;
         const Points rel = pts.rowwise() - offset.transpose();
         for (const KdScan scan : {KdScan::Scalar, KdScan::Auto}) {
-          const KdTree tree(pts, params(true, scan));
+          const KdTree tree(pts, test::nearest_params(scan, true, true));
           const Mat3 axes = tree.axes();
           ASSERT_LT((axes * axes.transpose() - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-14) << "orthonormal";
           ASSERT_GT((axes - Mat3::Identity()).cwiseAbs().maxCoeff(), 0.1) << "turned, shape " << shape;
@@ -111,7 +100,8 @@ TEST(KdTreeAlign, UprightSurfacesAndIsotropicCloudsKeepTheWorldAxesAndTheirBits)
   const Points cloud = test::random_cloud(20000, 93, 2.0, Vec3(1e6, 0, -1e6));
   for (const Points* pts : {&plate, &cloud}) {
     const Points queries = test::queries_about(*pts, 200, h, 1.0);
-    const KdTree with(*pts, params(true, KdScan::Auto)), without(*pts, params(false, KdScan::Auto));
+    const KdTree with(*pts, test::nearest_params(KdScan::Auto, true, true)),
+        without(*pts, test::nearest_params(KdScan::Auto, true, false));
     ASSERT_EQ(with.axes(), Mat3::Identity());
     const KnnResult a = with.knn(queries, 4), b = without.knn(queries, 4);
     ASSERT_EQ(a.indices, b.indices);

@@ -12,16 +12,6 @@
 namespace surfeledit {
 namespace {
 
-KdTreeParams params(bool frames, KdScan scan) {
-  KdTreeParams p;
-  p.leaf_size = 128;
-  p.threads = 1;
-  p.cells = true;
-  p.frames = frames;
-  p.scan = scan;
-  return p;
-}
-
 TEST(KdTreeFrames, SameAnswersAsWithoutFramesAndBruteForceOnTurnedSurfaces) {
   const double h = 0.01;
   for (const bool bent : {false, true}) {
@@ -30,7 +20,7 @@ TEST(KdTreeFrames, SameAnswersAsWithoutFramesAndBruteForceOnTurnedSurfaces) {
         const Points pts = test::turned_surface(90, h, bent, scale, offset);
         const Points queries = test::queries_about(pts, 120, h, scale);
         for (const KdScan scan : {KdScan::Scalar, KdScan::Auto}) {
-          const KdTree with(pts, params(true, scan)), without(pts, params(false, scan));
+          const KdTree with(pts, test::nearest_params(scan, true, false)), without(pts, test::nearest_params(scan, false, false));
           ASSERT_GT(with.memory_bytes(), without.memory_bytes());  // the frames are there
           const KnnResult batch_with = with.knn(queries, 1), batch_without = without.knn(queries, 1);
           for (Eigen::Index i = 0; i < queries.rows(); ++i) {
