@@ -92,8 +92,9 @@ inline KdTreeParams nearest_params(KdScan scan, bool frames, bool align) {
 // A side x side lattice of spacing h on the plane z = 0 (or, `bent`, on a cylinder of radius side * h / 2 about
 // the x axis), jittered by 1e-3 h (seeded), turned by a rotation no face of the axes' boxes survives, scaled and
 // moved to `offset`; `turn`: another rotation (the identity: the plane along the axes).
-inline Points turned_surface(int side, double h, bool bent, double scale, const Vec3& offset,
-                             const Mat3& turn = Eigen::AngleAxisd(0.7, Vec3(0.4, -0.3, 0.85).normalized()).toRotationMatrix()) {
+inline Points turned_surface(
+    int side, double h, bool bent, double scale, const Vec3& offset,
+    const Mat3& turn = Eigen::AngleAxisd(0.7, Vec3(0.4, -0.3, 0.85).normalized()).toRotationMatrix()) {
   std::mt19937_64 rng(91);
   std::uniform_real_distribution<double> jitter(-1e-3 * h, 1e-3 * h);
   const double radius = 0.5 * side * h;

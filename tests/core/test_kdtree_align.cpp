@@ -26,7 +26,9 @@ Points slab(int side, double h, double gap, double scale, const Vec3& offset, co
 
 // |dist2 - truth| allowed for a tree that computes in a turned frame: its coordinates are off by a few ulps of the
 // model's size `size` (1e-15 relative), which moves a distance d by about d * 1e-15 * size.
-double turned_tol(double truth, double size) { return 1e-9 * truth + 1e-13 * size * std::sqrt(truth) + 1e-28 * size * size; }
+double turned_tol(double truth, double size) {
+  return 1e-9 * truth + 1e-13 * size * std::sqrt(truth) + 1e-28 * size * size;
+}
 
 TEST(KdTreeAlign, TurnedSurfacesGetTheirAxesAndBruteForceAnswers) {
   const double h = 0.01;

@@ -99,7 +99,7 @@ constexpr std::size_t kCurveMinPoints = 1 << 16;
 struct KdTree::Impl {
   KdTreeParams params;
   Vec3 origin = Vec3::Zero();  // centroid of the tree's points, world units
-  bool turned = false;         // the local frame is turned (KdTreeParams::align found a tighter box)
+  bool turned = false;         // the local frame is turned (KdTreeParams::align)
   double turn[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  // rows: the local frame's axes in world coordinates
   kd::Tree tree;
   const kd::SearchFns* search = nullptr;  // the descent with params.scan's leaf scan
@@ -155,8 +155,8 @@ struct KdTree::Impl {
     }
     std::vector<double> local_points;  // the turned points, when a turned frame is taken
     if (params.align && kd::choose_turn(P, rows, origin.data(), turn)) {
-      // Every point turned (relative to the origin), numbered 0 .. n - 1 in `rows`' order; kept when their box is
-      // clearly smaller than the axis-aligned one.
+      // Every point turned (relative to the origin; `turned` is set first, for local()), numbered 0 .. n - 1 in
+      // `rows`' order; kept when their box is clearly smaller than the axis-aligned one.
       turned = true;
       local_points.resize(3 * n);
       double tlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, thi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};

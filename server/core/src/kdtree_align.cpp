@@ -14,8 +14,7 @@ namespace surfeledit::kd {
 
 namespace {
 
-// Points of the sample the candidates are compared on, and the bins of
-// their coordinates along each axis.
+// Points of the sample the candidates are compared on, and the bins of their coordinates along each axis.
 constexpr std::size_t kSample = 1024;
 constexpr int kBins = 256;
 constexpr double kBetter = 1.25;  // the concentration a turned frame needs, over the world axes
@@ -114,7 +113,8 @@ double floored_volume(const double lo[3], const double hi[3]) {
   return v;
 }
 
-bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, const double* origin, double turn[3][3]) {
+bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, const double* origin,
+                 double turn[3][3]) {
   const std::size_t n = rows.size();
   if (n < 4) return false;
   std::vector<Eigen::Vector3d> sample;
@@ -166,7 +166,8 @@ bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, c
   const Eigen::Vector3d along = best.row(normal).transpose();
   std::vector<std::uint32_t> bins(kBins, 0);
   for (const Eigen::Vector3d& p : sample) ++bins[static_cast<std::size_t>(bin_of(along.dot(p), w))];
-  const double centre = (static_cast<double>(std::max_element(bins.begin(), bins.end()) - bins.begin()) + 0.5 - 0.5 * kBins) * w;
+  const double fullest = static_cast<double>(std::max_element(bins.begin(), bins.end()) - bins.begin());
+  const double centre = (fullest + 0.5 - 0.5 * kBins) * w;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Matrix3d moments = Eigen::Matrix3d::Zero();
   double count = 0.0;

@@ -35,10 +35,10 @@ struct KdTreeParams {
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
   bool frames = false;  // keep an oriented box per node where it is much thinner than the points' axis-aligned box
                         // (60 B per node): exact k = 1 searches then skip more of a surface tilted against the axes
-  bool align = false;   // turn the tree's frame to the axes of the smallest box found around the points, when that box
-                        // has under 0.7 of the axis-aligned one's volume (a model tilted as a whole: its surfaces then
-                        // lie along the cuts). Distances are then computed in that frame: they round differently
-                        // (~1e-16 relative) and ties within that may go either way; an upright model is not turned
+  bool align = false;   // build and search in a frame turned along the points' surfaces (from a sample: the axes along
+                        // which its coordinates concentrate), when their box in it has under 0.7 of the axis-aligned
+                        // box's volume (a model tilted as a whole); distances then round differently (~1e-16 of the
+                        // model's size) and ties within that may go either way. An upright model is not turned
   bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans (about 0.3 per
                        // leaf: 40 B and 112 B per four cells) and 4 B per node, else each node's cell (28 B per node)
 };
