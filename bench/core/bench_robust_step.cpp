@@ -14,7 +14,7 @@
 //   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
 // BM_Preprocess/<tilted>: one iteration = configure(algorithm robust), i.e. one detector reset; tilted 1: the scene
-//   turned as BM_DetectRunTilted's.
+//   turned as BM_DetectRunTilted's. BM_PreprocessTemporal/<tilted>: the same with algorithm temporal.
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
 //   session, no history; the detect input carries the translation's displacement bound, as EditSession's).
@@ -174,18 +174,20 @@ void BM_IdleDrag(benchmark::State& state) {
   state.counters["history_kb_per_step"] = (history_bytes() - h0) / 16.0 / 1024.0;
 }
 
-void BM_Preprocess(benchmark::State& state) {
+void preprocess(benchmark::State& state, const char* algorithm) {
   const Piercing& scene = Piercing::get(state.range(0) != 0);
   auto session = scene.session(true, false);
   double preprocess = 0.0;
   for (auto _ : state) {
-    session->configure({{"algorithm", std::string("robust")}});
+    session->configure({{"algorithm", std::string(algorithm)}});
     state.PauseTiming();
     preprocess = session->deform(DeformParams{}).stats.preprocess_ms;  // reports the reset's time
     state.ResumeTiming();
   }
   state.counters["preprocess_ms"] = preprocess;
 }
+void BM_Preprocess(benchmark::State& state) { preprocess(state, "robust"); }
+void BM_PreprocessTemporal(benchmark::State& state) { preprocess(state, "temporal"); }
 
 // A detector configuration of BM_DetectRun / BM_DetectIdle: the algorithm and its hierarchy.
 struct Config {
@@ -318,6 +320,7 @@ BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMill
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Preprocess)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PreprocessTemporal)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
