@@ -70,14 +70,17 @@ inline KdTreeParams nearest_tree_params(double eps) {
   return p;
 }
 
-// Leaves of the k-d trees the detectors ask for each point's one nearest surfel, exactly: those whose searches start
-// from a leaf (KdTree::nearest_from: Temporal's zero tree, Robust's original model) and Robust's seed tree. Measured
-// on the piercing scene upright and tilted (bench_robust_step's BM_DetectRun and BM_DetectRunTilted), at spacings
-// 0.01 and 0.0137, against 48 (RESULTS §73): 128 points 0.97-1.02x upright and
-// 1.16-1.47x tilted, where a far point's search meets many loose axis-aligned leaf boxes of the tilted plate and
-// larger leaves mean fewer of them; 96 0.95-1.05x and 1.14-1.33x. (Earlier, upright only: 48 1.23x the default 10,
-// RESULTS §63; with the AVX2 scan 48 over 24 and 32, §49.)
-inline constexpr int kNearestLeafSize = 128;
+// Leaves of the k-d trees the detectors ask for each point's one nearest surfel, exactly, from a leaf
+// (KdTree::nearest_from: Temporal's zero tree, Robust's original model). Measured on the piercing scene upright and
+// tilted (bench_robust_step's BM_DetectRun and BM_DetectRunTilted): before the trees were turned (RESULTS §73, against
+// 48) 128 points 0.97-1.02x upright and 1.16-1.47x tilted, where a far point's search met many loose axis-aligned
+// leaf boxes; with the turned frame (§74) the tilted scene searches as the upright one, and 96 is 1.02-1.04x faster
+// than 128 upright and 1.02-1.10x tilted, 64 0.96-1.04x. (Earlier, upright only: 48 1.23x the default 10, §63; with
+// the AVX2 scan 48 over 24 and 32, §49.)
+inline constexpr int kNearestLeafSize = 96;
+// Leaves of Robust's seed tree (one batch of nearest queries at each reset, mostly far from the zero surface): 96
+// makes the tilted reset 0.82x as fast as 128 (34 -> 42 ms), 64 0.84x (RESULTS §74).
+inline constexpr int kSeedLeafSize = 128;
 
 // The zero region as the Simple / Improved / Temporal detectors see it: a private copy of the zero
 // surfels (they do not move), their k-d tree and their boundary marks (§4.1).

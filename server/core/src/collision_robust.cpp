@@ -86,9 +86,8 @@ void RobustKernel::build_inside() {
 
 void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
                         int threads, RowStates<State>& states) const {
-  // Leaves of kNearestLeafSize: the seed's queries are mostly far from the zero surface (RESULTS §73).
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
-  params.leaf_size = kNearestLeafSize;
+  params.leaf_size = kSeedLeafSize;
   params.frames = true;
   const KdTree zero_tree(scene.positions, zero_rows, params);
   seed_states(*this, scene.positions, deformable, threads, zero_tree, scene.positions, scene.radii, states);
