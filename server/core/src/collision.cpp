@@ -217,9 +217,8 @@ void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deform
   // Row -> index into the zero copies (-1 for deformable rows).
   IndexList zero_of_row(scene.regions.size(), -1);
   for (std::size_t k = 0; k < rows.size(); ++k) zero_of_row[rows[k]] = static_cast<Index>(k);
-  KdTreeParams tp;
+  KdTreeParams tp = nearest_tree_params(0.0);
   tp.threads = threads;
-  tp.align = true;  // as the detectors' nearest trees (nearest_tree_params)
   const KdTree whole(scene.positions, tp);
   Points queries(static_cast<Eigen::Index>(deformable.size()), 3);
   for (std::size_t q = 0; q < deformable.size(); ++q) queries.row(q) = scene.positions.row(deformable[q]);

@@ -61,8 +61,8 @@ IndexList remap_list(const IndexList& rows, const std::vector<bool>& keep, const
 void require_deformable_parents(const CollisionScene& scene, Index rows, const IndexList& parents);
 
 // Parameters of a detector's nearest-surfel tree: approximate search eps (0 = exact), and a turned frame for a scene
-// tilted as a whole (KdTreeParams::align: on the tilted piercing scene Simple's step 394 -> 13 ms, Robust's and
-// Temporal's 2.2-2.3x faster; an upright scene keeps the world axes and its bits; RESULTS §74).
+// tilted as a whole (KdTreeParams::align: on the tilted piercing scene Simple's step 390 -> 12.7 ms, Robust's and
+// Temporal's 2.2-2.4x faster; an upright scene keeps the world axes and its bits; RESULTS §74).
 inline KdTreeParams nearest_tree_params(double eps) {
   KdTreeParams p;
   p.eps = eps;

@@ -153,32 +153,29 @@ struct KdTree::Impl {
       lo[d] -= origin[d];  // subtracting a constant is monotonic: these are the local box's corners exactly
       hi[d] -= origin[d];
     }
-    std::vector<double> local_points;  // the turned points, when a turned frame is taken
-    if (params.align && kd::choose_turn(P, rows, origin.data(), turn)) {
-      // Every point turned (relative to the origin; `turned` is set first, for local()), numbered 0 .. n - 1 in
-      // `rows`' order; kept when their box is clearly smaller than the axis-aligned one.
-      turned = true;
+    // A turned frame (KdTreeParams::align): every point turned, numbered 0 .. n - 1 in `rows`' order, and the tree
+    // given the rows they stand for after its build; kept when their box is clearly smaller than the axis-aligned one.
+    double candidate[3][3];
+    std::vector<double> local_points;
+    if (params.align && kd::choose_turn(P, rows, origin.data(), candidate)) {
       local_points.resize(3 * n);
       double tlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, thi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
       for (std::size_t i = 0; i < n; ++i) {
         double* x = local_points.data() + 3 * i;
-        local(points.row(rows[i]).transpose(), x);
+        turn_local(candidate, points.row(rows[i]).transpose(), x);
         for (int d = 0; d < 3; ++d) {
           tlo[d] = std::min(tlo[d], x[d]);
           thi[d] = std::max(thi[d], x[d]);
         }
       }
-      turned = kd::floored_volume(tlo, thi) < kd::kTurnedVolume * kd::floored_volume(lo, hi);
-      if (turned) {
+      if (kd::floored_volume(tlo, thi) < kd::kTurnedVolume * kd::floored_volume(lo, hi)) {
+        turned = true;
+        std::copy_n(&candidate[0][0], 9, &turn[0][0]);
         std::copy_n(tlo, 3, lo);
         std::copy_n(thi, 3, hi);
-      } else {
-        turn[0][0] = turn[1][1] = turn[2][2] = 1.0;
-        turn[0][1] = turn[0][2] = turn[1][0] = turn[1][2] = turn[2][0] = turn[2][1] = 0.0;
       }
     }
     if (turned) {
-      // The tree gets the rows the turned points stand for after its build.
       std::vector<std::uint32_t> seq(n);
       for (std::size_t i = 0; i < n; ++i) seq[i] = static_cast<std::uint32_t>(i);
       const double zero[3] = {0.0, 0.0, 0.0};
@@ -195,15 +192,19 @@ struct KdTree::Impl {
   }
 
   double eps_factor() const { return 1.0 + params.eps; }
-  // Where q is in the tree's frame: relative to the origin, and turned when the tree is (`turned`: its points went
-  // through this same function, so a query at a point's place is at that point's local place exactly).
+  // Where q is in the tree's frame: relative to the origin, and turned when the tree is.
   void local(const Vec3& q, double* out) const {
     if (!turned) {
       for (int d = 0; d < 3; ++d) out[d] = q[d] - origin[d];
       return;
     }
+    turn_local(turn, q, out);
+  }
+  // q relative to the origin, turned by `r` (rows: the axes). The points of a turned tree went through this same
+  // function, so a query at a point's place is at that point's local place exactly.
+  void turn_local(const double (&r)[3][3], const Vec3& q, double* out) const {
     const double t[3] = {q[0] - origin[0], q[1] - origin[1], q[2] - origin[2]};
-    for (int k = 0; k < 3; ++k) out[k] = turn[k][0] * t[0] + turn[k][1] * t[1] + turn[k][2] * t[2];
+    for (int k = 0; k < 3; ++k) out[k] = r[k][0] * t[0] + r[k][1] * t[1] + r[k][2] * t[2];
   }
 
   // The order a batch is answered in: along the curve for a tree larger than the caches (scene 300k,
