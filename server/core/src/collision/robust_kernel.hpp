@@ -244,14 +244,15 @@ class RobustKernel {
   // The searches of a test at p1: the original surfel nearest to p1, from the state's leaf, and the one nearest
   // to old_position when a forgotten inside state (kFirstUpdate) is to be re-derived there. That is only when
   // the nearest to p1 is a zero surfel: against a deformable one no change counts, and the state is overwritten
-  // by p1's, so that query cannot change the result (an exact skip: RESULTS §50).
+  // by p1's, so that query cannot change the result (an exact skip: RESULTS §50). It starts from the leaf of p1's
+  // winner (old_position is the last step's position, one step from p1; 1.02x over the near-path leaf, RESULTS §75).
   Probe search(const State& s, const Vec3& p1) const {
     Probe f;
     f.leaf = s.leaf;
     f.near = orig_.tree->nearest_from(p1, f.leaf);
     if (!orig_.deformable.test(f.near) && (s.flags & kFirstUpdate) != 0) {
-      std::uint32_t cold = std::numeric_limits<std::uint32_t>::max();  // searched from the descent's first leaf
-      f.near_old = orig_.tree->nearest_from(s.old_position, cold);
+      std::uint32_t start = f.leaf;
+      f.near_old = orig_.tree->nearest_from(s.old_position, start);
     }
     return f;
   }
