@@ -253,7 +253,9 @@ class Descent {
       }
       const Node& leaf = nodes[ni];
       if constexpr (std::is_same_v<Set, NearestSet>) {
-        if (leaf.leaf() && leaf.a != leaf.b && leaf_bound(ni) <= set_.worst() && frame_bound(ni) <= set_.worst()) {
+        // A leaf the search starts at was bounded by the caller (its cell) and above (its oriented box).
+        if (leaf.leaf() && leaf.a != leaf.b &&
+            (ni == start || (leaf_bound(ni) <= set_.worst() && frame_bound(ni) <= set_.worst()))) {
           const std::uint32_t before = set_.slot;
           Scan::nearest(t_, q_, leaf.a, leaf.b, set_);
           won_ = set_.slot != before ? ni : won_;
