@@ -60,7 +60,10 @@ struct Piercing {
 
   static Eigen::Matrix3d tilt() { return Eigen::AngleAxisd(0.5, Vec3(0.3, -0.5, 0.8).normalized()).toRotationMatrix(); }
 
-  explicit Piercing(bool tilted) {
+  // `kind`: 0 upright, 1 turned by tilt(), 2 turned by tilt() with a second, larger zero plate below it at another
+  // tilt (so the detectors' trees turn to that plate, and the pierced one lies oblique in their frame).
+  explicit Piercing(int kind) {
+    const bool tilted = kind != 0;
     z0 = kHalfThick + kBall + 2.0 * kSpacing;
     Scene scene;
     scene.add(make_box(Vec3(kHalfWidth, kHalfWidth, kHalfThick)));
@@ -68,6 +71,12 @@ struct Piercing {
     ball.translation = Vec3(0.0, 0.0, z0);
     ball.rotation = Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
     scene.add(make_sphere(kBall, ball));
+    if (kind == 2) {
+      Pose below;
+      below.translation = Vec3(0.0, 0.0, -4.0);
+      below.rotation = Eigen::AngleAxisd(0.6, Vec3(-0.4, 0.9, 0.2).normalized()).toRotationMatrix();
+      scene.add(make_box(Vec3(1.6, 1.6, kHalfThick), below));
+    }
     const SampledSurfels s = scene.sample(SampleParams{kSpacing, 1, 0.25});
     arrays.positions = s.positions;
     arrays.normals = s.normals;
@@ -77,14 +86,18 @@ struct Piercing {
       arrays.normals = (s.normals * frame.transpose()).eval();
     }
     arrays.radii = s.radii;
-    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 0 ? zero : one).push_back(i);
+    for (std::size_t i = 0; i < s.part.size(); ++i) (s.part[i] == 1 ? one : zero).push_back(i);
   }
-  static const Piercing& get(bool tilted = false) {
-    if (tilted) {
-      static const Piercing turned(true);
+  static const Piercing& get(int kind = 0) {
+    if (kind == 2) {
+      static const Piercing two(2);
+      return two;
+    }
+    if (kind == 1) {
+      static const Piercing turned(1);
       return turned;
     }
-    static const Piercing upright(false);
+    static const Piercing upright(0);
     return upright;
   }
   // One step of the scenario's push (the ball through the plate in kSteps steps).
@@ -227,7 +240,7 @@ struct DetectorRun {
   std::unique_ptr<CollisionDetector> detector;
   const Piercing& scene;
 
-  explicit DetectorRun(const Config& config, bool tilted = false) : scene(Piercing::get(tilted)) {
+  explicit DetectorRun(const Config& config, int kind = 0) : scene(Piercing::get(kind)) {
     positions = scene.arrays.positions;
     previous = positions;
     regions.assign(static_cast<std::size_t>(positions.rows()), Region::Zero);
@@ -261,7 +274,7 @@ struct DetectorRun {
 };
 
 // BM_DetectRun and BM_DetectRunTilted.
-void detect_run(benchmark::State& state, bool tilted) {
+void detect_run(benchmark::State& state, int tilted) {
   std::vector<double> cpu, nv, np, nu, queries;
   const Vec3 t = Piercing::get(tilted).push();
   for (auto _ : state) {
@@ -287,8 +300,9 @@ void detect_run(benchmark::State& state, bool tilted) {
   state.counters["queries_median"] = median(queries);
   state.counters["detect_cpu_max_ms"] = *std::max_element(cpu.begin(), cpu.end());
 }
-void BM_DetectRun(benchmark::State& state) { detect_run(state, false); }
-void BM_DetectRunTilted(benchmark::State& state) { detect_run(state, true); }
+void BM_DetectRun(benchmark::State& state) { detect_run(state, 0); }
+void BM_DetectRunTilted(benchmark::State& state) { detect_run(state, 1); }
+void BM_DetectRunTwoTilts(benchmark::State& state) { detect_run(state, 2); }
 
 void BM_DetectIdle(benchmark::State& state) {
   const Config& config = kConfigs[state.range(0)];
@@ -316,6 +330,7 @@ void BM_DetectIdle(benchmark::State& state) {
 
 BENCHMARK(BM_DetectRun)->DenseRange(0, 1)->Arg(10)->Arg(12)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_DetectRunTilted)->DenseRange(0, 1)->Arg(10)->Arg(12)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_DetectRunTwoTilts)->Arg(0)->Arg(12)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);

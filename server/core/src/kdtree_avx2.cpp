@@ -107,52 +107,75 @@ struct Avx2Scan {
 
 #if defined(__AVX512F__)
   // nearest() eight points at a time (the AVX-512 build): the same per-lane first strict minimum and the same
-  // (dist2, slot) choice among the lanes; the last, partial vector's loads and compares masked.
+  // (dist2, slot) choice among the lanes; the last, partial vector's loads and compares masked. A leaf of sixteen
+  // points or more goes to nearest16() (out of line, so the short leaves of other trees keep this loop's code).
   static void nearest8(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b, NearestSet& set) {
-    const __m512d qx = _mm512_set1_pd(qp[0]), qy = _mm512_set1_pd(qp[1]), qz = _mm512_set1_pd(qp[2]);
-    const __m512d inf = _mm512_set1_pd(std::numeric_limits<double>::infinity());
-    __m512d best = inf, best_slot = inf;
-    __m512d slot = _mm512_add_pd(_mm512_set1_pd(a), _mm512_setr_pd(0, 1, 2, 3, 4, 5, 6, 7));
-    const __m512d eight = _mm512_set1_pd(8.0);
+    if (b - a >= 16) return nearest16(t, qp, a, b, set);
+    const Lanes8 q(qp, a);
+    __m512d best = q.inf, best_slot = q.inf, slot = q.slot;
+    scan8(t, q, a, b, best, best_slot, slot);
+    offer(best, best_slot, a, set);
+  }
+  // nearest8() with blocks of sixteen points into two independent minima (half the loop's dependency chain),
+  // merged lane by lane with the tie rule (the smaller slot among equal distances), then the rest eight at a time:
+  // the same winner as one pass (RESULTS §75).
+  [[gnu::noinline]] static void nearest16(const Tree& t, const double* qp, std::uint32_t a, std::uint32_t b,
+                                          NearestSet& set) {
+    const Lanes8 q(qp, a);
+    const __m512d eight = _mm512_set1_pd(8.0), sixteen = _mm512_set1_pd(16.0);
+    __m512d best = q.inf, best_slot = q.inf, slot = q.slot;
+    __m512d best1 = q.inf, best_slot1 = q.inf, slot1 = _mm512_add_pd(q.slot, eight);
     std::uint32_t s = a;
-    if (b - a >= 16) {
-      // Blocks of sixteen points into two independent minima (half the loop's dependency chain), merged lane by lane
-      // with the tie rule; the rest as below. The same winner as one pass.
-      __m512d best1 = inf, best_slot1 = inf, slot1 = _mm512_add_pd(slot, eight);
-      const __m512d sixteen = _mm512_set1_pd(16.0);
-      for (; s + 16 <= b; s += 16) {
-        const __m512d dx0 = _mm512_sub_pd(qx, _mm512_loadu_pd(t.xs() + s));
-        const __m512d dy0 = _mm512_sub_pd(qy, _mm512_loadu_pd(t.ys() + s));
-        const __m512d dz0 = _mm512_sub_pd(qz, _mm512_loadu_pd(t.zs() + s));
-        const __m512d dx1 = _mm512_sub_pd(qx, _mm512_loadu_pd(t.xs() + s + 8));
-        const __m512d dy1 = _mm512_sub_pd(qy, _mm512_loadu_pd(t.ys() + s + 8));
-        const __m512d dz1 = _mm512_sub_pd(qz, _mm512_loadu_pd(t.zs() + s + 8));
-        const __m512d d0 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx0, dx0), _mm512_mul_pd(dy0, dy0)), _mm512_mul_pd(dz0, dz0));
-        const __m512d d1 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx1, dx1), _mm512_mul_pd(dy1, dy1)), _mm512_mul_pd(dz1, dz1));
-        const __mmask8 lt0 = _mm512_cmp_pd_mask(d0, best, _CMP_LT_OQ), lt1 = _mm512_cmp_pd_mask(d1, best1, _CMP_LT_OQ);
-        best = _mm512_mask_mov_pd(best, lt0, d0);
-        best_slot = _mm512_mask_mov_pd(best_slot, lt0, slot);
-        best1 = _mm512_mask_mov_pd(best1, lt1, d1);
-        best_slot1 = _mm512_mask_mov_pd(best_slot1, lt1, slot1);
-        slot = _mm512_add_pd(slot, sixteen);
-        slot1 = _mm512_add_pd(slot1, sixteen);
-      }
-      const __mmask8 take1 = _mm512_cmp_pd_mask(best1, best, _CMP_LT_OQ) |
-                             (_mm512_cmp_pd_mask(best1, best, _CMP_EQ_OQ) & _mm512_cmp_pd_mask(best_slot1, best_slot, _CMP_LT_OQ));
-      best = _mm512_mask_mov_pd(best, take1, best1);
-      best_slot = _mm512_mask_mov_pd(best_slot, take1, best_slot1);
+    for (; s + 16 <= b; s += 16) {
+      const __m512d d0 = q.dist2(t, s), d1 = q.dist2(t, s + 8);
+      const __mmask8 lt0 = _mm512_cmp_pd_mask(d0, best, _CMP_LT_OQ), lt1 = _mm512_cmp_pd_mask(d1, best1, _CMP_LT_OQ);
+      best = _mm512_mask_mov_pd(best, lt0, d0);
+      best_slot = _mm512_mask_mov_pd(best_slot, lt0, slot);
+      best1 = _mm512_mask_mov_pd(best1, lt1, d1);
+      best_slot1 = _mm512_mask_mov_pd(best_slot1, lt1, slot1);
+      slot = _mm512_add_pd(slot, sixteen);
+      slot1 = _mm512_add_pd(slot1, sixteen);
     }
+    const __mmask8 take1 = _mm512_cmp_pd_mask(best1, best, _CMP_LT_OQ) |
+                           (_mm512_cmp_pd_mask(best1, best, _CMP_EQ_OQ) & _mm512_cmp_pd_mask(best_slot1, best_slot, _CMP_LT_OQ));
+    best = _mm512_mask_mov_pd(best, take1, best1);
+    best_slot = _mm512_mask_mov_pd(best_slot, take1, best_slot1);
+    scan8(t, q, s, b, best, best_slot, slot);
+    offer(best, best_slot, a, set);
+  }
+  // The query in every lane, +inf and the first slots a .. a + 7 (as doubles).
+  struct Lanes8 {
+    __m512d x, y, z, inf, slot;
+    Lanes8(const double* qp, std::uint32_t a)
+        : x(_mm512_set1_pd(qp[0])), y(_mm512_set1_pd(qp[1])), z(_mm512_set1_pd(qp[2])),
+          inf(_mm512_set1_pd(std::numeric_limits<double>::infinity())),
+          slot(_mm512_add_pd(_mm512_set1_pd(a), _mm512_setr_pd(0, 1, 2, 3, 4, 5, 6, 7))) {}
+    // dist2 of slots s .. s + 7 (all in the tree or its tail), summed as the scalar scan sums it.
+    [[gnu::always_inline]] __m512d dist2(const Tree& t, std::uint32_t s) const {
+      const __m512d dx = _mm512_sub_pd(x, _mm512_loadu_pd(t.xs() + s));
+      const __m512d dy = _mm512_sub_pd(y, _mm512_loadu_pd(t.ys() + s));
+      const __m512d dz = _mm512_sub_pd(z, _mm512_loadu_pd(t.zs() + s));
+      return _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
+    }
+  };
+  // Slots [s, b) into the per-lane minima, eight at a time, the last vector's loads and compares masked.
+  [[gnu::always_inline]] static void scan8(const Tree& t, const Lanes8& q, std::uint32_t s, std::uint32_t b, __m512d& best,
+                                           __m512d& best_slot, __m512d& slot) {
+    const __m512d eight = _mm512_set1_pd(8.0);
     for (; s < b; s += 8) {
       const __mmask8 in = b - s >= 8 ? __mmask8(0xff) : static_cast<__mmask8>((1u << (b - s)) - 1u);
-      const __m512d dx = _mm512_sub_pd(qx, _mm512_maskz_loadu_pd(in, t.xs() + s));
-      const __m512d dy = _mm512_sub_pd(qy, _mm512_maskz_loadu_pd(in, t.ys() + s));
-      const __m512d dz = _mm512_sub_pd(qz, _mm512_maskz_loadu_pd(in, t.zs() + s));
+      const __m512d dx = _mm512_sub_pd(q.x, _mm512_maskz_loadu_pd(in, t.xs() + s));
+      const __m512d dy = _mm512_sub_pd(q.y, _mm512_maskz_loadu_pd(in, t.ys() + s));
+      const __m512d dz = _mm512_sub_pd(q.z, _mm512_maskz_loadu_pd(in, t.zs() + s));
       const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
       const __mmask8 lt = _mm512_mask_cmp_pd_mask(in, d2, best, _CMP_LT_OQ);
       best = _mm512_mask_mov_pd(best, lt, d2);
       best_slot = _mm512_mask_mov_pd(best_slot, lt, slot);
       slot = _mm512_add_pd(slot, eight);
     }
+  }
+  // The (dist2, slot)-smallest of the lanes' minima to the set (slot a for a leaf whose points are all at +inf).
+  [[gnu::always_inline]] static void offer(__m512d best, __m512d best_slot, std::uint32_t a, NearestSet& set) {
     // A leaf none of whose lanes reaches the set's best offers nothing set.add() would take (most leaves of a
     // descent): no reduction across the lanes then.
     if (_mm512_cmp_pd_mask(best, _mm512_set1_pd(set.best), _CMP_LE_OQ) == 0) return;
