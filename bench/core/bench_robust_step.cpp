@@ -25,6 +25,9 @@
 // BM_DetectRunTilted/<config>: BM_DetectRun on the scene turned by Piercing::tilt() (no face of the plate along an
 //   axis): the same steps and queries, but the k-d trees' axis-aligned boxes fit the tilted plate loosely
 //   (RESULTS §73: 4.9x BM_DetectRun's time with leaves of 48; §74: Simple's 33x before the turned frame).
+// BM_DetectRunTwoTilts/<config>: the tilted scene with a second, larger zero plate far below it at another tilt, so
+//   that the detectors' trees turn to that plate and the pierced one lies oblique in their frame (RESULTS §75: what
+//   the nodes' oriented boxes still do once the trees turn).
 #include <benchmark/benchmark.h>
 
 #include <time.h>
