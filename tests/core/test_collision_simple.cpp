@@ -33,6 +33,26 @@ TEST(CollisionSimple, ThresholdAndBoundaryParametersFollowTheOracle) {
   run_against_oracle(slab_and_sphere(), p, slab_script(), false);
 }
 
+// Zero and deformable surfels interleaved (every 5th slab surfel deformable, every 4th sphere surfel rigid), so that
+// deformable surfels have their first zero neighbour at every rank: the marks come only from rows with a zero
+// surfel among their n + 1 nearest (ZeroSet::rows_near_zero skips the others), as the oracle's brute force finds.
+TEST(CollisionSimple, BoundaryMarksOnInterleavedRegionsFollowTheOracle) {
+  TestScene scene = slab_and_sphere();
+  for (Index r = 0; r < scene.rows(); ++r) {
+    Region& g = scene.regions[static_cast<std::size_t>(r)];
+    if (g == Region::Zero && r % 5 == 0) g = Region::One;
+    else if (g != Region::Zero && r % 4 == 0) g = Region::Zero;
+  }
+  for (CollisionAlgorithm alg : {CollisionAlgorithm::Simple, CollisionAlgorithm::Improved, CollisionAlgorithm::Temporal}) {
+    for (const auto& [n, i] : {std::pair{10, 5}, std::pair{4, 2}, std::pair{16, 16}}) {
+      CollisionParams p = params_of(alg);
+      p.boundary_n = n;
+      p.boundary_i = i;
+      run_against_oracle(scene, p, slab_script(), false);
+    }
+  }
+}
+
 TEST(CollisionSimple, InsertionAndRemovalMidScenario) {
   run_against_oracle(slab_and_sphere(), params_of(CollisionAlgorithm::Simple), slab_script(), true);
 }

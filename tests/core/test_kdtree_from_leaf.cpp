@@ -144,6 +144,46 @@ TEST(KdTreeFromLeaf, TiesOnALatticeWithDuplicatesFromEveryStart) {
   }
 }
 
+// The batch k = 1 query of a tree built with cells (KdTree::knn(queries, 1): along the Morton curve, each query
+// warm-started from the previous answer, on one and two threads; the seeds of the detectors) gives each query the row
+// and dist2 bits of its single search, on a lattice with every point three times (ties everywhere) and on a random
+// cloud far from the origin.
+TEST(KdTreeFromLeaf, BatchNearestIsTheSingleAnswer) {
+  constexpr int m = 7;
+  Points lattice(3 * m * m * m, 3);
+  for (int i = 0; i < m * m * m; ++i)
+    for (int c = 0; c < 3; ++c) lattice.row(c * m * m * m + i) << i % m, (i / m) % m, i / (m * m);
+  const Points cloud = test::uniform_cloud(3000, 11, 1.0, Vec3(1e6, -1e6, 1e6));
+  const Points* const sets[] = {&lattice, &cloud};
+  for (const Points* pts : sets) {
+    const Vec3 lo = pts->colwise().minCoeff().transpose(), hi = pts->colwise().maxCoeff().transpose();
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-0.2, 1.2);
+    Points queries(400, 3);
+    for (Eigen::Index i = 0; i < queries.rows(); ++i) {
+      Vec3 q;
+      for (int d = 0; d < 3; ++d) q[d] = lo[d] + u(rng) * (hi[d] - lo[d]);
+      if (pts == &lattice && i % 2 == 0) q = q.array().round() + 0.5 * Eigen::Array3d(i % 3 == 0, i % 5 == 0, 1.0);
+      queries.row(i) = q.transpose();
+    }
+    for (int leaf_size : {1, 10, 96}) {
+      for (KdScan scan : kScans) {
+        KdTreeParams p = with_cells(leaf_size, scan);
+        for (int threads : {1, 2}) {
+          const KdTree tree(*pts, p);
+          const KnnResult batch = tree.knn(queries, 1, threads);
+          for (Eigen::Index i = 0; i < queries.rows(); ++i) {
+            double d2 = 0.0;
+            const Index row = tree.nearest(queries.row(i).transpose(), &d2);
+            ASSERT_EQ(batch.indices(i, 0), row) << "query " << i << " leaf " << leaf_size << " threads " << threads;
+            ASSERT_EQ(batch.dist2(i, 0), d2) << "query " << i;
+          }
+        }
+      }
+    }
+  }
+}
+
 // Far from the origin and at tiny and huge scales: the local frame keeps the comparison exact enough, and the
 // walk's stop (face gaps squared against the best dist2) must hold at every magnitude.
 TEST(KdTreeFromLeaf, OffsetsAndScales) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "collision/improved_sweep.hpp"
@@ -211,6 +212,33 @@ double ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
   return reach;
 }
 
+IndexList ZeroSet::rows_near_zero(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole,
+                                  int k, int threads) const {
+  const Eigen::Index n = static_cast<Eigen::Index>(deformable.size());
+  Points queries(n, 3);
+  for (Eigen::Index q = 0; q < n; ++q) queries.row(q) = scene.positions.row(deformable[static_cast<std::size_t>(q)]);
+  const KnnResult zero = tree->knn(queries, 1, threads);
+  // The two trees round their distances in their own local frames (centred, maybe turned): each squared distance is
+  // off by a few ulps of the model's extent. A point counts as closer than the nearest zero surfel only below its
+  // distance less a margin well above that (and less the share an approximate zero tree may overshoot by).
+  double extent = 0.0;
+  if (scene.positions.rows() > 0) {
+    const Vec3 lo = scene.positions.colwise().minCoeff().transpose(), hi = scene.positions.colwise().maxCoeff().transpose();
+    extent = (hi - lo).norm() + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  }
+  const double slack = 64.0 * std::numeric_limits<double>::epsilon() * extent;
+  std::vector<std::uint8_t> keep(static_cast<std::size_t>(n), 1);
+#pragma omp parallel for schedule(dynamic, 256) num_threads(resolve_threads(threads))
+  for (Eigen::Index q = 0; q < n; ++q) {
+    const double d = std::sqrt(zero.dist2(q, 0) / (1.0 + knn_eps)) * (1.0 - 1e-9) - slack;
+    if (d > 0.0 && whole.count_within(queries.row(q).transpose(), d * d, k) >= k) keep[static_cast<std::size_t>(q)] = 0;
+  }
+  IndexList out;
+  for (Eigen::Index q = 0; q < n; ++q)
+    if (keep[static_cast<std::size_t>(q)]) out.push_back(deformable[static_cast<std::size_t>(q)]);
+  return out;
+}
+
 void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {
   std::fill(marked.begin(), marked.end(), 0);
   if (deformable.empty()) return;
@@ -220,15 +248,19 @@ void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deform
   KdTreeParams tp = nearest_tree_params(0.0);
   tp.threads = threads;
   const KdTree whole(scene.positions, tp);
-  Points queries(static_cast<Eigen::Index>(deformable.size()), 3);
-  for (std::size_t q = 0; q < deformable.size(); ++q) queries.row(q) = scene.positions.row(deformable[q]);
+  // Only a row with a zero surfel among its n + 1 nearest can mark one. A row with n + 1 points strictly closer than
+  // its nearest zero surfel has none there, whatever the order of ties, and makes no knn query: most deformable rows
+  // lie far from the zero region, where such points are found in a leaf (RESULTS §75).
+  const IndexList near = rows_near_zero(scene, deformable, whole, n + 1, threads);
+  Points queries(static_cast<Eigen::Index>(near.size()), 3);
+  for (std::size_t q = 0; q < near.size(); ++q) queries.row(q) = scene.positions.row(near[q]);
   // n + 1 neighbours: the surfel itself comes back too and is skipped.
   const KnnResult knn = whole.knn(queries, n + 1);
-  for (std::size_t q = 0; q < deformable.size(); ++q) {
+  for (std::size_t q = 0; q < near.size(); ++q) {
     int seen = 0, marks = 0;
     for (Eigen::Index j = 0; j < knn.indices.cols() && seen < n && marks < i; ++j) {
       const Index r = knn.indices(q, j);
-      if (r < 0 || r == deformable[q]) continue;
+      if (r < 0 || r == near[q]) continue;
       ++seen;
       const Index z = zero_of_row[r];
       if (z >= 0) {

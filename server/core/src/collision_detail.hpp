@@ -109,6 +109,10 @@ struct ZeroSet {
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.
   void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads);
+  // The rows of `deformable` (ascending) that may have a zero surfel among their k nearest points of `whole` (the
+  // whole model's tree): all but those with k points strictly closer than their nearest zero surfel.
+  IndexList rows_near_zero(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole, int k,
+                           int threads) const;
   // Rows `moved` (model rows) moved: their copies take `scene`'s values, the tree is rebuilt (a new
   // object), the boundary marks are kept. Returns the largest displacement of a moved surfel (model
   // units), or -1 (nothing changed) when one of them is not in `rows`.

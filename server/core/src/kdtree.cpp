@@ -289,6 +289,20 @@ Index KdTree::nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2) co
   return set.slot == kd::NearestSet::kNone ? -1 : static_cast<Index>(impl.tree.rows[set.slot]);
 }
 
+Index KdTree::count_within(const Vec3& q, double max_dist2, Index limit) const {
+  check_query(q);
+  if (std::isnan(max_dist2) || max_dist2 < 0.0) {
+    throw Error(ErrorCode::InvalidArgument, "max_dist2", "must be >= 0 (or +inf), got " + std::to_string(max_dist2));
+  }
+  if (limit < 0) throw Error(ErrorCode::InvalidArgument, "limit", "must be >= 0, got " + std::to_string(limit));
+  const Impl& impl = *impl_;
+  double x[3];
+  impl.local(q, x);
+  kd::CountSet set{max_dist2, static_cast<std::size_t>(limit)};
+  if (limit > 0) impl.search->count(impl.tree, x, set, 1.0);
+  return static_cast<Index>(set.n);
+}
+
 void KdTree::knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const {
   check_query(q);
   check_k(k);

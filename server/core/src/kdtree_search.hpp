@@ -78,6 +78,16 @@ class KnnSet {
   double bound_;
 };
 
+// How many points have dist2 < r2 (strictly), counted up to `limit`: once there, worst() admits nothing, so the
+// descent prunes every node left and the search ends.
+struct CountSet {
+  double r2;
+  std::size_t limit;
+  std::size_t n = 0;
+  [[gnu::always_inline]] double worst() const { return n < limit ? r2 : -std::numeric_limits<double>::infinity(); }
+  [[gnu::always_inline]] void add(double d2, std::uint32_t) { n += (d2 < r2) & (n < limit); }
+};
+
 // Every point with dist2 <= r2 (unsorted; the caller sorts).
 struct RadiusSet {
   double r2;

@@ -140,6 +140,7 @@ struct SearchFns {
   void (*nearest)(const Tree&, const double* q, NearestSet&, double eps_factor);
   void (*knn)(const Tree&, const double* q, KnnSet&, double eps_factor);
   void (*radius)(const Tree&, const double* q, RadiusSet&, double eps_factor);
+  void (*count)(const Tree&, const double* q, CountSet&, double eps_factor);
   void (*nearest_from)(const Tree&, const double* q, NearestSet&, std::uint32_t& leaf);  // exact only
   bool fans;  // nearest_from walks by fans when the tree has them (build_fans)
 };
@@ -152,7 +153,7 @@ void search_with(const Tree& t, const double* q, Set& set, double eps_factor) {
 template <class Scan, class Walk>
 constexpr SearchFns search_fns() {
   return {&search_with<Scan, NearestSet>, &search_with<Scan, KnnSet>, &search_with<Scan, RadiusSet>,
-          &nearest_from<Scan, Walk>, Walk::kFans};
+          &search_with<Scan, CountSet>, &nearest_from<Scan, Walk>, Walk::kFans};
 }
 
 // The AVX2 leaf scans' and walk's table (kdtree_avx2.cpp); nullptr when that file was built without AVX2 (then

@@ -90,6 +90,10 @@ class KdTree {
   void knn(const Vec3& q, int k, IndexList& indices, std::vector<double>& dist2) const;
   // All points within real distance `radius` (inclusive) of q, ascending by distance.
   void radius(const Vec3& q, double radius, IndexList& indices, std::vector<double>& dist2) const;
+  // How many points have a squared distance from q below `max_dist2` (strictly), counting no further than `limit`
+  // (the search stops there, so a count that reaches it costs about one leaf). Throws InvalidArgument for a NaN or
+  // negative max_dist2 or a negative limit.
+  Index count_within(const Vec3& q, double max_dist2, Index limit) const;
 
   // Batch versions, multithreaded over queries (`params().threads`; knn: `threads` when > 0); thread-safe, const.
   // The queries are answered in Morton-curve order when the tree holds >= 2^16 points (cache reuse), and written
