@@ -26,6 +26,13 @@ std::vector<KdScan> scans() {
   return out;
 }
 
+KdTreeParams leaves_of(int leaf, KdScan scan) {
+  KdTreeParams p;
+  p.leaf_size = leaf;
+  p.scan = scan;
+  return p;
+}
+
 // min(limit, the number of brute-force squared distances below max_dist2), for every limit up to the true count + 2.
 void expect_counts(const KdTree& tree, const Points& pts, const Vec3& q, double max_dist2) {
   const std::vector<double> d2 = brute_dist2(pts, q);
@@ -43,10 +50,7 @@ TEST(KdTreeCount, MatchesBruteForceAtOffsetsAndScales) {
       const Points queries = random_cloud(40, 4, 1.2 * scale, offset * scale);
       for (KdScan scan : scans()) {
         for (int leaf : {1, 10, 96}) {
-          KdTreeParams p;
-          p.leaf_size = leaf;
-          p.scan = scan;
-          const KdTree tree(pts, p);
+          const KdTree tree(pts, leaves_of(leaf, scan));
           for (Eigen::Index i = 0; i < queries.rows(); ++i) {
             const Vec3 q = queries.row(i).transpose();
             for (const double r : {0.0, 0.05, 0.3, 3.0}) expect_counts(tree, pts, q, r * r * scale * scale);
@@ -66,10 +70,7 @@ TEST(KdTreeCount, BoundIsStrictOnALatticeWithDuplicates) {
     for (int c = 0; c < 3; ++c) pts.row(c * m * m * m + i) << i % m, (i / m) % m, i / (m * m);
   for (KdScan scan : scans()) {
     for (int leaf : {1, 4, 16}) {
-      KdTreeParams p;
-      p.leaf_size = leaf;
-      p.scan = scan;
-      const KdTree tree(pts, p);
+      const KdTree tree(pts, leaves_of(leaf, scan));
       const Vec3 q(2.0, 3.0, 2.0);  // a lattice point: 3 copies at 0, 18 at 1, 36 at 2 (squared)
       EXPECT_EQ(tree.count_within(q, 1.0, 1000), 3);
       EXPECT_EQ(tree.count_within(q, std::nextafter(1.0, 2.0), 1000), 21);
