@@ -276,13 +276,13 @@ struct DetectorRun {
   }
 };
 
-// BM_DetectRun and BM_DetectRunTilted.
-void detect_run(benchmark::State& state, int tilted) {
+// BM_DetectRun, BM_DetectRunTilted and BM_DetectRunTwoTilts (`kind` as Piercing's).
+void detect_run(benchmark::State& state, int kind) {
   std::vector<double> cpu, nv, np, nu, queries;
-  const Vec3 t = Piercing::get(tilted).push();
+  const Vec3 t = Piercing::get(kind).push();
   for (auto _ : state) {
     state.PauseTiming();
-    DetectorRun run(kConfigs[state.range(0)], tilted);
+    DetectorRun run(kConfigs[state.range(0)], kind);
     for (int k = 0; k < kSteps; ++k) {
       state.ResumeTiming();
       // The move is timed too (a copy and 60k row updates, the same in A and B).

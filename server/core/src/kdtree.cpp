@@ -51,6 +51,13 @@ double checked_radius2(double radius) {
   return radius * radius;
 }
 
+// A squared-distance bound: >= 0, +inf allowed (every point).
+void check_max_dist2(double max_dist2) {
+  if (std::isnan(max_dist2) || max_dist2 < 0.0) {
+    throw Error(ErrorCode::InvalidArgument, "max_dist2", "must be >= 0 (or +inf), got " + std::to_string(max_dist2));
+  }
+}
+
 const kd::SearchFns* search_for(KdScan scan) {
   static const kd::SearchFns scalar = kd::search_fns<kd::ScalarScan, kd::ScalarWalk>();
   switch (scan) {
@@ -265,9 +272,7 @@ Index KdTree::nearest(const Vec3& q, double* dist2) const {
 
 Index KdTree::nearest_within(const Vec3& q, double max_dist2, double* dist2) const {
   check_query(q);
-  if (std::isnan(max_dist2) || max_dist2 < 0.0) {
-    throw Error(ErrorCode::InvalidArgument, "max_dist2", "must be >= 0 (or +inf), got " + std::to_string(max_dist2));
-  }
+  check_max_dist2(max_dist2);
   const Impl& impl = *impl_;
   double x[3];
   impl.local(q, x);
@@ -291,9 +296,7 @@ Index KdTree::nearest_from(const Vec3& q, std::uint32_t& leaf, double* dist2) co
 
 Index KdTree::count_within(const Vec3& q, double max_dist2, Index limit) const {
   check_query(q);
-  if (std::isnan(max_dist2) || max_dist2 < 0.0) {
-    throw Error(ErrorCode::InvalidArgument, "max_dist2", "must be >= 0 (or +inf), got " + std::to_string(max_dist2));
-  }
+  check_max_dist2(max_dist2);
   if (limit < 0) throw Error(ErrorCode::InvalidArgument, "limit", "must be >= 0, got " + std::to_string(limit));
   const Impl& impl = *impl_;
   double x[3];
