@@ -445,7 +445,9 @@ std::size_t KdTree::memory_bytes() const {
   return sizeof(Impl) + t.coords.capacity() * sizeof(double) + t.rows.capacity() * sizeof(std::uint32_t) +
          t.nodes.capacity() * sizeof(kd::Node) + t.cells.capacity() * sizeof(kd::Cell) +
          t.fans.capacity() * sizeof(kd::Fan) + t.fan_blocks.capacity() * sizeof(kd::FanBlock) +
-         t.fan_of.capacity() * sizeof(std::uint32_t) + t.frames.capacity() * sizeof(kd::NodeFrame);
+         t.fan_of.capacity() * sizeof(std::uint32_t) + t.frames.capacity() * sizeof(kd::NodeFrame) +
+         t.frame_of.capacity() * sizeof(std::uint32_t) + t.halos.capacity() * sizeof(kd::Halo) +
+         t.halo_blocks.capacity() * sizeof(kd::HaloBlock);
 }
 
 }  // namespace surfeledit

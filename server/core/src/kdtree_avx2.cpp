@@ -8,6 +8,8 @@
 // kdtree_avx512.cpp builds this file again for AVX-512VL under another entry name (SURFELEDIT_KD_ENTRY).
 #include "kdtree_walk.hpp"
 
+#include <cstring>
+
 #if defined(__AVX2__) && !defined(__FMA__)
 #include <immintrin.h>
 #endif
@@ -268,8 +270,71 @@ class Avx2Walk {
     return mask & f.lanes;
 #endif
   }
+  // fan_bounds() of a halo's nodes (blocks: its blocks), their boxes decoded as Halo::value does (the same operations,
+  // so the same bits): bound[k] and off[axis][k] for each node k; returns the nodes whose bound is <= best.
+  std::uint64_t halo_bounds(const Halo& h, const HaloBlock* blocks, double best, double* bound,
+                            double (*off)[kMaxHalo]) const {
+    static_assert(kMaxHalo <= 64 && kMaxHalo % kHaloBlock == 0, "a halo's nodes are bits of one word");
+    std::uint64_t mask = 0;
+#if defined(__AVX512F__)
+    __m512d base[3], step[3], qd[3], boxd[3];
+    for (int d = 0; d < 3; ++d) {
+      base[d] = _mm512_set1_pd(static_cast<double>(h.reach.lo[d]));
+      step[d] = _mm512_set1_pd(Halo::step(h.reach, d));
+      qd[d] = _mm512_broadcast_f64x4(qs_[d]);
+      boxd[d] = _mm512_broadcast_f64x4(boxes_[d]);
+    }
+    const __m512d zero = _mm512_setzero_pd(), vbest = _mm512_set1_pd(best);
+    auto decode = [&](const std::uint8_t* c, int d) {
+      const __m512d v = _mm512_cvtepi32_pd(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(c))));
+      return _mm512_add_pd(base[d], _mm512_mul_pd(v, step[d]));
+    };
+    for (unsigned k = 0; k * kHaloBlock < h.count; ++k) {
+      const HaloBlock& b = blocks[k];
+      __m512d o[3];
+      for (int d = 0; d < 3; ++d) {
+        const __m512d g = _mm512_max_pd(
+            _mm512_max_pd(_mm512_sub_pd(decode(b.lo[d], d), qd[d]), _mm512_sub_pd(qd[d], decode(b.hi[d], d))), zero);
+        o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), boxd[d]);
+        _mm512_storeu_pd(off[d] + kHaloBlock * k, o[d]);
+      }
+      const __m512d sum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
+      _mm512_storeu_pd(bound + kHaloBlock * k, sum);
+      mask |= static_cast<std::uint64_t>(_mm512_cmp_pd_mask(sum, vbest, _CMP_LE_OQ)) << (kHaloBlock * k);
+    }
+#else
+    __m256d base[3], step[3];
+    for (int d = 0; d < 3; ++d) {
+      base[d] = _mm256_set1_pd(static_cast<double>(h.reach.lo[d]));
+      step[d] = _mm256_set1_pd(Halo::step(h.reach, d));
+    }
+    const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
+    auto decode = [&](const std::uint8_t* c, int d) {
+      std::int32_t four;
+      std::memcpy(&four, c, sizeof four);
+      const __m256d v = _mm256_cvtepi32_pd(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(four)));
+      return _mm256_add_pd(base[d], _mm256_mul_pd(v, step[d]));
+    };
+    for (unsigned k = 0; k * 4 < h.count; ++k) {
+      const HaloBlock& b = blocks[k / 2];
+      const unsigned at = (k % 2) * 4;
+      __m256d o[3];
+      for (int d = 0; d < 3; ++d) {
+        const __m256d g = _mm256_max_pd(
+            _mm256_max_pd(_mm256_sub_pd(decode(b.lo[d] + at, d), qs_[d]), _mm256_sub_pd(qs_[d], decode(b.hi[d] + at, d))),
+            zero);
+        o[d] = _mm256_max_pd(_mm256_mul_pd(g, g), boxes_[d]);
+        _mm256_storeu_pd(off[d] + 4 * k, o[d]);
+      }
+      const __m256d sum = _mm256_add_pd(_mm256_add_pd(o[0], o[1]), o[2]);
+      _mm256_storeu_pd(bound + 4 * k, sum);
+      mask |= static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(sum, vbest, _CMP_LE_OQ))) << (4 * k);
+    }
+#endif
+    return h.count >= 64 ? mask : mask & ((std::uint64_t{1} << h.count) - 1);  // unused lanes' codes are 0
+  }
   Avx2Walk(const double* q, const double* box)
-      : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),
+      : qd_{q[0], q[1], q[2]}, q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),
         qs_{_mm256_set1_pd(q[0]), _mm256_set1_pd(q[1]), _mm256_set1_pd(q[2])},
         boxes_{_mm256_set1_pd(box[0]), _mm256_set1_pd(box[1]), _mm256_set1_pd(box[2])} {}
   bool holds(const Cell& c, double best) const {
@@ -293,6 +358,7 @@ class Avx2Walk {
     lo = _mm256_cvtps_pd(_mm_loadu_ps(c.lo));
     hi = _mm256_cvtps_pd(_mm_permute_ps(_mm_loadu_ps(c.lo + 2), _MM_SHUFFLE(0, 3, 2, 1)));
   }
+  double qd_[3];
   __m256d q_, box_;
   __m256d qs_[3], boxes_[3];  // q and the box offsets per axis, in every lane
 };

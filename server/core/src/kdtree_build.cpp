@@ -47,16 +47,6 @@ Box box_of(const Tree& t, std::uint32_t b, std::uint32_t e) {
   return box;
 }
 
-// The nearest float >= x / <= x (+-inf beyond float range, which only weakens a bound).
-float round_up(double x) {
-  const float f = static_cast<float>(x);
-  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
-float round_down(double x) {
-  const float f = static_cast<float>(x);
-  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-}
-
 constexpr int kBits = 10;                                  // Morton code bits per axis (30-bit codes)
 constexpr double kCells = static_cast<double>((1 << kBits) - 1);  // largest cell coordinate
 constexpr int kDigit = 10, kPasses = 3 * kBits / kDigit;          // radix sort: 3 passes of 10 bits
@@ -258,6 +248,8 @@ void build_fans(Tree& t) {
   t.fans.clear();
   t.fan_blocks.clear();
   t.fan_of.clear();
+  t.halos.clear();
+  t.halo_blocks.clear();
   if (t.cells.size() != n || n < 2) return;
   t.fan_of.assign(n, Tree::kNoFan);
   std::vector<std::uint8_t> level(n, 0);  // depth modulo kFanLevels
@@ -312,6 +304,9 @@ void build_fans(Tree& t) {
     }
     t.fans.push_back(f);
   }
+  std::vector<std::uint32_t> roots(t.fans.size());
+  for (std::size_t k = 0; k < roots.size(); ++k) roots[k] = t.fans[k].up;
+  build_halos(t, roots);
   for (Fan& f : t.fans) f.up = t.fan_of[f.up];  // each R's lane was set by its parent fan, made before it (pre-order)
   t.fans.shrink_to_fit();
   t.fan_blocks.shrink_to_fit();

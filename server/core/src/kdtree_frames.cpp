@@ -19,7 +19,7 @@ namespace surfeledit::kd {
 // 8 box corners or 8 oriented-box corners, whichever bounds the child tighter on that axis (an oriented box holds
 // its points only up to its float axes' error, ~1e-7 of its size: 1e-6 of the sum of its half extents is added, and
 // its corners' rounding).
-// Kept (else half[0] = NaN; an inner node kept gets kFramed in Node::b) where the thinnest half extent is under kThinner of the thinnest half side of the points'
+// Kept (in t.frames, its index in t.frame_of; an inner node kept gets kFramed in Node::b) where the thinnest half extent is under kThinner of the thinnest half side of the points'
 // axis-aligned box: the surface is tilted against the axes there.
 void build_frames(Tree& t) {
   constexpr double kThinner = 0.5;
@@ -31,7 +31,8 @@ void build_frames(Tree& t) {
   };
   std::vector<Sums> sums(n);
   std::vector<NodeFrame> frame(n);  // every node's frame, kept or not (its parent reads its corners)
-  t.frames.assign(n, NodeFrame{});
+  t.frame_of.assign(n, Tree::kNoFrame);
+  std::vector<std::uint32_t> kept;  // nodes that keep theirs, bottom-up
   // The 8 corners of the box centre c +- half along the three axes (rows of `axis`), in doubles.
   auto corners = [](const double* c, const double (*axis)[3], const double* half, Eigen::Vector3d* out) {
     for (int k = 0; k < 8; ++k)
@@ -63,7 +64,7 @@ void build_frames(Tree& t) {
       z.hi = l.hi.cwiseMax(r.hi);
     }
     NodeFrame& g = frame[i];
-    g.half[0] = t.frames[i].half[0] = std::numeric_limits<float>::quiet_NaN();
+    g.half[0] = std::numeric_limits<float>::quiet_NaN();
     if (z.count < 2.0) continue;
     const Eigen::Vector3d mean = z.s / z.count;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
@@ -122,9 +123,17 @@ void build_frames(Tree& t) {
       thinnest = std::min(thinnest, half[k]);
     }
     if (thinnest < kThinner * 0.5 * (z.hi - z.lo).minCoeff()) {
-      t.frames[i] = g;
+      kept.push_back(static_cast<std::uint32_t>(i));
       if (!t.nodes[i].leaf()) t.nodes[i].b |= kFramed;
     }
+  }
+  // In pre-order, as the nodes; none kept: no index either (frame_bound() then stops at the empty list).
+  t.frames.clear();
+  if (kept.empty()) std::vector<std::uint32_t>().swap(t.frame_of);
+  t.frames.reserve(kept.size());
+  for (std::size_t k = kept.size(); k-- > 0;) {
+    t.frame_of[kept[k]] = static_cast<std::uint32_t>(t.frames.size());
+    t.frames.push_back(frame[kept[k]]);
   }
 }
 

@@ -133,15 +133,46 @@ struct Fan {
   std::uint32_t lanes = 0;  // bit per used lane, in the frontier's pre-order
 };
 
+// A fan's halo (kdtree_halos.cpp): the nodes outside the fan's root R that have points in `reach`, a box E around the
+// box T of R's points, wider by kHaloReach of T's longest side on every side. Once R's points are searched, a ball
+// that E holds (strictly, as the walk's stop test) holds no other point than these nodes' (every point outside E is
+// beyond one of its faces), so the walk searches them instead of going on up (kdtree_walk.hpp; RESULTS §76). The
+// nodes are leaves, or inner nodes no longer than kHaloCoarse of T; a fan with more than kMaxHalo of them, or none,
+// has no halo. Each node's box, clipped to E, is kept in 8-bit codes over E per axis (Halo::value), rounded
+// outward: 10 B per node. Clipping is exact for the search: the ball is in E, so what lies outside E is beyond it.
+inline constexpr double kHaloReach = 0.5;
+inline constexpr double kHaloCoarse = 0.25;
+inline constexpr int kHaloBlock = 8;
+inline constexpr int kMaxHalo = 64;
+struct HaloBlock {
+  std::uint8_t lo[3][kHaloBlock];  // per axis, each node's box (codes); unused lanes 0
+  std::uint8_t hi[3][kHaloBlock];
+  std::uint32_t node[kHaloBlock];  // the node; unused lanes 0
+};
+struct Halo {
+  Cell reach;               // E (floats, rounded outward); parent 0
+  std::uint32_t first = 0;  // its first block in Tree::halo_blocks
+  std::uint32_t count = 0;  // nodes; 0: no halo
+  // Code c's coordinate on axis d: E's lower face plus c steps of 1 / 254 of E's side (so code 254 is E's upper face
+  // up to rounding and 255 beyond it); the search computes it with the same operations (no FMA contraction in either
+  // file).
+  static double step(const Cell& e, int d) {
+    return (static_cast<double>(e.hi[d]) - static_cast<double>(e.lo[d])) * (1.0 / 254.0);
+  }
+  static double value(const Cell& e, int d, int c) {
+    return static_cast<double>(e.lo[d]) + static_cast<double>(c) * step(e, d);
+  }
+};
+
 // A node's oriented box (build_frames; trees built with KdTreeParams::frames): its points' principal axes and
 // centroid (floats), and per axis half the extent of the points' projections, widened for rounding. On a tilted surface a node's
 // axis-aligned box reaches far into the space beside its points; this box does not, so a search ball that meets
 // the first but not the second skips the node (Descent::frame_bound; RESULTS §73). Kept only where it is much
-// thinner than the points' axis-aligned box (`half[0]` is NaN otherwise, and the test is skipped).
+// thinner than the points' axis-aligned box (Tree::frame_of; elsewhere the test is skipped).
 struct NodeFrame {
   float c[3];        // centroid, local frame
   float axis[3][3];  // the axes (rows), unit and orthogonal up to float rounding
-  float half[3];     // per axis: >= |(p - c) . axis| for every point p of the node, rounding included; NaN: unused
+  float half[3];     // per axis: >= |(p - c) . axis| for every point p of the node, rounding included
 };
 
 struct Tree {
@@ -160,7 +191,13 @@ struct Tree {
   std::vector<Fan> fans;
   std::vector<FanBlock> fan_blocks;
   std::vector<std::uint32_t> fan_of;
-  std::vector<NodeFrame> frames;  // per node when built with KdTreeParams::frames (build_frames), else empty
+  std::vector<Halo> halos;  // per fan (build_fans; Halo::count 0 for a fan without), or empty
+  std::vector<HaloBlock> halo_blocks;
+  // The oriented boxes kept (build_frames; empty without KdTreeParams::frames), and per node its box's index in them
+  // or kNoFrame: most nodes keep none (an upright surface's boxes are already thin), so 4 B per node, not 60.
+  std::vector<NodeFrame> frames;
+  std::vector<std::uint32_t> frame_of;
+  static constexpr std::uint32_t kNoFrame = std::numeric_limits<std::uint32_t>::max();
   static constexpr std::uint32_t kNoFan = std::numeric_limits<std::uint32_t>::max();
 
   std::size_t size() const { return rows.size(); }
@@ -301,8 +338,9 @@ class Descent {
     if (t_.frames.empty()) return 0.0;
     const Node& nd = t_.nodes[ni];
     if (!nd.leaf() && !(nd.b & kFramed)) return 0.0;
-    const NodeFrame& f = t_.frames[ni];
-    if (!(f.half[0] >= 0.0f)) return 0.0;  // NaN: no frame kept
+    const std::uint32_t at = t_.frame_of[ni];
+    if (at == Tree::kNoFrame) return 0.0;
+    const NodeFrame& f = t_.frames[at];
     const double d[3] = {q_[0] - static_cast<double>(f.c[0]), q_[1] - static_cast<double>(f.c[1]),
                          q_[2] - static_cast<double>(f.c[2])};
     const double slack = 1e-15 * (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
@@ -362,6 +400,16 @@ inline std::uint32_t spread10(std::uint32_t v) {
   return v;
 }
 
+// The nearest float >= x / <= x (+-inf beyond float range, which only weakens a bound; the build's boxes).
+inline float round_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+inline float round_down(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+
 // Sorts (key, value) pairs by the low 30 key bits, stable (LSD radix, 3 passes of 10 bits; kdtree_build.cpp).
 void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val);
 
@@ -386,9 +434,11 @@ double floored_volume(const double lo[3], const double hi[3]);
 // when the world axes are as good. The caller keeps them only when the points' box along them is under kTurnedVolume
 // of the axis-aligned box (kdtree_align.cpp).
 bool choose_turn(const double* points, const std::vector<std::uint32_t>& rows, const double* origin, double turn[3][3]);
-// Fills t.frames (one per node) from the points (kdtree_frames.cpp).
+// Fills t.frames and t.frame_of from the points (kdtree_frames.cpp).
 void build_frames(Tree& t);
-// Fills t.fans, t.fan_blocks and t.fan_of from t.cells, then drops the cells (kdtree_build.cpp). A tree without an
+// Fills t.halos and t.halo_blocks for the fans whose roots are `roots`, from t.cells (kdtree_halos.cpp).
+void build_halos(Tree& t, const std::vector<std::uint32_t>& roots);
+// Fills t.fans, t.fan_blocks, t.fan_of and the fans' halos from t.cells, then drops the cells (kdtree_build.cpp). A tree without an
 // inner node gets no fans and keeps its cells.
 void build_fans(Tree& t);
 

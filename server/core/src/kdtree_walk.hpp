@@ -93,27 +93,49 @@ void nearest_from(const Tree& t, const double* q, NearestSet& set, std::uint32_t
       // cell is within the best distance, then the walk goes on at the fan's root R, stopping there when R's stop box
       // holds the ball. The frontier holds all of R's points, so the argument above holds with a fan for a level; the
       // stop box's faces are at the far side of each ancestor's cut (kdtree_build.cpp's stop_cells), which every point
-      // outside R lies beyond, so it may be wider than R's cell and needs no kNoStop.
-      std::uint32_t at = t.fan_of[n];
-      while (at != Tree::kNoFan) {
-        const Fan& fan = t.fans[at / kFanLanes];
-        alignas(32) double bound[kFanLanes], off[3][kFanLanes];
-        unsigned todo = walk.fan_bounds(fan, t.fan_blocks.data() + fan.first, set.best, bound, off) &
-                        ~(1u << (at % kFanLanes));
+      // outside R lies beyond, so it may be wider than R's cell and needs no kNoStop. Where the stop box does not hold
+      // the ball but R's halo box does, the halo's nodes hold every point outside R that the ball may (Halo): once they
+      // are searched, the walk stops there too.
+      // Searches the nodes whose bits are set in `todo` (node(k); cell bound[k], per axis off[axis][k]) nearest first,
+      // each while its bound is still within the best.
+      auto nearest_first = [&](std::uint64_t todo, const double* bound, const auto* off, auto node) {
         while (todo != 0) {
-          unsigned lane = static_cast<unsigned>(__builtin_ctz(todo));
-          for (unsigned rest = todo & (todo - 1); rest != 0; rest &= rest - 1) {
-            const unsigned l = static_cast<unsigned>(__builtin_ctz(rest));
-            lane = bound[l] < bound[lane] ? l : lane;
+          unsigned k = static_cast<unsigned>(__builtin_ctzll(todo));
+          for (std::uint64_t rest = todo & (todo - 1); rest != 0; rest &= rest - 1) {
+            const unsigned l = static_cast<unsigned>(__builtin_ctzll(rest));
+            k = bound[l] < bound[k] ? l : k;
           }
-          todo &= ~(1u << lane);
-          if (!(bound[lane] <= set.best)) continue;  // the best shrank since
-          const double o[3] = {off[0][lane], off[1][lane], off[2][lane]};
-          descent.run_from(t.lane_block(fan, lane).node[lane % kFanBlock], o);
+          todo &= ~(std::uint64_t{1} << k);
+          if (!(bound[k] <= set.best)) continue;  // the best shrank since
+          const double o[3] = {off[0][k], off[1][k], off[2][k]};
+          descent.run_from(node(k), o);
           if (descent.won() != NearestSet::kNone) won = descent.won();
         }
-        if (walk.holds(fan.cell, set.best)) break;
-        at = fan.up;
+      };
+      // Searches the frontier of the fan of lane `at` but that lane (where the walk comes from); true when the fan's
+      // stop box then holds the ball.
+      auto search_fan = [&](std::uint32_t at) {
+        const Fan& fan = t.fans[at / kFanLanes];
+        alignas(32) double bound[kFanLanes], off[3][kFanLanes];
+        const unsigned todo =
+            walk.fan_bounds(fan, t.fan_blocks.data() + fan.first, set.best, bound, off) & ~(1u << (at % kFanLanes));
+        nearest_first(todo, bound, off, [&](unsigned k) { return t.lane_block(fan, k).node[k % kFanBlock]; });
+        return walk.holds(fan.cell, set.best);
+      };
+      // The start leaf's fan first, then its halo when its stop box does not hold the ball but its halo box does
+      // (only there: the halos of the fans above would cost more than the walk they save, RESULTS §76), else up.
+      std::uint32_t at = t.fan_of[n];
+      if (at != Tree::kNoFan && !search_fan(at)) {
+        const Halo* h = t.halos.empty() ? nullptr : &t.halos[at / kFanLanes];
+        if (h && h->count != 0 && walk.holds(h->reach, set.best)) {
+          alignas(64) double hbound[kMaxHalo], hoff[3][kMaxHalo];
+          const HaloBlock* blocks = t.halo_blocks.data() + h->first;
+          nearest_first(walk.halo_bounds(*h, blocks, set.best, hbound, hoff), hbound, hoff,
+                        [&](unsigned k) { return blocks[k / kHaloBlock].node[k % kHaloBlock]; });
+        } else {
+          for (at = t.fans[at / kFanLanes].up; at != Tree::kNoFan && !search_fan(at); at = t.fans[at / kFanLanes].up) {
+          }
+        }
       }
       if (set.slot != NearestSet::kNone) leaf = won;
       return;

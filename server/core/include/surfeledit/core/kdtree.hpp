@@ -34,13 +34,15 @@ struct KdTreeParams {
                        // distance is at most (1 + eps) x that of the true one; 0 = exact. Radius queries stay exact.
   KdScan scan = KdScan::Auto;  // leaf scan; one this CPU lacks throws InvalidArgument at construction
   bool frames = false;  // keep an oriented box per node where it is much thinner than the points' axis-aligned box
-                        // (60 B per node): exact k = 1 searches then skip more of a surface tilted against the axes
+                        // (4 B per node, 60 B per box kept): exact k = 1 searches then skip more of a surface tilted
+                        // against the axes
   bool align = false;   // build and search in a frame turned along the points' surfaces (from a sample: the axes along
                         // which its coordinates concentrate), when their box in it has under 0.7 of the axis-aligned
                         // box's volume (a model tilted as a whole); distances then round differently (~1e-16 of the
                         // model's size) and ties within that may go either way. An upright model is not turned
   bool cells = false;  // keep what nearest_from() needs to start at a leaf: with the AVX2 scan fans (about 0.3 per
-                       // leaf: 40 B and 112 B per four cells) and 4 B per node, else each node's cell (28 B per node)
+                       // leaf: 40 B and 112 B per four cells), 4 B per node and the fans' halos (36 B per fan and 10 B
+                       // per node of a halo, about 5 per leaf), else each node's cell (28 B per node)
 };
 
 // kNN result for #Q queries: #Q by k, row-major. Rows with fewer than k hits
