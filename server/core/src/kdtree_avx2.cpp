@@ -334,7 +334,7 @@ class Avx2Walk {
     return h.count >= 64 ? mask : mask & ((std::uint64_t{1} << h.count) - 1);  // unused lanes' codes are 0
   }
   Avx2Walk(const double* q, const double* box)
-      : qd_{q[0], q[1], q[2]}, q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),
+      : q_(_mm256_setr_pd(q[0], q[1], q[2], 0.0)), box_(_mm256_setr_pd(box[0], box[1], box[2], 0.0)),
         qs_{_mm256_set1_pd(q[0]), _mm256_set1_pd(q[1]), _mm256_set1_pd(q[2])},
         boxes_{_mm256_set1_pd(box[0]), _mm256_set1_pd(box[1]), _mm256_set1_pd(box[2])} {}
   bool holds(const Cell& c, double best) const {
@@ -358,7 +358,6 @@ class Avx2Walk {
     lo = _mm256_cvtps_pd(_mm_loadu_ps(c.lo));
     hi = _mm256_cvtps_pd(_mm_permute_ps(_mm_loadu_ps(c.lo + 2), _MM_SHUFFLE(0, 3, 2, 1)));
   }
-  double qd_[3];
   __m256d q_, box_;
   __m256d qs_[3], boxes_[3];  // q and the box offsets per axis, in every lane
 };
