@@ -89,7 +89,7 @@ void build_halos(Tree& t, const std::vector<std::uint32_t>& roots) {
     if (!leaves || T.empty()) continue;
     const double side = T.longest();
     const double margin = kHaloReach * side;
-    Halo h;
+    Halo h{};  // reach.parent 0
     FloatBox E;
     bool finite = true;  // a box beyond float range (or its codes' step) would make no bound: no halo then
     for (int d = 0; d < 3; ++d) {
