@@ -2,8 +2,9 @@
 // hold the search ball but its halo box does, the walk searches the halo's nodes and stops. Checked where that
 // happens most: queries above, below and between the surfaces of a thin plate with a ball close above it (the
 // Robust detector's piercing scene, small), upright and tilted, at 1e6 offsets and 1e+-4 scales, from the near-path
-// leaf and from the previous answer's leaf; each answer is the root descent's (row and dist2 bits, which no walk
-// and no halo touches) and a brute-force nearest row.
+// leaf and from the previous answer's leaf, leaves of 24 and of 96 (the detectors' trees: oriented node boxes and
+// the turned frame); each answer is the root descent's (row and dist2 bits, which no walk and no halo touches) and a
+// brute-force nearest row.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -86,6 +87,9 @@ TEST(KdTreeHalos, PlateAndBallQueriesFromEveryStartAgreeWithTheRootAndBruteForce
         params.cells = true;
         params.threads = 1;
         params.scan = scan;
+        // Leaves of 96 as the detectors' trees: with oriented node boxes and the turned frame (which turns the tilted
+        // plate upright in the tree, halos included).
+        params.frames = params.align = leaf_size == 96;
         const KdTree tree(pts, params);
         std::uint32_t walking = 0;
         // Half the queries anywhere over the plate, half just off one of its points (whose nearest is that point, in
