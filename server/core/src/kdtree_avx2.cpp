@@ -235,37 +235,24 @@ class Avx2Walk {
 #if defined(__AVX512F__)
     // The AVX-512 build: both blocks' lanes in one vector of eight, the same operations per lane.
     const FanBlock* second = f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock;
-    const __m512d zero = _mm512_setzero_pd();
-    __m512d o[3];
+    Lanes lo, hi;
     for (int d = 0; d < 3; ++d) {
-      const __m512d lo = _mm512_cvtps_pd(
+      lo[d] = _mm512_cvtps_pd(
           _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->lo[d])), _mm_load_ps(second->lo[d]), 1));
-      const __m512d hi = _mm512_cvtps_pd(
+      hi[d] = _mm512_cvtps_pd(
           _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(blocks->hi[d])), _mm_load_ps(second->hi[d]), 1));
-      const __m512d qd = _mm512_broadcast_f64x4(qs_[d]);
-      const __m512d g = _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(lo, qd), _mm512_sub_pd(qd, hi)), zero);
-      o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), _mm512_broadcast_f64x4(boxes_[d]));
-      _mm512_storeu_pd(off[d], o[d]);
     }
-    const __m512d bsum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
-    _mm512_storeu_pd(bound, bsum);
-    return static_cast<unsigned>(_mm512_cmp_pd_mask(bsum, _mm512_set1_pd(best), _CMP_LE_OQ)) & f.lanes;
+    return lane_bounds(lo, hi, best, bound, off, 0) & f.lanes;
 #else
-    const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
     const FanBlock* block[2] = {blocks, f.lanes >> kFanBlock ? blocks + 1 : &kEmptyBlock};
     unsigned mask = 0;
     for (int h = 0; h < 2; ++h) {
-      __m256d o[3];
+      Lanes lo, hi;
       for (int d = 0; d < 3; ++d) {
-        const __m256d lo = _mm256_cvtps_pd(_mm_load_ps(block[h]->lo[d]));
-        const __m256d hi = _mm256_cvtps_pd(_mm_load_ps(block[h]->hi[d]));
-        const __m256d g = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(lo, qs_[d]), _mm256_sub_pd(qs_[d], hi)), zero);
-        o[d] = _mm256_max_pd(_mm256_mul_pd(g, g), boxes_[d]);
-        _mm256_store_pd(off[d] + kFanBlock * h, o[d]);
+        lo[d] = _mm256_cvtps_pd(_mm_load_ps(block[h]->lo[d]));
+        hi[d] = _mm256_cvtps_pd(_mm_load_ps(block[h]->hi[d]));
       }
-      const __m256d b = _mm256_add_pd(_mm256_add_pd(o[0], o[1]), o[2]);
-      _mm256_store_pd(bound + kFanBlock * h, b);
-      mask |= static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(b, vbest, _CMP_LE_OQ))) << (kFanBlock * h);
+      mask |= lane_bounds(lo, hi, best, bound, off, kFanBlock * h) << (kFanBlock * h);
     }
     return mask & f.lanes;
 #endif
@@ -277,30 +264,22 @@ class Avx2Walk {
     static_assert(kMaxHalo <= 64 && kMaxHalo % kHaloBlock == 0, "a halo's nodes are bits of one word");
     std::uint64_t mask = 0;
 #if defined(__AVX512F__)
-    __m512d base[3], step[3], qd[3], boxd[3];
+    __m512d base[3], step[3];
     for (int d = 0; d < 3; ++d) {
       base[d] = _mm512_set1_pd(static_cast<double>(h.reach.lo[d]));
       step[d] = _mm512_set1_pd(Halo::step(h.reach, d));
-      qd[d] = _mm512_broadcast_f64x4(qs_[d]);
-      boxd[d] = _mm512_broadcast_f64x4(boxes_[d]);
     }
-    const __m512d zero = _mm512_setzero_pd(), vbest = _mm512_set1_pd(best);
     auto decode = [&](const std::uint8_t* c, int d) {
       const __m512d v = _mm512_cvtepi32_pd(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(c))));
       return _mm512_add_pd(base[d], _mm512_mul_pd(v, step[d]));
     };
     for (unsigned k = 0; k * kHaloBlock < h.count; ++k) {
-      const HaloBlock& b = blocks[k];
-      __m512d o[3];
+      Lanes lo, hi;
       for (int d = 0; d < 3; ++d) {
-        const __m512d g = _mm512_max_pd(
-            _mm512_max_pd(_mm512_sub_pd(decode(b.lo[d], d), qd[d]), _mm512_sub_pd(qd[d], decode(b.hi[d], d))), zero);
-        o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), boxd[d]);
-        _mm512_storeu_pd(off[d] + kHaloBlock * k, o[d]);
+        lo[d] = decode(blocks[k].lo[d], d);
+        hi[d] = decode(blocks[k].hi[d], d);
       }
-      const __m512d sum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
-      _mm512_storeu_pd(bound + kHaloBlock * k, sum);
-      mask |= static_cast<std::uint64_t>(_mm512_cmp_pd_mask(sum, vbest, _CMP_LE_OQ)) << (kHaloBlock * k);
+      mask |= static_cast<std::uint64_t>(lane_bounds(lo, hi, best, bound, off, kHaloBlock * k)) << (kHaloBlock * k);
     }
 #else
     __m256d base[3], step[3];
@@ -308,7 +287,6 @@ class Avx2Walk {
       base[d] = _mm256_set1_pd(static_cast<double>(h.reach.lo[d]));
       step[d] = _mm256_set1_pd(Halo::step(h.reach, d));
     }
-    const __m256d zero = _mm256_setzero_pd(), vbest = _mm256_set1_pd(best);
     auto decode = [&](const std::uint8_t* c, int d) {
       std::int32_t four;
       std::memcpy(&four, c, sizeof four);
@@ -318,17 +296,12 @@ class Avx2Walk {
     for (unsigned k = 0; k * 4 < h.count; ++k) {
       const HaloBlock& b = blocks[k / 2];
       const unsigned at = (k % 2) * 4;
-      __m256d o[3];
+      Lanes lo, hi;
       for (int d = 0; d < 3; ++d) {
-        const __m256d g = _mm256_max_pd(
-            _mm256_max_pd(_mm256_sub_pd(decode(b.lo[d] + at, d), qs_[d]), _mm256_sub_pd(qs_[d], decode(b.hi[d] + at, d))),
-            zero);
-        o[d] = _mm256_max_pd(_mm256_mul_pd(g, g), boxes_[d]);
-        _mm256_storeu_pd(off[d] + 4 * k, o[d]);
+        lo[d] = decode(b.lo[d] + at, d);
+        hi[d] = decode(b.hi[d] + at, d);
       }
-      const __m256d sum = _mm256_add_pd(_mm256_add_pd(o[0], o[1]), o[2]);
-      _mm256_storeu_pd(bound + 4 * k, sum);
-      mask |= static_cast<std::uint64_t>(_mm256_movemask_pd(_mm256_cmp_pd(sum, vbest, _CMP_LE_OQ))) << (4 * k);
+      mask |= static_cast<std::uint64_t>(lane_bounds(lo, hi, best, bound, off, 4 * k)) << (4 * k);
     }
 #endif
     return h.count >= 64 ? mask : mask & ((std::uint64_t{1} << h.count) - 1);  // unused lanes' codes are 0
@@ -357,6 +330,41 @@ class Avx2Walk {
   static void load(const Cell& c, __m256d& lo, __m256d& hi) {
     lo = _mm256_cvtps_pd(_mm_loadu_ps(c.lo));
     hi = _mm256_cvtps_pd(_mm_permute_ps(_mm_loadu_ps(c.lo + 2), _MM_SHUFFLE(0, 3, 2, 1)));
+  }
+#if defined(__AVX512F__)
+  using Lanes = __m512d[3];  // per axis, one coordinate of eight lanes' boxes
+#else
+  using Lanes = __m256d[3];  // per axis, one coordinate of four lanes' boxes
+#endif
+  // bound() of the lanes whose boxes are lo[axis] .. hi[axis]: per lane the per-axis offsets into off[axis][at + lane]
+  // and their sum into bound[at + lane], with bound()'s operations (the same bits); returns the lanes <= best.
+  template <std::size_t N>
+  unsigned lane_bounds(const Lanes& lo, const Lanes& hi, double best, double* bound, double (*off)[N],
+                       unsigned at) const {
+#if defined(__AVX512F__)
+    __m512d o[3];
+    for (int d = 0; d < 3; ++d) {
+      const __m512d qd = _mm512_broadcast_f64x4(qs_[d]);
+      const __m512d g =
+          _mm512_max_pd(_mm512_max_pd(_mm512_sub_pd(lo[d], qd), _mm512_sub_pd(qd, hi[d])), _mm512_setzero_pd());
+      o[d] = _mm512_max_pd(_mm512_mul_pd(g, g), _mm512_broadcast_f64x4(boxes_[d]));
+      _mm512_storeu_pd(off[d] + at, o[d]);
+    }
+    const __m512d sum = _mm512_add_pd(_mm512_add_pd(o[0], o[1]), o[2]);
+    _mm512_storeu_pd(bound + at, sum);
+    return static_cast<unsigned>(_mm512_cmp_pd_mask(sum, _mm512_set1_pd(best), _CMP_LE_OQ));
+#else
+    __m256d o[3];
+    for (int d = 0; d < 3; ++d) {
+      const __m256d g =
+          _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(lo[d], qs_[d]), _mm256_sub_pd(qs_[d], hi[d])), _mm256_setzero_pd());
+      o[d] = _mm256_max_pd(_mm256_mul_pd(g, g), boxes_[d]);
+      _mm256_storeu_pd(off[d] + at, o[d]);
+    }
+    const __m256d sum = _mm256_add_pd(_mm256_add_pd(o[0], o[1]), o[2]);
+    _mm256_storeu_pd(bound + at, sum);
+    return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(sum, _mm256_set1_pd(best), _CMP_LE_OQ)));
+#endif
   }
   __m256d q_, box_;
   __m256d qs_[3], boxes_[3];  // q and the box offsets per axis, in every lane
