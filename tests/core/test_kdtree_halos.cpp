@@ -23,6 +23,11 @@ namespace {
 constexpr double kHalf = 1.0;     // plate half width
 constexpr double kThick = 0.075;  // plate half thickness
 constexpr double kBall = 0.5;     // ball radius, its lowest point 0.02 above the plate
+constexpr double kSpacing = 0.04;  // sample spacing
+
+// Spacings across the plate's width at spacing h: a face has (m + 1)^2 samples, the first rows of plate_and_ball
+// (both faces, then the ball).
+int face_steps(double h) { return static_cast<int>(2.0 * kHalf / h); }
 
 // Both faces of the plate at spacing h (jittered by h / 4) and a ball above it (Fibonacci points at about the same
 // spacing), turned by `turn`, scaled by `scale` and moved by `offset`.
@@ -30,7 +35,7 @@ Points plate_and_ball(double h, const Eigen::Matrix3d& turn, double scale, const
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> jitter(-0.25 * h, 0.25 * h);
   std::vector<Vec3> p;
-  const int m = static_cast<int>(2.0 * kHalf / h);
+  const int m = face_steps(h);
   for (int side : {-1, 1})
     for (int i = 0; i <= m; ++i)
       for (int j = 0; j <= m; ++j)
@@ -42,7 +47,8 @@ Points plate_and_ball(double h, const Eigen::Matrix3d& turn, double scale, const
     p.push_back(centre + kBall * Vec3(r * std::cos(a), r * std::sin(a), z));
   }
   Points out(static_cast<Eigen::Index>(p.size()), 3);
-  for (std::size_t i = 0; i < p.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = (scale * (turn * p[i]) + offset).transpose();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) = (scale * (turn * p[i]) + offset).transpose();
   return out;
 }
 
@@ -79,7 +85,7 @@ TEST(KdTreeHalos, PlateAndBallQueriesFromEveryStartAgreeWithTheRootAndBruteForce
   // the spacing to well beyond a leaf's width.
   const std::vector<double> heights = {0.0004, 0.004, 0.012, 0.03, 0.05, 0.08, 0.15, 0.3};
   for (const Case& c : cases) {
-    const Points pts = plate_and_ball(0.04, c.turn, c.scale, c.offset);
+    const Points pts = plate_and_ball(kSpacing, c.turn, c.scale, c.offset);
     for (KdScan scan : scans) {
       for (int leaf_size : {24, 96}) {
         KdTreeParams params;
@@ -94,8 +100,8 @@ TEST(KdTreeHalos, PlateAndBallQueriesFromEveryStartAgreeWithTheRootAndBruteForce
         std::uint32_t walking = 0;
         // Half the queries anywhere over the plate, half just off one of its points (whose nearest is that point, in
         // whichever leaf it lies: often one of a halo's, near the face of its box).
-        std::uniform_int_distribution<Eigen::Index> any_plate_point(0, 2 * (static_cast<Eigen::Index>(2.0 * kHalf / 0.04) + 1) *
-                                                                           (static_cast<Eigen::Index>(2.0 * kHalf / 0.04) + 1) - 1);
+        const Eigen::Index per_face = (face_steps(kSpacing) + 1) * (face_steps(kSpacing) + 1);
+        std::uniform_int_distribution<Eigen::Index> any_plate_point(0, 2 * per_face - 1);
         for (int i = 0; i < 160; ++i) {
           const double h = heights[static_cast<std::size_t>(i) % heights.size()];
           Vec3 local;
