@@ -213,11 +213,11 @@ double ZeroSet::move_rows(const CollisionScene& scene, const IndexList& moved) {
 }
 
 IndexList ZeroSet::rows_near_zero(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole,
-                                  int k, int threads) const {
+                                  int k, int threads, KnnResult* nearest) const {
   const Eigen::Index n = static_cast<Eigen::Index>(deformable.size());
   Points queries(n, 3);
   for (Eigen::Index q = 0; q < n; ++q) queries.row(q) = scene.positions.row(deformable[static_cast<std::size_t>(q)]);
-  const KnnResult zero = tree->knn(queries, 1, threads);
+  KnnResult zero = tree->knn(queries, 1, threads);
   // The two trees round their distances in their own local frames (centred, maybe turned): each squared distance is
   // off by a few ulps of the model's extent. A point counts as closer than the nearest zero surfel only below its
   // distance less a margin well above that (and less the share an approximate zero tree may overshoot by).
@@ -236,12 +236,17 @@ IndexList ZeroSet::rows_near_zero(const CollisionScene& scene, const IndexList& 
   IndexList out;
   for (Eigen::Index q = 0; q < n; ++q)
     if (keep[static_cast<std::size_t>(q)]) out.push_back(deformable[static_cast<std::size_t>(q)]);
+  if (nearest) *nearest = std::move(zero);
   return out;
 }
 
-void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads) {
+void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads,
+                            KnnResult* nearest) {
   std::fill(marked.begin(), marked.end(), 0);
-  if (deformable.empty()) return;
+  if (deformable.empty()) {
+    if (nearest) *nearest = KnnResult();
+    return;
+  }
   // Row -> index into the zero copies (-1 for deformable rows).
   IndexList zero_of_row(scene.regions.size(), -1);
   for (std::size_t k = 0; k < rows.size(); ++k) zero_of_row[rows[k]] = static_cast<Index>(k);
@@ -251,7 +256,7 @@ void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deform
   // Only a row with a zero surfel among its n + 1 nearest can mark one. A row with n + 1 points strictly closer than
   // its nearest zero surfel has none there, whatever the order of ties, and makes no knn query: most deformable rows
   // lie far from the zero region, where such points are found in a leaf (RESULTS §75).
-  const IndexList near = rows_near_zero(scene, deformable, whole, n + 1, threads);
+  const IndexList near = rows_near_zero(scene, deformable, whole, n + 1, threads, nearest);
   Points queries(static_cast<Eigen::Index>(near.size()), 3);
   for (std::size_t q = 0; q < near.size(); ++q) queries.row(q) = scene.positions.row(near[q]);
   // n + 1 neighbours: the surfel itself comes back too and is skipped.

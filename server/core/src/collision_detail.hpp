@@ -108,11 +108,16 @@ struct ZeroSet {
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
   // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
   // number of nearest-neighbour queries made.
-  void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads);
+  // `nearest` (optional): gets each deformable row's nearest zero surfel, as tree->knn(their positions, 1) answers
+  // (#deformable by 1, indices into the copies), which the marks ask for anyway (a seeded kernel's seed needs it too).
+  void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads,
+                     KnnResult* nearest = nullptr);
   // The rows of `deformable` (ascending) that may have a zero surfel among their k nearest points of `whole` (the
-  // whole model's tree): all but those with k points strictly closer than their nearest zero surfel.
+  // whole model's tree): all but those with k points strictly closer than their nearest zero surfel. `nearest`
+  // (optional) gets those nearest zero surfels (tree->knn(the rows' positions, 1)).
   IndexList rows_near_zero(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole, int k,
-                           int threads) const;
+                           int threads,
+                           KnnResult* nearest = nullptr) const;
   // Rows `moved` (model rows) moved: their copies take `scene`'s values, the tree is rebuilt (a new
   // object), the boundary marks are kept. Returns the largest displacement of a moved surfel (model
   // units), or -1 (nothing changed) when one of them is not in `rows`.

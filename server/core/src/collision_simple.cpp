@@ -11,7 +11,11 @@ void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformab
                           int threads) {
   ZeroSet zero;
   zero.build(scene, zero_rows, params_.knn_eps, zero_cells_);
-  if (params_.boundary) zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads);
+  reset_nearest_ = KnnResult();
+  if (params_.boundary) {
+    zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads,
+                       keep_reset_nearest_ ? &reset_nearest_ : nullptr);
+  }
   zero_ = std::move(zero);
 }
 

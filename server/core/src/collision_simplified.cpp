@@ -41,8 +41,10 @@ class SimplifiedDetector final : public ApproximateDetector {
     const ZeroSet& zero = kernel.zero_set() ? *kernel.zero_set() : own_zero;
     auto nearest = [&](const Vec3& p) { return nearest_zero(zero, p); };
     // Per-row states: spheres start with the distance to the nearest zero surfel.
-    if (Kernel::kSeeded)
-      seed_states(kernel, scene.positions, kr.deformable, threads, *zero.tree, zero.positions, zero.radii, kr.states);
+    if (Kernel::kSeeded) {
+      if (kernel.zero_set()) kernel.seed(scene, kr.deformable, zero_rows, threads, kr.states);  // from that zero set
+      else seed_states(kernel, scene.positions, kr.deformable, threads, *zero.tree, zero.positions, zero.radii, kr.states);
+    }
     // Clusters of the deformable rows and their simplified surfels' states.
     const auto cluster_start = std::chrono::steady_clock::now();
     SimplifyParams sp = simplify_;

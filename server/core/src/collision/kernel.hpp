@@ -197,24 +197,33 @@ class RowStates {
   std::vector<State> dense_;  // one per row with a state, in ascending row order
 };
 
-// The initial states of `rows` (ascending) at their positions (Kernel::init), from each one's nearest point of `tree`
-// (not empty), whose answers index `near_positions` (#N by 3) and `near_radii` (#N). The queries go as one batch
-// (KdTree::knn: along a Morton curve, each warm-started from the previous answer, on `threads`): a seed's points
-// are mostly far from the zero surface, where a cold single search meets many leaves (RESULTS §73). An exact tree
-// answers as its single queries do, whatever the order and the threads.
-template <typename Kernel, typename States>
-void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads, const KdTree& tree,
+// The initial states of `rows` (ascending) at their positions (Kernel::init), from each one's nearest zero surfel:
+// `nearest(queries)` answers the rows' positions (#Q by 3) as KdTree::knn(queries, 1) does, with indices into
+// `near_positions` (#N by 3) and `near_radii` (#N), never -1. One batch (along a Morton curve, each query warm-started
+// from the previous answer, on the caller's threads): a seed's points are mostly far from the zero surface, where a
+// cold single search meets many leaves (RESULTS §73). An exact tree answers as its single queries do, whatever the
+// order and the threads.
+template <typename Kernel, typename Nearest, typename States>
+void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, Nearest&& nearest,
                  const Points& near_positions, const Values& near_radii, States& states) {
   const Index n = static_cast<Index>(rows.size());
   Points queries(n, 3);
   for (Index q = 0; q < n; ++q) queries.row(q) = positions.row(rows[static_cast<std::size_t>(q)]);
-  const KnnResult nearest = tree.knn(queries, 1, threads);
+  const KnnResult found = nearest(static_cast<const Points&>(queries));
   for (Index q = 0; q < n; ++q) {
     const Index r = rows[static_cast<std::size_t>(q)];
     const Vec3 p = row3(positions, r);
-    const Index k = nearest.indices(q, 0);
+    const Index k = found.indices(q, 0);
     states[r] = kernel.init(p, NearestZero{(p - row3(near_positions, k)).squaredNorm(), near_radii[k]});
   }
+}
+// The same from the nearest point of `tree` (not empty, over the zero surfels), on `threads`.
+template <typename Kernel, typename States>
+void seed_states(const Kernel& kernel, const Points& positions, const IndexList& rows, int threads, const KdTree& tree,
+                 const Points& near_positions, const Values& near_radii, States& states) {
+  seed_states(
+      kernel, positions, rows, [&](const Points& queries) { return tree.knn(queries, 1, threads); }, near_positions,
+      near_radii, states);
 }
 
 // The NearestZero of p in `zero`.

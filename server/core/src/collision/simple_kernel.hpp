@@ -35,9 +35,20 @@ class ZeroSetKernel {
     return simple_test(params_, zero_, k, pt.p, pt.radius(), pt.previous(), previous_state, bounded);
   }
 
+  // The deformable rows' nearest zero surfels as zero_.tree->knn(their positions, 1) answers them (#deformable by 1),
+  // kept by reset() from the boundary marks, which ask for them (ZeroSet::mark_boundary), for the seed that follows
+  // (Temporal); moved out by the first call, else (no marks, other rows) that batch made afresh.
+  KnnResult reset_nearest(const Points& queries, int threads) const {
+    KnnResult out = std::move(reset_nearest_);
+    reset_nearest_ = KnnResult();
+    return out.indices.rows() == queries.rows() && out.indices.cols() == 1 ? out : zero_.tree->knn(queries, 1, threads);
+  }
+
   CollisionParams params_;
   ZeroSet zero_;
-  bool zero_cells_ = false;  // build zero_'s tree with cells when exact (ZeroSet::cells; Temporal)
+  bool zero_cells_ = false;          // build zero_'s tree with cells when exact (ZeroSet::cells; Temporal)
+  bool keep_reset_nearest_ = false;  // reset() keeps the marks' nearest zero surfels for the seed (Temporal)
+  mutable KnnResult reset_nearest_;  // what reset_nearest() hands out once: empty after it, or without marks
 };
 
 class SimpleKernel : public ZeroSetKernel {

@@ -34,7 +34,10 @@ class TemporalKernel : public ZeroSetKernel {
 
   // The zero tree keeps cells when the queries are exact (knn_eps == 0): each point's query starts at its last
   // winner's leaf (State::leaf; 28 B per tree node, RESULTS §63).
-  explicit TemporalKernel(const CollisionParams& params) : ZeroSetKernel(params) { zero_cells_ = true; }
+  explicit TemporalKernel(const CollisionParams& params) : ZeroSetKernel(params) {
+    zero_cells_ = true;
+    keep_reset_nearest_ = true;
+  }
 
   void reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int threads) {
     ZeroSetKernel::reset(scene, deformable, zero_rows, threads);
@@ -51,7 +54,9 @@ class TemporalKernel : public ZeroSetKernel {
 
   void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList&, int threads,
             RowStates<State>& states) const {
-    seed_states(*this, scene.positions, deformable, threads, *zero_.tree, zero_.positions, zero_.radii, states);
+    seed_states(
+        *this, scene.positions, deformable, [&](const Points& queries) { return reset_nearest(queries, threads); },
+        zero_.positions, zero_.radii, states);
   }
   State init(const Vec3& p, const NearestZero& z) const {
     State s;
