@@ -127,17 +127,26 @@ struct ParallelSweep {
                                               Index& m_sum, Update update) {
     typename Journal<typename Kernel::State>::Image before;
     if constexpr (kJournal) before = Journal<typename Kernel::State>::Image::of(s);
-    const Index made = kCandidate && !candidate[r] ? kernel.not_candidate(s, pt) : update();
+    const Index made = row_update<kCandidate>(kernel, q, r, s, pt, candidate, hit, t, m_sum, update);
     if constexpr (kJournal) journal->note(r, before, s, made, part);
+  }
+  // row_step() without the journal's note; returns the queries made.
+  template <bool kCandidate, typename Kernel, typename Update>
+  [[gnu::always_inline]] static Index row_update(const Kernel& kernel, Index q, Index r, typename Kernel::State& s,
+                                                 const TestPoint& pt, const std::uint8_t* candidate, std::uint8_t* hit,
+                                                 Index& t, Index& m_sum, Update update) {
+    const Index made = kCandidate && !candidate[r] ? kernel.not_candidate(s, pt) : update();
     hit[q] = s.colliding();
     m_sum += made;
     t += made > 0;
+    return made;
   }
 
   // rows_range() for a kernel with probes (kernel.hpp), kProbeBlock rows at a time: first the searches of the
-  // block's rows that will be tested (the kernel asks for the cache lines of what they found), then every row's
-  // update in order with what its searches found, so a row's reads do not wait on memory right after its
-  // search. States are written in the second pass only, so the journal sees each row as rows_range() does.
+  // block's rows that will be tested (the kernel asks for the cache lines of what they found), the other rows updated
+  // there and then, while their states are in cache; then the tested rows' updates in order with what their searches
+  // found, so a row's reads do not wait on memory right after its search. The journal's notes are taken in the
+  // second pass, in row order as rows_range() takes them (each row's state as it was before the first pass).
   static constexpr Index kProbeBlock = 32;
   static constexpr Index kAhead = 24;  // rows: the state read that far ahead is asked for
   template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
@@ -146,6 +155,7 @@ struct ParallelSweep {
                            const std::vector<std::uint8_t>* candidate, std::vector<std::uint8_t>& hit,
                            Journal<typename Kernel::State>* journal, std::size_t part, Index begin, Index end,
                            Index& tested, Index& queries) {
+    using Image = typename Journal<typename Kernel::State>::Image;
     typename Kernel::State* const stored = states.stored_data();
     const StepRows at(scene, previous);
     const Index* const row = rows.data();
@@ -153,22 +163,33 @@ struct ParallelSweep {
     std::uint8_t* const hits = hit.data();
     typename Kernel::Probe found[kProbeBlock];
     bool probed[kProbeBlock];
+    Index made[kJournal ? kProbeBlock : 1];   // the untested rows' queries (not_candidate() may make some)
+    Image before[kJournal ? kProbeBlock : 1];
     Index t = 0, m_sum = 0;
     for (Index b = begin; b < end; b += kProbeBlock) {
       const Index e = std::min(end, b + kProbeBlock);
       for (Index q = b; q < e; ++q) {
-        const Index r = row[q];
-        const auto& s = kBySlot ? stored[q] : states[r];
+        const Index r = row[q], k = q - b;
+        auto& s = kBySlot ? stored[q] : states[r];
         if constexpr (kBySlot) __builtin_prefetch(stored + std::min(q + kAhead, end - 1));
-        probed[q - b] = !(kCandidate && !cand[r]) && kernel.probe(s, at(r), found[q - b]);
+        const TestPoint pt = at(r);
+        if constexpr (kJournal) before[k] = Image::of(s);
+        probed[k] = !(kCandidate && !cand[r]) && kernel.probe(s, pt, found[k]);
+        if (probed[k]) continue;
+        const Index m = row_update<kCandidate>(kernel, q, r, s, pt, cand, hits, t, m_sum,
+                                               [&] { return kernel.update(s, pt, nullptr); });
+        if constexpr (kJournal) made[k] = m;
       }
       for (Index q = b; q < e; ++q) {
-        const Index r = row[q];
-        const TestPoint pt = at(r);
+        const Index r = row[q], k = q - b;
         auto& s = kBySlot ? stored[q] : states[r];
-        const auto* f = probed[q - b] ? &found[q - b] : nullptr;
-        row_step<kJournal, kCandidate>(kernel, q, r, s, pt, cand, hits, journal, part, t, m_sum,
-                                       [&] { return kernel.update(s, pt, f); });
+        if (probed[k]) {
+          const TestPoint pt = at(r);
+          const Index m = row_update<false>(kernel, q, r, s, pt, cand, hits, t, m_sum,
+                                            [&] { return kernel.update(s, pt, &found[k]); });
+          if constexpr (kJournal) made[k] = m;
+        }
+        if constexpr (kJournal) journal->note(r, before[k], s, made[k], part);
       }
     }
     tested += t;
