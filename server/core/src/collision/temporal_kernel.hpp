@@ -66,10 +66,7 @@ class TemporalKernel : public ZeroSetKernel {
   double depth(const State& s, const Vec3&) const { return s.depth; }
   Index update(State& s, const TestPoint& pt) const {
     const double moved2 = (pt.p - s.sphere.center).squaredNorm();
-    if (moved2 < s.sphere.rho2) {
-      if (s.colliding()) s.depth = std::max(0.0, std::sqrt(s.sphere.rho2) - std::sqrt(moved2));
-      return 0;
-    }
+    if (moved2 < s.sphere.rho2) return stay(s, moved2);
     if (inside_) return update_inside(s, pt);
     return retest(s, pt, zero_.nearest_from(pt.p, s.leaf));
   }
@@ -92,9 +89,9 @@ class TemporalKernel : public ZeroSetKernel {
     __builtin_prefetch(zero_.radii.data() + k);
     return true;
   }
-  // update() with what probe() found (null when it returned false).
-  Index update(State& s, const TestPoint& pt, const Probe* found) const {
-    if (!found) return update(s, pt);
+  // update() with what probe() found (null when it returned false: the point is inside its sphere).
+  [[gnu::always_inline]] Index update(State& s, const TestPoint& pt, const Probe* found) const {
+    if (!found) return stay(s, (pt.p - s.sphere.center).squaredNorm());
     s.leaf = found->leaf;
     return retest(s, pt, found->near);
   }
@@ -121,6 +118,12 @@ class TemporalKernel : public ZeroSetKernel {
   }
 
  private:
+  // A point strictly inside its sphere (at squared distance moved2 from its centre): its state stands, a colliding
+  // one's depth estimate follows it.
+  [[gnu::always_inline]] Index stay(State& s, double moved2) const {
+    if (s.colliding()) s.depth = std::max(0.0, std::sqrt(s.sphere.rho2) - std::sqrt(moved2));
+    return 0;
+  }
   // The thesis's test of a point that left its sphere against zero surfel k, its nearest.
   Index retest(State& s, const TestPoint& pt, Index k) const {
     const SimpleTest t = test(k, pt, s.colliding(), !s.unbounded);
