@@ -116,8 +116,7 @@ struct ZeroSet {
   // whole model's tree): all but those with k points strictly closer than their nearest zero surfel. `nearest`
   // (optional) gets those nearest zero surfels (tree->knn(the rows' positions, 1)).
   IndexList rows_near_zero(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole, int k,
-                           int threads,
-                           KnnResult* nearest = nullptr) const;
+                           int threads, KnnResult* nearest = nullptr) const;
   // Rows `moved` (model rows) moved: their copies take `scene`'s values, the tree is rebuilt (a new
   // object), the boundary marks are kept. Returns the largest displacement of a moved surfel (model
   // units), or -1 (nothing changed) when one of them is not in `rows`.
