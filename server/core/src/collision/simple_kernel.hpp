@@ -57,21 +57,25 @@ class SimpleKernel : public ZeroSetKernel {
     double depth = 0.0;     // |d| at the last test (model units)
     std::uint8_t hit = 0;   // colliding
     std::uint8_t unbounded = 0;  // 1: its next test ignores the step bound (the zero region moved near it)
-    std::uint8_t pad[6] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint8_t pad[2] = {};    // no padding bytes: the undo journal compares states bytewise (Journal::note)
+    std::uint32_t leaf = 0;      // the zero tree's leaf that held the last nearest: where the next query starts
+                                 // (KdTree::nearest_from; exact queries only; a stale one costs time, not exactness)
     bool colliding() const { return hit != 0; }
   };
   static_assert(sizeof(State) == 16, "State has padding bytes");
   static constexpr bool kSeeded = false;  // nothing to measure at reset
   static constexpr int kChunk = 256;
 
-  using ZeroSetKernel::ZeroSetKernel;
+  // Every point queries every step, from its last winner's leaf when the queries are exact (the zero tree then keeps
+  // cells, as Temporal's).
+  explicit SimpleKernel(const CollisionParams& params) : ZeroSetKernel(params) { zero_cells_ = true; }
 
   void seed(const CollisionScene&, const IndexList&, const IndexList&, int, RowStates<State>&) const {}
   State init(const Vec3&, const NearestZero&) const { return {}; }
   double depth(const State& s, const Vec3&) const { return s.depth; }
   // One §4.1 test of s; returns it (Improved's sweep needs |d|^2).
   SimpleTest test(State& s, const TestPoint& pt) const {
-    const SimpleTest t = ZeroSetKernel::test(zero_.nearest(pt.p), pt, s.colliding(), !s.unbounded);
+    const SimpleTest t = ZeroSetKernel::test(zero_.nearest_from(pt.p, s.leaf), pt, s.colliding(), !s.unbounded);
     s.unbounded = 0;
     s.hit = t.state;
     s.depth = std::sqrt(t.dist2);
