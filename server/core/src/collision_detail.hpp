@@ -71,8 +71,8 @@ inline KdTreeParams nearest_tree_params(double eps) {
 }
 
 // Leaves of the k-d trees the detectors ask for each point's one nearest surfel, exactly, from a leaf
-// (KdTree::nearest_from: Temporal's zero tree, Robust's original model). Measured on the piercing scene upright and
-// tilted (bench_robust_step's BM_DetectRun and BM_DetectRunTilted): before the trees were turned (RESULTS §73, against
+// (KdTree::nearest_from: Simple's and Temporal's zero trees, Robust's original model). Measured on the piercing scene
+// upright and tilted (bench_robust_step's BM_DetectRun and BM_DetectRunTilted): before the trees were turned (RESULTS §73, against
 // 48) 128 points 0.97-1.02x upright and 1.16-1.47x tilted, where a far point's search met many loose axis-aligned
 // leaf boxes; with the turned frame (§74) the tilted scene searches as the upright one, and 96 is 1.02-1.04x faster
 // than 128 upright and 1.02-1.10x tilted, 64 0.96-1.04x. (Earlier, upright only: 48 1.23x the default 10, §63; with
@@ -92,7 +92,7 @@ struct ZeroSet {
   IndexList rows;                    // #Z: row in the model
   std::shared_ptr<const KdTree> tree;  // over `positions`; immutable once built, shared by copies
   double knn_eps = 0.0;              // approximate search of `tree` (CollisionParams::knn_eps)
-  bool cells = false;                // `tree` keeps cells (KdTree::nearest_from) when knn_eps == 0 (Temporal)
+  bool cells = false;                // `tree` keeps cells (KdTree::nearest_from) when knn_eps == 0 (Simple, Temporal)
 
   // Copies the zero rows of `scene` and builds the tree (approximate search `eps`; with cells when
   // `with_cells` and eps == 0). Throws InvalidArgument when there are none.

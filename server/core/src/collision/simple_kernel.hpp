@@ -46,7 +46,7 @@ class ZeroSetKernel {
 
   CollisionParams params_;
   ZeroSet zero_;
-  bool zero_cells_ = false;          // build zero_'s tree with cells when exact (ZeroSet::cells; Temporal)
+  bool zero_cells_ = false;          // build zero_'s tree with cells when exact (ZeroSet::cells; Simple, Temporal)
   bool keep_reset_nearest_ = false;  // reset() keeps the marks' nearest zero surfels for the seed (Temporal)
   mutable KnnResult reset_nearest_;  // what reset_nearest() hands out once: empty after it, or without marks
 };
