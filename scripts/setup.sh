@@ -84,7 +84,7 @@ if [ ! -f "$BUILD/CMakeCache.txt" ]; then
     || { tail -n 40 "$BUILD/setup-configure.log"; exit 1; }
 fi
 log "building ($JOBS jobs)"
-cmake --build "$BUILD" -j "$JOBS" >"$BUILD/setup-build.log" 2>&1 || { grep -E "error|Error" "$BUILD/setup-build.log" | head -n 40; exit 1; }
+cmake --build "$BUILD" -j "$JOBS" >"$BUILD/setup-build.log" 2>&1 || { "$ROOT/scripts/build_failed.sh" "$BUILD/setup-build.log" "$BUILD"; exit 1; }
 
 # The client finds the server on PATH inside the venv.
 ln -sf "$BUILD/server/app/surfeledit-server" "$VENV/bin/surfeledit-server"

@@ -24,7 +24,7 @@ sanitizer_build() {
   fi
   # shellcheck disable=SC2086  # the targets are words
   cmake --build "$dir" -j "$(nproc)" --target $targets >"$BUILD/setup-$name-build.log" 2>&1 \
-    || { grep -E "error|Error" "$BUILD/setup-$name-build.log" | head -n 40; exit 1; }
+    || { "$ROOT/scripts/build_failed.sh" "$BUILD/setup-$name-build.log" "$dir"; exit 1; }
 }
 
 echo "== ThreadSanitizer: background hierarchy rebuilds while steps run"
