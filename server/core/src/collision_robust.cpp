@@ -146,7 +146,8 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   for (Index r : hit) {
     State& s = states[r];
     if (!(s.flags & kFirstUpdate)) continue;
-    const Index o = orig_.tree->nearest(s.old_position);
+    const Vec3 p0 = old(s, scene.positions.data() + 3 * static_cast<std::ptrdiff_t>(r));  // its position now, or held
+    const Index o = orig_.tree->nearest(p0);
     Ref k = ref(o);
     if (k.zero) {  // a moved row: where it was
       const auto it = std::lower_bound(rows.begin(), rows.end(), row_of(o));
@@ -157,7 +158,7 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
       }
     }
     s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
-    set_inside(s, (s.old_position - k.p).dot(k.n) < params_.threshold);
+    set_inside(s, (p0 - k.p).dot(k.n) < params_.threshold);
   }
   // A new tree over the rigid part where it is now (clones in history images share the old one, and read
   // the model as it was when they are brought back with it).

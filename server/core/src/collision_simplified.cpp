@@ -151,7 +151,7 @@ class SimplifiedDetector final : public ApproximateDetector {
           n.tested += made > 0;
         }
       } else {
-        for (Index r : m) kernel.skip(state[r]);
+        for (Index r : m) kernel.skip(state[r], row_point(scene, previous, r));
       }
     };
     Counts total;

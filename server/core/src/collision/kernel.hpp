@@ -33,7 +33,7 @@
 //     // the queries made.
 //     Index not_candidate(State& s, const TestPoint& pt) const;
 //     // A point not tested this step because its cluster is inactive (it keeps "not colliding").
-//     void skip(State& s) const;
+//     void skip(State& s, const TestPoint& pt) const;
 //     // The state of a child split from `parent`, the child at p (§4.4, thesis §6.5); then the
 //     // parent's own state once it sits at p. Called through split_states() (children first).
 //     State child(const State& parent, const Vec3& p) const;

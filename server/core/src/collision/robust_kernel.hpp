@@ -25,14 +25,21 @@ class RobustKernel {
  public:
   static constexpr std::uint8_t kInside = 1;       // inside the original model at the last test
   static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
-  static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at old_position
+  static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at the old position
   static constexpr std::uint8_t kCrossed = 8;      // swept: the last step passed through the solid
+  static constexpr std::uint8_t kOldHeld = 16;     // old_position holds the point's old position (see State)
 
-  // One cache line per point: the row sweep touches every state every step.
+  // One cache line per point: the row sweep reads every state every step, and writes only those of the points it
+  // tests (or that start or stop colliding), so that the undo journal notes only them.
   struct alignas(64) State {
     Sphere sphere;                     // holds no original surfel
-    Vec3 old_position = Vec3::Zero();  // last position at which the point did not collide
-    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed
+    // The point's old position -- the last position at which it did not collide -- when kOldHeld is set. Without
+    // kOldHeld it is implicit: the point's position at its last update, which is where the next step's detection
+    // finds it before the step (TestPoint::previous(); between steps, its position now; after reset, where it was
+    // then). It is held from the update at which the point starts to collide (until it stops) and from a skip()
+    // (until its next update); a stale value is left in place otherwise (old()).
+    Vec3 old_position = Vec3::Zero();
+    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed | kOldHeld
     std::uint8_t pad[3] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
     std::uint32_t leaf = 0;            // the original tree's leaf that held the last nearest: where the next test's
                                        // search starts (KdTree::nearest_from; a stale one costs time, not exactness)
@@ -53,8 +60,7 @@ class RobustKernel {
   State init(const Vec3& p, const NearestZero& z) const {
     State s;
     s.sphere = {p, sphere_rho2(z.dist2, z.radius, params_.sphere_margin)};
-    s.old_position = p;
-    s.flags = kFirstUpdate;
+    s.flags = kFirstUpdate;  // its old position: p, where the next step finds it before moving it
     return s;
   }
   // rho - |p - c| (Eq. 6.4), p being where the point was at its update this step.
@@ -64,20 +70,20 @@ class RobustKernel {
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
     if (leaves(s, pt)) made = test(s, pt.p, pt.previous());
-    finish(s, pt.p);
+    finish(s, pt);
     return made;
   }
   // Probes (kernel.hpp): the original model's searches of a test, found for a block of rows before their updates.
   struct Probe {
     Index near = -1;         // original row nearest to the point
-    Index near_old = -1;     // original row nearest to old_position, when its inside state is re-derived; else -1
+    Index near_old = -1;     // original row nearest to the old position, when its inside state is re-derived; else -1
     std::uint32_t leaf = 0;  // the leaf holding `near` (State::leaf's next value)
   };
   bool probing() const { return !with_inside(); }
   // update()'s searches when the point left its sphere (true; the rows they found are being fetched), else false.
   [[gnu::always_inline]] bool probe(const State& s, const TestPoint& pt, Probe& found) const {
     if (!leaves(s, pt)) return false;
-    found = search(s, pt.p);
+    found = search(s, pt);
     prefetch_ref(found.near);
     if (found.near_old >= 0) prefetch_ref(found.near_old);
     return true;
@@ -88,9 +94,9 @@ class RobustKernel {
     if (found) {
       s.flags &= static_cast<std::uint8_t>(~kCrossed);
       double r_near;
-      made = classify(s, pt.p, *found, r_near);
+      made = classify(s, pt.p, old(s, pt.prev), *found, r_near);
     }
-    finish(s, pt.p);
+    finish(s, pt);
     return made;
   }
   // Whether the point at pt left its sphere (is tested this step).
@@ -107,13 +113,17 @@ class RobustKernel {
       s.flags |= kFirstUpdate;
       s.sphere = {pt.p, 0.0};
     }
-    finish(s, pt.p);
+    finish(s, pt);
     return 0;
   }
-  // Its inside state may go stale while it is not tested, so its next test re-derives it from
-  // old_position (the last position at which it was found not colliding), as after a reset: the
-  // parity then compares that position with the new one, across the untested steps.
-  void skip(State& s) const { s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed); }
+  // Its inside state may go stale while it is not tested, so its next test re-derives it from its old
+  // position (the last position at which it was found not colliding), as after a reset: the parity then
+  // compares that position with the new one, across the untested steps. The old position is held from
+  // now on (the point's position before this step; it does not move with the steps it skips).
+  void skip(State& s, const TestPoint& pt) const {
+    hold_old(s, pt.prev);
+    s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed);
+  }
   // Child: the parent's state (inside, colliding, first update, old position) and the sphere rule.
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
@@ -211,7 +221,9 @@ class RobustKernel {
   [[gnu::noinline]] Index test(State& s, const Vec3& p1, const Vec3& p0) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
     double r_near = 0.0;  // radius of the reference surfel nearest to p1
-    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, r_near) : test_zero(s, p1, r_near);
+    const double* prev = p0.data();
+    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, prev, r_near)
+                                                       : test_zero(s, p1, prev, r_near);
     if (params_.swept && !s.colliding()) {
       if (InsideModel::may_cross(p1 - p0, r_near) && inside_->crossed(p0, p1, made)) {
         s.flags |= kCrossed;
@@ -221,12 +233,13 @@ class RobustKernel {
     return made;
   }
   // The inside state against the rigid solid (InsideModel); every change counts.
-  Index test_zero(State& s, const Vec3& p1, double& r_near) const {
+  // `prev`: the point's position before the step (3 doubles).
+  Index test_zero(State& s, const Vec3& p1, const double* prev, double& r_near) const {
     Index made = 0;
     if (s.flags & kFirstUpdate) {
       s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
       ++made;
-      set_inside(s, inside_->probe(s.old_position).inside);
+      set_inside(s, inside_->probe(old(s, prev)).inside);
     }
     const InsideModel::Probe pr = inside_->probe(p1);
     ++made;
@@ -238,26 +251,32 @@ class RobustKernel {
   }
   // The thesis's test against the original model (Code 6.8): its searches (search()), then what they found
   // (classify()).
-  Index test_original(State& s, const Vec3& p1, double& r_near) const {
-    return classify(s, p1, search(s, p1), r_near);
+  Index test_original(State& s, const Vec3& p1, const double* prev, double& r_near) const {
+    const Vec3 p0 = old(s, prev);
+    return classify(s, p1, p0, search(s, p1, p0), r_near);
   }
   // The searches of a test at p1: the original surfel nearest to p1, from the state's leaf, and the one nearest
-  // to old_position when a forgotten inside state (kFirstUpdate) is to be re-derived there. That is only when
+  // to the old position p0 when a forgotten inside state (kFirstUpdate) is to be re-derived there. That is only when
   // the nearest to p1 is a zero surfel: against a deformable one no change counts, and the state is overwritten
   // by p1's, so that query cannot change the result (an exact skip: RESULTS §50). It starts from the leaf of p1's
-  // winner (old_position is the last step's position, one step from p1; 1.02x over the near-path leaf, RESULTS §75).
-  Probe search(const State& s, const Vec3& p1) const {
+  // winner (the old position is mostly the last step's position, one step from p1; 1.02x over the near-path
+  // leaf, RESULTS §75).
+  Probe search(const State& s, const Vec3& p1, const Vec3& p0) const {
     Probe f;
     f.leaf = s.leaf;
     f.near = orig_.tree->nearest_from(p1, f.leaf);
     if (!orig_.deformable.test(f.near) && (s.flags & kFirstUpdate) != 0) {
       std::uint32_t start = f.leaf;
-      f.near_old = orig_.tree->nearest_from(s.old_position, start);
+      f.near_old = orig_.tree->nearest_from(p0, start);
     }
     return f;
   }
-  // The state after a test at p1 whose searches found `f`.
-  Index classify(State& s, const Vec3& p1, const Probe& f, double& r_near) const {
+  Probe search(const State& s, const TestPoint& pt) const {
+    // The old position is read only for a re-derivation (old() is cheap, and its value unused otherwise).
+    return search(s, pt.p, old(s, pt.prev));
+  }
+  // The state after a test at p1 (old position p0) whose searches found `f`.
+  Index classify(State& s, const Vec3& p1, const Vec3& p0, const Probe& f, double& r_near) const {
     const double w = params_.threshold;
     s.leaf = f.leaf;
     const Ref k = ref(f.near);
@@ -269,7 +288,7 @@ class RobustKernel {
     if (f.near_old >= 0) {
       ++made;
       const Ref k0 = ref(f.near_old);
-      set_inside(s, (s.old_position - k0.p).dot(k0.n) < w);
+      set_inside(s, (p0 - k0.p).dot(k0.n) < w);
     }
     // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero).
     const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
@@ -278,11 +297,28 @@ class RobustKernel {
     set_inside(s, inside_now);
     return made;
   }
-  // End of every step: the position of a point that does not collide is the last non-colliding one.
   // The inside model over the alive zero surfels, when `inside` or `swept` needs it.
   void build_inside();
-  static void finish(State& s, const Vec3& p1) {
-    if (!(s.flags & kColliding)) s.old_position = p1;
+  // The old position of a point whose position before this step is `prev` (3 doubles; between steps: its position
+  // now).
+  [[gnu::always_inline]] static Vec3 old(const State& s, const double* prev) {
+    return (s.flags & kOldHeld) ? s.old_position : Vec3(prev[0], prev[1], prev[2]);
+  }
+  // Holds the old position from now on (the implicit one, `prev` as in old()).
+  static void hold_old(State& s, const double* prev) {
+    if (s.flags & kOldHeld) return;
+    s.old_position = Vec3(prev[0], prev[1], prev[2]);
+    s.flags |= kOldHeld;
+  }
+  // End of every update: the position of a point that does not collide is the last non-colliding one (implicit from
+  // now on: the next step finds the point there before it); one that collides keeps its old position (held from now
+  // on). A point that neither starts nor stops colliding keeps its state's bytes.
+  [[gnu::always_inline]] static void finish(State& s, const TestPoint& pt) {
+    if (s.flags & kColliding) {
+      hold_old(s, pt.prev);
+    } else if (s.flags & kOldHeld) {
+      s.flags &= static_cast<std::uint8_t>(~kOldHeld);
+    }
   }
   static void set_inside(State& s, bool in) {
     s.flags = in ? (s.flags | kInside) : (s.flags & static_cast<std::uint8_t>(~kInside));

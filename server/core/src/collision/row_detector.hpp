@@ -148,7 +148,7 @@ class RowDetector final : public NarrowDetector {
   }
 
   // The journal (independent points only: an order-dependent sweep saves images before the step). When
-  // most rows changed at the last journal (e.g. Robust moves every point's last free position), copying
+  // most rows changed at the last journal (e.g. a step that tested most rows), copying
   // them twice costs more than one image before the step: the next steps only note the tested rows.
   bool start_journal() override {
     if constexpr (!std::is_same_v<Sweep, ParallelSweep>) {

@@ -87,7 +87,7 @@ class SimpleKernel : public ZeroSetKernel {
   }
   // No zero surfel within the point's step: the step bound keeps its state and depth.
   Index not_candidate(State&, const TestPoint&) const { return 0; }
-  void skip(State&) const {}
+  void skip(State&, const TestPoint&) const {}
   State child(const State& parent, const Vec3&) const { return parent; }
   void keep_parent(State&, const Vec3&) const {}
   // Every point queries its nearest zero surfel every step: the zero copies are all there is to update.

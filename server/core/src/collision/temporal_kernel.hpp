@@ -98,7 +98,7 @@ class TemporalKernel : public ZeroSetKernel {
   // A point that leaves its sphere needs its nearest zero distance for its next sphere whether or not
   // the broad phase ruled it out (the step bound then keeps its state): Temporal ignores candidates.
   Index not_candidate(State& s, const TestPoint& pt) const { return update(s, pt); }
-  void skip(State&) const {}
+  void skip(State&, const TestPoint&) const {}
   State child(const State& parent, const Vec3& p) const { return split_child(parent, p); }
   void keep_parent(State& parent, const Vec3& p) const { parent.sphere.keep_if_contains(p); }
   // The zero copies, then the points a moved surface may have crossed or whose sphere holds a moved
