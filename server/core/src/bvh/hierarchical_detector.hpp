@@ -72,6 +72,14 @@ class HierarchicalDetector final : public CollisionDetector {
   void restore_image(const DetectorImage& image) override;
   // A deep copy (trees included); a background rebuild under way is not copied.
   std::unique_ptr<CollisionDetector> clone() const override;
+  // The journal: the narrow phase's (the states its sweeps change), beside the rest of an image -- the
+  // deformable tree, the reach, the counters, which change every step -- taken when it starts. None with the
+  // extended narrow phase, nor when the narrow phase keeps no states this time (save_image() then).
+  bool start_journal() override;
+  std::shared_ptr<const DetectorImage> journal_image() const override;
+  void restore_journal() override;
+  bool journal_tested(std::vector<std::uint8_t>& flags) const override;
+  void stop_journal() override;
 
  private:
   // What detect() changes (save_image / restore_image); trees and the extended state are copies.
@@ -89,6 +97,12 @@ class HierarchicalDetector final : public CollisionDetector {
              (extended ? extended->colliding().capacity() * (1 + 2 * sizeof(std::int64_t)) : 0);
     }
   };
+
+  // An image without the narrow phase's part (`narrow`, `extended` null); whether an image's part fits this
+  // detector's rows; that part put back (once it fits).
+  std::shared_ptr<Image> image_but_narrow() const;
+  bool fits(const Image& image) const;
+  void restore_but_narrow(const Image& image);
 
   // Surfel/tree: marks the candidates among the deformable rows, each ball (p, r + reach) tested against
   // zero_bounds_ and then down the zero tree; only the rows in filter_'s leaves that reach zero_hull_.
@@ -127,6 +141,7 @@ class HierarchicalDetector final : public CollisionDetector {
   double def_build_ms_ = 0.0;                       // build of the deformable tree
   double last_rebuild_ms_ = 0.0;                    // the last finished background rebuild
   Index rebuilds_adopted_ = 0;                      // background rebuilds swapped in since the reset
+  std::shared_ptr<const Image> journal_;            // while a journal keeps states: image_but_narrow() at its start
 };
 
 }  // namespace surfeledit::detail

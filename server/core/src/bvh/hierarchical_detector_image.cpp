@@ -3,14 +3,8 @@
 
 namespace surfeledit::detail {
 
-std::shared_ptr<const DetectorImage> HierarchicalDetector::save_image(const IndexList*) const {
+std::shared_ptr<HierarchicalDetector::Image> HierarchicalDetector::image_but_narrow() const {
   auto image = std::make_shared<Image>();
-  if (extended_) {
-    image->extended = std::make_shared<const bvh::ExtendedNarrow>(*extended_);
-  } else {
-    image->narrow = narrow_->save_image(nullptr);
-    if (!image->narrow) return nullptr;
-  }
   if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
   if (bounded_) {
     image->reach = prev_radius_;  // the radii the next step's shift compares with
@@ -26,23 +20,72 @@ std::shared_ptr<const DetectorImage> HierarchicalDetector::save_image(const Inde
   return image;
 }
 
+std::shared_ptr<const DetectorImage> HierarchicalDetector::save_image(const IndexList*) const {
+  auto image = image_but_narrow();
+  if (extended_) {
+    image->extended = std::make_shared<const bvh::ExtendedNarrow>(*extended_);
+  } else {
+    image->narrow = narrow_->save_image(nullptr);
+    if (!image->narrow) return nullptr;
+  }
+  return image;
+}
+
 void HierarchicalDetector::restore_image(const DetectorImage& image) {
   const auto* mine = dynamic_cast<const Image*>(&image);
-  if (!mine || mine->rows != rows_ || mine->reach.size() != deformable_.size() || !mine->extended != !extended_ ||
-      !mine->def != !def_) {
+  if (!mine || !mine->extended != !extended_ || !fits(*mine)) {
     throw Error(ErrorCode::Internal, "history", "detector image does not fit this hierarchical detector");
   }
   if (extended_) *extended_ = *mine->extended;
-  else narrow_->restore_image(*mine->narrow);
-  if (def_) *def_ = *mine->def;
+  else narrow_->restore_image(*mine->narrow);  // checks its own part before it changes anything
+  restore_but_narrow(*mine);
+}
+
+bool HierarchicalDetector::fits(const Image& image) const {
+  return image.rows == rows_ && image.reach.size() == deformable_.size() && !image.def == !def_;
+}
+
+void HierarchicalDetector::restore_but_narrow(const Image& image) {
+  if (def_) *def_ = *image.def;
   // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
   if (filter_) filter_->refit_all_next_step();
-  if (bounded_) prev_radius_ = mine->reach;
-  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = mine->reach[q];
-  step_ = mine->step;
-  evaluations_ = mine->evaluations;
-  inserted_nu_ = mine->inserted_nu;
-  rebuilds_adopted_ = mine->rebuilds_adopted;
+  if (bounded_) prev_radius_ = image.reach;
+  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = image.reach[q];
+  step_ = image.step;
+  evaluations_ = image.evaluations;
+  inserted_nu_ = image.inserted_nu;
+  rebuilds_adopted_ = image.rebuilds_adopted;
+}
+
+bool HierarchicalDetector::start_journal() {
+  journal_.reset();
+  if (extended_ || !narrow_->start_journal()) return false;
+  journal_ = image_but_narrow();
+  return true;
+}
+
+std::shared_ptr<const DetectorImage> HierarchicalDetector::journal_image() const {
+  if (!journal_) return nullptr;
+  auto narrow = narrow_->journal_image();
+  if (!narrow) return nullptr;
+  auto image = std::make_shared<Image>(*journal_);
+  image->narrow = std::move(narrow);
+  return image;
+}
+
+void HierarchicalDetector::restore_journal() {
+  if (!journal_ || !fits(*journal_)) throw Error(ErrorCode::Internal, "history", "no journal to restore");
+  narrow_->restore_journal();
+  restore_but_narrow(*journal_);
+}
+
+bool HierarchicalDetector::journal_tested(std::vector<std::uint8_t>& flags) const {
+  return !extended_ && narrow_->journal_tested(flags);
+}
+
+void HierarchicalDetector::stop_journal() {
+  if (!extended_) narrow_->stop_journal();
+  journal_.reset();
 }
 
 std::unique_ptr<CollisionDetector> HierarchicalDetector::clone() const {
