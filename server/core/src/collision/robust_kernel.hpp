@@ -106,12 +106,14 @@ class RobustKernel {
   // Not a candidate: it keeps its collision state. If it left its sphere and does not collide, its
   // inside state is forgotten (re-derived at its previous position when it is tested next) and its
   // sphere emptied, so that it is tested as soon as it is a candidate again; a colliding one keeps
-  // everything (it is still inside, farther than its step from the zero surface).
+  // everything (it is still inside, farther than its step from the zero surface). An empty sphere stays where
+  // it is: no point is inside it wherever its centre (Sphere::contains), and its state's bytes then do not
+  // change from step to step while the point is not a candidate.
   Index not_candidate(State& s, const TestPoint& pt) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
     if (leaves(s, pt) && !(s.flags & kColliding)) {
       s.flags |= kFirstUpdate;
-      s.sphere = {pt.p, 0.0};
+      if (s.sphere.rho2 != 0.0) s.sphere = {pt.p, 0.0};
     }
     finish(s, pt);
     return 0;
