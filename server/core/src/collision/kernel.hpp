@@ -67,6 +67,10 @@
 //     bool probe(const State& s, const TestPoint& pt, Probe& found) const;
 //     // update(s, pt) with what probe() found (nullptr: probe() returned false).
 //     Index update(State& s, const TestPoint& pt, const Probe* found) const;
+//     // Whether update(s, pt, nullptr) / not_candidate(s, pt) leave s's bytes as they are (the journal then takes
+//     // no before-image; false is always safe).
+//     bool keeps(const State& s) const;
+//     bool keeps_not_candidate(const State& s, const TestPoint& pt) const;
 //   };
 //
 // What a tested point asks about inside/outside beyond the thesis's nearest-surfel test (`inside` =

@@ -146,7 +146,8 @@ struct ParallelSweep {
   // block's rows that will be tested (the kernel asks for the cache lines of what they found), the other rows updated
   // there and then, while their states are in cache; then the tested rows' updates in order with what their searches
   // found, so a row's reads do not wait on memory right after its search. The journal's notes are taken in the
-  // second pass, in row order as rows_range() takes them (each row's state as it was before the first pass).
+  // second pass, in row order as rows_range() takes them (each row's state as it was before the first pass), of
+  // every row but those whose update the kernel says keeps their state (Kernel::keeps, keeps_not_candidate).
   static constexpr Index kProbeBlock = 32;
   static constexpr Index kAhead = 24;  // rows: the state read that far ahead is asked for
   template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
@@ -165,6 +166,7 @@ struct ParallelSweep {
     bool probed[kProbeBlock];
     Index made[kJournal ? kProbeBlock : 1];   // the untested rows' queries (not_candidate() may make some)
     Image before[kJournal ? kProbeBlock : 1];
+    bool noted[kJournal ? kProbeBlock : 1];   // the row may change: its before-image is taken and noted
     Index t = 0, m_sum = 0;
     for (Index b = begin; b < end; b += kProbeBlock) {
       const Index e = std::min(end, b + kProbeBlock);
@@ -173,8 +175,12 @@ struct ParallelSweep {
         auto& s = kBySlot ? stored[q] : states[r];
         if constexpr (kBySlot) __builtin_prefetch(stored + std::min(q + kAhead, end - 1));
         const TestPoint pt = at(r);
-        if constexpr (kJournal) before[k] = Image::of(s);
-        probed[k] = !(kCandidate && !cand[r]) && kernel.probe(s, pt, found[k]);
+        const bool candidate_row = !(kCandidate && !cand[r]);
+        probed[k] = candidate_row && kernel.probe(s, pt, found[k]);  // reads the state only
+        if constexpr (kJournal) {
+          noted[k] = probed[k] || !(candidate_row ? kernel.keeps(s) : kernel.keeps_not_candidate(s, pt));
+          if (noted[k]) before[k] = Image::of(s);
+        }
         if (probed[k]) continue;
         const Index m = row_update<kCandidate>(kernel, q, r, s, pt, cand, hits, t, m_sum,
                                                [&] { return kernel.update(s, pt, nullptr); });
@@ -189,7 +195,9 @@ struct ParallelSweep {
                                             [&] { return kernel.update(s, pt, &found[k]); });
           if constexpr (kJournal) made[k] = m;
         }
-        if constexpr (kJournal) journal->note(r, before[k], s, made[k], part);
+        if constexpr (kJournal) {
+          if (noted[k]) journal->note(r, before[k], s, made[k], part);
+        }
       }
     }
     tested += t;

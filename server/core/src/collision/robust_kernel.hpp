@@ -99,6 +99,16 @@ class RobustKernel {
     finish(s, pt);
     return made;
   }
+  // Unprobed, only finish() may write: when the point collides and its old position is not held, or the reverse.
+  [[gnu::always_inline]] static bool keeps(const State& s) {
+    return ((s.flags & kColliding) != 0) == ((s.flags & kOldHeld) != 0);
+  }
+  // Not a candidate: nor is anything of not_candidate() written but finish()'s, once its sphere is empty and its
+  // inside state forgotten (or while it collides, or stays in its sphere).
+  [[gnu::always_inline]] static bool keeps_not_candidate(const State& s, const TestPoint& pt) {
+    if ((s.flags & kCrossed) || !keeps(s)) return false;
+    return (s.flags & kColliding) || ((s.flags & kFirstUpdate) && s.sphere.rho2 == 0.0) || !leaves(s, pt);
+  }
   // Whether the point at pt left its sphere (is tested this step).
   [[gnu::always_inline]] static bool leaves(const State& s, const TestPoint& pt) {
     return (pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2;

@@ -95,6 +95,9 @@ class TemporalKernel : public ZeroSetKernel {
     s.leaf = found->leaf;
     return retest(s, pt, found->near);
   }
+  // Unprobed, only a colliding point's depth changes (stay()).
+  [[gnu::always_inline]] static bool keeps(const State& s) { return !s.colliding(); }
+  static bool keeps_not_candidate(const State&, const TestPoint&) { return false; }  // it may be tested
   // A point that leaves its sphere needs its nearest zero distance for its next sphere whether or not
   // the broad phase ruled it out (the step bound then keeps its state): Temporal ignores candidates.
   Index not_candidate(State& s, const TestPoint& pt) const { return update(s, pt); }
