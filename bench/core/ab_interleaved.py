@@ -2,8 +2,9 @@
 # Interleaved A/B of two Google Benchmark binaries (e.g. a kept copy of the old bench and the new one):
 #   python3 bench/core/ab_interleaved.py OLD NEW [runs=5] [filter] [counters]
 # Alternates the binaries run by run; per run the CPU time of each median aggregate, then the median over runs.
-# With `counters` (comma-separated user counters, e.g. detect_cpu_median_ms,detect_cpu_max_ms) those counters of
-# every benchmark run instead (ms). Pin it with `taskset -c 1 python3 ...` (the binaries inherit the mask).
+# With `counters` (comma-separated user counters, e.g. detect_cpu_median_ms,detect_cpu_max_ms; cpu_time and
+# real_time count too, in the benchmark's unit) those counters of every benchmark run instead (ms when the name
+# ends in _ms or is a time). Pin it with `taskset -c 1 python3 ...` (the binaries inherit the mask).
 import json, subprocess, sys, statistics, os
 old, new = sys.argv[1], sys.argv[2]
 runs = int(sys.argv[3]) if len(sys.argv) > 3 else 5
@@ -27,5 +28,6 @@ digits = 3 if counters else 1
 rnd = (lambda v: round(v, 3)) if counters else round
 for name in res[old]:
     a, b = statistics.median(res[old][name]), statistics.median(res[new][name])
-    print(f"{name}: old {a:.{digits}f} ms, new {b:.{digits}f} ms, ratio {a/b:.2f}  "
+    unit = " ms" if not counters or name.endswith(("_ms", "cpu_time", "real_time")) else ""
+    print(f"{name}: old {a:.{digits}f}{unit}, new {b:.{digits}f}{unit}, ratio {a/b:.2f}  "
           f"(old runs {[rnd(v) for v in res[old][name]]}, new {[rnd(v) for v in res[new][name]]})")
