@@ -74,11 +74,12 @@ class HierarchicalDetector final : public CollisionDetector {
   std::unique_ptr<CollisionDetector> clone() const override;
   // The journal: the narrow phase's (the states its sweeps change), beside the rest of an image -- the
   // deformable tree, the reach, the counters, which change every step -- taken when it starts. None with the
-  // extended narrow phase, nor when the narrow phase keeps no states this time (save_image() then).
+  // extended narrow phase, nor when the narrow phase keeps no states this time (save_image() then). It tells no
+  // tested rows (journal_tested() false: a back-off re-detects its kept fraction whole): a row outside the broad
+  // phase may leave its sphere without a query.
   bool start_journal() override;
   std::shared_ptr<const DetectorImage> journal_image() const override;
   void restore_journal() override;
-  bool journal_tested(std::vector<std::uint8_t>& flags) const override;
   void stop_journal() override;
 
  private:

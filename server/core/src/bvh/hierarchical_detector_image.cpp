@@ -79,10 +79,6 @@ void HierarchicalDetector::restore_journal() {
   restore_but_narrow(*journal_);
 }
 
-bool HierarchicalDetector::journal_tested(std::vector<std::uint8_t>& flags) const {
-  return !extended_ && narrow_->journal_tested(flags);
-}
-
 void HierarchicalDetector::stop_journal() {
   if (!extended_) narrow_->stop_journal();
   journal_.reset();
