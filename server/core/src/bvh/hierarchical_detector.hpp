@@ -88,13 +88,14 @@ class HierarchicalDetector final : public CollisionDetector {
     std::shared_ptr<const DetectorImage> narrow;             // narrow phase's image (without extended)
     std::shared_ptr<const bvh::ExtendedNarrow> extended;     // extended narrow phase (with it)
     std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;          // the deformable tree (with one)
-    std::vector<double> reach;                               // per deformable row (bounded: its radius)
+    // Per deformable row (bounded: its radius); shared, so the journal's image hands it over without a copy.
+    std::shared_ptr<const std::vector<double>> reach;
     Index rows = 0;
     std::int64_t step = 0, evaluations = 0;
     Index inserted_nu = 0, rebuilds_adopted = 0;
     std::size_t bytes() const override {
       return sizeof(*this) + (narrow ? narrow->bytes() : 0) + (def ? def->memory_bytes() : 0) +
-             reach.capacity() * sizeof(double) +
+             (reach ? reach->capacity() * sizeof(double) : 0) +
              (extended ? extended->colliding().capacity() * (1 + 2 * sizeof(std::int64_t)) : 0);
     }
   };

@@ -7,10 +7,12 @@ std::shared_ptr<HierarchicalDetector::Image> HierarchicalDetector::image_but_nar
   auto image = std::make_shared<Image>();
   if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
   if (bounded_) {
-    image->reach = prev_radius_;  // the radii the next step's shift compares with
+    image->reach = std::make_shared<const std::vector<double>>(prev_radius_);  // the radii the next shift compares with
   } else {
-    image->reach.reserve(deformable_.size());
-    for (Index r : deformable_) image->reach.push_back(reach_[r]);
+    auto reach = std::make_shared<std::vector<double>>();
+    reach->reserve(deformable_.size());
+    for (Index r : deformable_) reach->push_back(reach_[r]);
+    image->reach = std::move(reach);
   }
   image->rows = rows_;
   image->step = step_;
@@ -42,15 +44,16 @@ void HierarchicalDetector::restore_image(const DetectorImage& image) {
 }
 
 bool HierarchicalDetector::fits(const Image& image) const {
-  return image.rows == rows_ && image.reach.size() == deformable_.size() && !image.def == !def_;
+  return image.rows == rows_ && image.reach && image.reach->size() == deformable_.size() && !image.def == !def_;
 }
 
 void HierarchicalDetector::restore_but_narrow(const Image& image) {
   if (def_) *def_ = *image.def;
   // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
   if (filter_) filter_->refit_all_next_step();
-  if (bounded_) prev_radius_ = image.reach;
-  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = image.reach[q];
+  const std::vector<double>& reach = *image.reach;
+  if (bounded_) prev_radius_ = reach;
+  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = reach[q];
   step_ = image.step;
   evaluations_ = image.evaluations;
   inserted_nu_ = image.inserted_nu;
@@ -68,7 +71,7 @@ std::shared_ptr<const DetectorImage> HierarchicalDetector::journal_image() const
   if (!journal_) return nullptr;
   auto narrow = narrow_->journal_image();
   if (!narrow) return nullptr;
-  auto image = std::make_shared<Image>(*journal_);
+  auto image = std::make_shared<Image>(*journal_);  // shares the journal's tree copy and reach
   image->narrow = std::move(narrow);
   return image;
 }

@@ -68,7 +68,7 @@
 //     // update(s, pt) with what probe() found (nullptr: probe() returned false).
 //     Index update(State& s, const TestPoint& pt, const Probe* found) const;
 //     // Whether update(s, pt, nullptr) / not_candidate(s, pt) leave s's bytes as they are (the journal then takes
-//     // no before-image; false is always safe).
+//     // no before-image; false is always safe; a checked build compares the bytes: parallel_sweep.hpp, kChecked).
 //     bool keeps(const State& s) const;
 //     bool keeps_not_candidate(const State& s, const TestPoint& pt) const;
 //   };

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cstring>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -149,6 +151,14 @@ struct ParallelSweep {
   // second pass, in row order as rows_range() takes them (each row's state as it was before the first pass), of
   // every row but those whose update the kernel says keeps their state (Kernel::keeps, keeps_not_candidate).
   static constexpr Index kProbeBlock = 32;
+  // A checked build (SURFELEDIT_CHECKED; on with the sanitizers' build in scripts/test.sh) also takes the image of
+  // every row whose update the kernel says keeps its state and throws when its bytes changed: the journal would
+  // have missed that row, and the results-based tests cannot see it.
+#ifdef SURFELEDIT_CHECKED
+  static constexpr bool kChecked = true;
+#else
+  static constexpr bool kChecked = false;
+#endif
   static constexpr Index kAhead = 24;  // rows: the state read that far ahead is asked for
   template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
   static void probed_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
@@ -179,7 +189,7 @@ struct ParallelSweep {
         probed[k] = candidate_row && kernel.probe(s, pt, found[k]);  // reads the state only
         if constexpr (kJournal) {
           noted[k] = probed[k] || !(candidate_row ? kernel.keeps(s) : kernel.keeps_not_candidate(s, pt));
-          if (noted[k]) before[k] = Image::of(s);
+          if (noted[k] || kChecked) before[k] = Image::of(s);
         }
         if (probed[k]) continue;
         const Index m = row_update<kCandidate>(kernel, q, r, s, pt, cand, hits, t, m_sum,
@@ -196,7 +206,13 @@ struct ParallelSweep {
           if constexpr (kJournal) made[k] = m;
         }
         if constexpr (kJournal) {
-          if (noted[k]) journal->note(r, before[k], s, made[k], part);
+          if (noted[k]) {
+            journal->note(r, before[k], s, made[k], part);
+          } else if constexpr (kChecked) {
+            if (std::memcmp(before[k].word, &s, sizeof(s)) != 0)
+              throw Error(ErrorCode::Internal, "Kernel::keeps",
+                          "row " + std::to_string(r) + " changed in an update its kernel said keeps its state");
+          }
         }
       }
     }
