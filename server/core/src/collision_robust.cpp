@@ -4,7 +4,8 @@
 
 namespace surfeledit::detail {
 
-void RobustKernel::reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int) {
+template <bool kHeld>
+void RobustKernelT<kHeld>::reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows, int) {
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
   const Index rows = static_cast<Index>(scene.regions.size());
   Original orig;
@@ -28,7 +29,8 @@ void RobustKernel::reset(const CollisionScene& scene, const IndexList& deformabl
   build_inside();
 }
 
-void RobustKernel::bind(const CollisionScene& scene) {
+template <bool kHeld>
+void RobustKernelT<kHeld>::bind(const CollisionScene& scene) {
   if (static_cast<std::size_t>(scene.positions.rows()) != rows_now()) {
     throw Error(ErrorCode::Internal, "detect", "row count differs from the detector's");
   }
@@ -40,13 +42,15 @@ void RobustKernel::bind(const CollisionScene& scene) {
   }
 }
 
-void RobustKernel::bind_model(const CollisionScene& scene) {
+template <bool kHeld>
+void RobustKernelT<kHeld>::bind_model(const CollisionScene& scene) {
   model_positions_ = scene.positions.data();
   model_normals_ = scene.normals.data();
   model_radii_ = scene.radii.data();
 }
 
-Points RobustKernel::original_points(const CollisionScene& scene, const IndexList* moved, const RigidRows* before) const {
+template <bool kHeld>
+Points RobustKernelT<kHeld>::original_points(const CollisionScene& scene, const IndexList* moved, const RigidRows* before) const {
   const Index n = original_rows();
   Points out(n, 3);
   for (Index o = 0; o < n; ++o) {
@@ -64,7 +68,8 @@ Points RobustKernel::original_points(const CollisionScene& scene, const IndexLis
   return out;
 }
 
-void RobustKernel::build_inside() {
+template <bool kHeld>
+void RobustKernelT<kHeld>::build_inside() {
   inside_.reset();
   if (!with_inside()) return;
   // Built at reset and at the first bind after a removal of zero rows, from the bound model.
@@ -84,7 +89,8 @@ void RobustKernel::build_inside() {
   inside_ = std::make_shared<const InsideModel>(pos, nrm, rad, std::move(tree), params_);
 }
 
-void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
+template <bool kHeld>
+void RobustKernelT<kHeld>::seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
                         int threads, RowStates<State>& states) const {
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kSeedLeafSize;
@@ -93,7 +99,8 @@ void RobustKernel::seed(const CollisionScene& scene, const IndexList& deformable
   seed_states(*this, scene.positions, deformable, threads, zero_tree, scene.positions, scene.radii, states);
 }
 
-void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
+template <bool kHeld>
+void RobustKernelT<kHeld>::on_removed(const std::vector<bool>& keep, const IndexList&) {
   bool zero_removed = false;
   for (std::size_t r = 0; r < keep.size(); ++r) {
     const Index o = orig_of(static_cast<Index>(r));
@@ -120,7 +127,8 @@ void RobustKernel::on_removed(const std::vector<bool>& keep, const IndexList&) {
   }
 }
 
-bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before,
+template <bool kHeld>
+bool RobustKernelT<kHeld>::on_rigid_moved(const CollisionScene& scene, const IndexList& rows, const RigidRows& before,
                                   const IndexList& deformable, RowStates<State>& states, int threads) {
   if (with_inside()) return false;
   if (static_cast<std::size_t>(scene.positions.rows()) != rows_now()) return false;
@@ -167,7 +175,8 @@ bool RobustKernel::on_rigid_moved(const CollisionScene& scene, const IndexList& 
   return true;
 }
 
-std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& positions) {
+template <bool kHeld>
+std::shared_ptr<const KdTree> RobustKernelT<kHeld>::original_tree(const Points& positions) {
   KdTreeParams params = nearest_tree_params(params_.knn_eps);
   params.leaf_size = kNearestLeafSize;
   params.frames = true;
@@ -185,10 +194,14 @@ std::shared_ptr<const KdTree> RobustKernel::original_tree(const Points& position
   return tree;
 }
 
-std::size_t RobustKernel::memory_bytes() const {
+template <bool kHeld>
+std::size_t RobustKernelT<kHeld>::memory_bytes() const {
   return static_cast<std::size_t>(orig_.positions.size() + orig_.normals.size() + orig_.radii.size()) * sizeof(double) +
          orig_.deformable.memory_bytes() + orig_.alive.capacity() + (orig_.tree ? orig_.tree->memory_bytes() : tree_bytes_) +
          (orig_of_row_.capacity() + row_of_orig_.capacity()) * sizeof(Index) + (inside_ ? inside_->memory_bytes() : 0);
 }
+
+template class RobustKernelT<false>;
+template class RobustKernelT<true>;
 
 }  // namespace surfeledit::detail

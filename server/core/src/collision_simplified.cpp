@@ -285,7 +285,7 @@ std::unique_ptr<ApproximateDetector> make_approximate_detector(const CollisionPa
     case CollisionAlgorithm::Temporal: return std::make_unique<SimplifiedDetector<TemporalKernel>>(params, simplify);
     case CollisionAlgorithm::Robust: break;
   }
-  return std::make_unique<SimplifiedDetector<RobustKernel>>(params, simplify);
+  return std::make_unique<SimplifiedDetector<RobustHeldKernel>>(params, simplify);
 }
 
 }  // namespace surfeledit

@@ -149,7 +149,8 @@ void ZeroSetKernel::save(SnapshotWriter& out) const { put_zero_set(out, zero_); 
 
 void ZeroSetKernel::load(SnapshotReader& in, Index rows) { zero_ = get_zero_set(in, rows, zero_cells_); }
 
-void RobustKernel::save(SnapshotWriter& out) const {
+template <bool kHeld>
+void RobustKernelT<kHeld>::save(SnapshotWriter& out) const {
   out.u64(static_cast<std::uint64_t>(original_rows()));
   out.vec(orig_.deformable.list());
   out.mat(orig_.positions);
@@ -163,7 +164,8 @@ void RobustKernel::save(SnapshotWriter& out) const {
 
 // The zero rows are the model's: the tree over the original model is built at the first bind (the model is
 // then where this detector saw it) or by on_rigid_moved (which is told where the moved rows were).
-void RobustKernel::load(SnapshotReader& in, Index rows) {
+template <bool kHeld>
+void RobustKernelT<kHeld>::load(SnapshotReader& in, Index rows) {
   const std::uint64_t n64 = in.u64("original rows count");
   if (n64 > static_cast<std::uint64_t>(std::numeric_limits<Index>::max())) in.fail("original rows count", "out of range");
   const Index n = static_cast<Index>(n64);
@@ -213,6 +215,11 @@ void RobustKernel::load(SnapshotReader& in, Index rows) {
   tree_bytes_ = tree_bytes;
   model_positions_ = model_normals_ = model_radii_ = nullptr;
 }
+
+template void RobustKernelT<false>::save(SnapshotWriter&) const;
+template void RobustKernelT<false>::load(SnapshotReader&, Index);
+template void RobustKernelT<true>::save(SnapshotWriter&) const;
+template void RobustKernelT<true>::load(SnapshotReader&, Index);
 
 }  // namespace detail
 }  // namespace surfeledit

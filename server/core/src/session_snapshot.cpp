@@ -19,9 +19,10 @@ using namespace snapshot_values;
 namespace {
 
 constexpr std::uint32_t kMagic = 0x53534553;  // "SESS"
-constexpr std::uint32_t kFormat = 3;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows;
+constexpr std::uint32_t kFormat = 4;  // 2: rows images name their `bent` rows; a stale tool keeps its held rigid rows;
                                       // 3: merge origins may be the tool detector's (MergeMemo::origins_in_detector),
-                                      // row versions as a floor and 32-bit offsets (RowVersions)
+                                      // row versions as a floor and 32-bit offsets (RowVersions);
+                                      // 4: a row detector's Robust states without an old position
 
 // An entry's item: version, op, author, then its touched ids (the view shares them) and its undone flag.
 void put_item_head(SnapshotWriter& out, const HistoryItem& item) {

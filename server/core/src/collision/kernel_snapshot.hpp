@@ -51,15 +51,15 @@ inline void get_state(SnapshotReader& in, TemporalKernel::State& s) {
   s.unbounded = in.u8("unbounded");
 }
 
-inline void put_state(SnapshotWriter& out, const RobustKernel::State& s) {
+// A row detector's Robust state holds no old position (RobustState); its leaf is not kept (a stale one costs time).
+inline void put_state(SnapshotWriter& out, const RobustState& s) {
   put_sphere(out, s.sphere);
-  put_vec3(out, s.old_position);
   out.u8(s.flags);
 }
-inline void get_state(SnapshotReader& in, RobustKernel::State& s) {
+inline void get_state(SnapshotReader& in, RobustState& s) {
   get_sphere(in, s.sphere);
-  s.old_position = get_vec3(in, "old position");
   s.flags = in.u8("flags");
+  if (s.flags & RobustFlags::kOldHeld) in.fail("flags", "an old position held by a row detector's state");
 }
 
 }  // namespace surfeledit::detail

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "inside_model.hpp"
 #include "kernel.hpp"
@@ -21,35 +22,47 @@
 
 namespace surfeledit::detail {
 
-class RobustKernel {
- public:
+// The flags of a Robust state.
+struct RobustFlags {
   static constexpr std::uint8_t kInside = 1;       // inside the original model at the last test
   static constexpr std::uint8_t kColliding = 2;    // odd number of counted changes
   static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at the old position
   static constexpr std::uint8_t kCrossed = 8;      // swept: the last step passed through the solid
-  static constexpr std::uint8_t kOldHeld = 16;     // old_position holds the point's old position (see State)
+  static constexpr std::uint8_t kOldHeld = 16;     // RobustHeldState::old_position holds the old position
+};
 
-  // One cache line per point: the row sweep reads every state every step, and writes only those of the points it
-  // tests (or that start or stop colliding), so that the undo journal notes only them.
-  struct alignas(64) State {
-    Sphere sphere;                     // holds no original surfel
-    // The point's old position -- the last position at which it did not collide -- when kOldHeld is set. Without
-    // kOldHeld it is implicit: the point's position at its last update, which is where the next step's detection
-    // finds it before the step (TestPoint::previous(); between steps, its position now; after reset, where it was
-    // then). It is held from the update at which the point starts to collide (until it stops) and from a skip()
-    // (until its next update); a stale value is left in place otherwise (old()).
-    Vec3 old_position = Vec3::Zero();
-    std::uint8_t flags = 0;            // kInside | kColliding | kFirstUpdate | kCrossed | kOldHeld
-    std::uint8_t pad[3] = {};          // no padding bytes: the undo journal compares states bytewise (Journal::note)
-    std::uint32_t leaf = 0;            // the original tree's leaf that held the last nearest: where the next test's
-                                       // search starts (KdTree::nearest_from; a stale one costs time, not exactness)
-    bool colliding() const { return (flags & (kColliding | kCrossed)) != 0; }
-  };
-  static_assert(sizeof(State) == 64, "State has padding bytes");
+// A Robust state of a row detector's point (40 bytes; the row sweep reads every state every step and writes only
+// those of the points it tests or that start or stop colliding, so that the undo journal notes only them). Its old
+// position -- the last position at which it did not collide, where a forgotten inside state (kFirstUpdate) is
+// re-derived -- is implicit: the point's position at its last update, which is where the next step's detection
+// finds it before the step (TestPoint::previous(); between steps, its position now; after reset, where it was then).
+// A point that collides never has its inside state forgotten, so its old position is never read.
+struct RobustState {
+  Sphere sphere;                // holds no original surfel
+  std::uint8_t flags = 0;       // RobustFlags: kInside | kColliding | kFirstUpdate | kCrossed (| kOldHeld)
+  std::uint8_t pad[3] = {};     // no padding bytes: the undo journal compares states bytewise (Journal::note)
+  std::uint32_t leaf = 0;       // the original tree's leaf that held the last nearest: where the next test's search
+                                // starts (KdTree::nearest_from; a stale one costs time, not exactness)
+  bool colliding() const { return (flags & (RobustFlags::kColliding | RobustFlags::kCrossed)) != 0; }
+};
+static_assert(sizeof(RobustState) == 40, "RobustState has padding bytes");
+
+// The simplified detector's Robust state: a point may also skip steps (its cluster inactive, skip()), and its
+// old position -- its position before the first step it skipped -- is then held (kOldHeld) until its next update.
+struct alignas(64) RobustHeldState : RobustState {
+  Vec3 old_position = Vec3::Zero();  // the old position while kOldHeld is set (a stale value otherwise)
+};
+static_assert(sizeof(RobustHeldState) == 64, "RobustHeldState has padding bytes");
+
+// kHeld: the states hold old positions (RobustHeldState; for a driver that calls skip()), else RobustState.
+template <bool kHeld>
+class RobustKernelT : public RobustFlags {
+ public:
+  using State = std::conditional_t<kHeld, RobustHeldState, RobustState>;
   static constexpr bool kSeeded = true;
   static constexpr int kChunk = 512;
 
-  explicit RobustKernel(const CollisionParams& params) : params_(params) {}
+  explicit RobustKernelT(const CollisionParams& params) : params_(params) {}
 
   // The model as it is now becomes the original model (its deformable rows copied, its tree built). Throws
   // InvalidArgument when there are no zero rows.
@@ -99,10 +112,8 @@ class RobustKernel {
     finish(s, pt);
     return made;
   }
-  // Unprobed, only finish() may write: when the point collides and its old position is not held, or the reverse.
-  [[gnu::always_inline]] static bool keeps(const State& s) {
-    return ((s.flags & kColliding) != 0) == ((s.flags & kOldHeld) != 0);
-  }
+  // Unprobed, only finish() may write: when it drops a held old position.
+  [[gnu::always_inline]] static bool keeps(const State& s) { return !(s.flags & kOldHeld); }
   // Not a candidate: nor is anything of not_candidate() written but finish()'s, once its sphere is empty and its
   // inside state forgotten (or while it collides, or stays in its sphere).
   [[gnu::always_inline]] static bool keeps_not_candidate(const State& s, const TestPoint& pt) {
@@ -132,6 +143,8 @@ class RobustKernel {
   // position (the last position at which it was found not colliding), as after a reset: the parity then
   // compares that position with the new one, across the untested steps. The old position is held from
   // now on (the point's position before this step; it does not move with the steps it skips).
+  // Only with states that hold old positions (RobustKernelT<true>).
+  template <bool H = kHeld, std::enable_if_t<H, int> = 0>
   void skip(State& s, const TestPoint& pt) const {
     hold_old(s, pt.prev);
     s.flags = static_cast<std::uint8_t>((s.flags | kFirstUpdate) & ~kCrossed);
@@ -314,22 +327,27 @@ class RobustKernel {
   // The old position of a point whose position before this step is `prev` (3 doubles; between steps: its position
   // now).
   [[gnu::always_inline]] static Vec3 old(const State& s, const double* prev) {
-    return (s.flags & kOldHeld) ? s.old_position : Vec3(prev[0], prev[1], prev[2]);
+    if constexpr (kHeld) {
+      if (s.flags & kOldHeld) return s.old_position;
+    }
+    return Vec3(prev[0], prev[1], prev[2]);
   }
   // Holds the old position from now on (the implicit one, `prev` as in old()).
   static void hold_old(State& s, const double* prev) {
-    if (s.flags & kOldHeld) return;
-    s.old_position = Vec3(prev[0], prev[1], prev[2]);
-    s.flags |= kOldHeld;
+    if constexpr (kHeld) {
+      if (s.flags & kOldHeld) return;
+      s.old_position = Vec3(prev[0], prev[1], prev[2]);
+      s.flags |= kOldHeld;
+    }
   }
-  // End of every update: the position of a point that does not collide is the last non-colliding one (implicit from
-  // now on: the next step finds the point there before it); one that collides keeps its old position (held from now
-  // on). A point that neither starts nor stops colliding keeps its state's bytes.
-  [[gnu::always_inline]] static void finish(State& s, const TestPoint& pt) {
-    if (s.flags & kColliding) {
-      hold_old(s, pt.prev);
-    } else if (s.flags & kOldHeld) {
-      s.flags &= static_cast<std::uint8_t>(~kOldHeld);
+  // End of every update: the position of a point that does not collide is its last non-colliding one, implicit from
+  // now on (the next step finds the point there before it); that of a point that collides is never read. A held
+  // old position is dropped; otherwise the state's bytes stay as they are.
+  [[gnu::always_inline]] static void finish(State& s, const TestPoint&) {
+    if constexpr (kHeld) {
+      if (s.flags & kOldHeld) s.flags &= static_cast<std::uint8_t>(~kOldHeld);
+    } else {
+      (void)s;
     }
   }
   static void set_inside(State& s, bool in) {
@@ -367,5 +385,11 @@ class RobustKernel {
   std::size_t tree_bytes_ = 0;  // the inside model is to be built at the next bind (zero rows were removed)
   std::shared_ptr<const InsideModel> inside_;  // over the alive zero surfels; null with nearest and no swept
 };
+
+// The row detector's kernel (no skips: old positions implicit) and the simplified detector's.
+using RobustKernel = RobustKernelT<false>;
+using RobustHeldKernel = RobustKernelT<true>;
+extern template class RobustKernelT<false>;
+extern template class RobustKernelT<true>;
 
 }  // namespace surfeledit::detail
