@@ -44,6 +44,13 @@ struct Avx2Scan {
     return _mm256_castsi256_pd(_mm256_load_si256(reinterpret_cast<const __m256i*>(kLanes[r < 4 ? r : 4])));
   }
 
+  // A compare's lanes (all bits set or clear) as a blend mask, opaque to the compiler: GCC otherwise re-derives
+  // the blend's sign-bit test from it with an extra integer compare per blend.
+  [[gnu::always_inline]] static __m256d sign_mask(__m256d m) {
+    asm("" : "+x"(m));
+    return m;
+  }
+
   // The smallest of v's four lanes, in every lane.
   static __m256d lane_min(__m256d v) {
     v = _mm256_min_pd(v, _mm256_permute2f128_pd(v, v, 1));
@@ -72,10 +79,11 @@ struct Avx2Scan {
       const __m256d eight = _mm256_set1_pd(8.0);
       for (; s + 8 <= b; s += 8) {
         const __m256d d0 = dist2(t, q, s), d1 = dist2(t, q, s + 4);
-        const __m256d lt0 = _mm256_cmp_pd(d0, best, _CMP_LT_OQ), lt1 = _mm256_cmp_pd(d1, best1, _CMP_LT_OQ);
-        best = _mm256_blendv_pd(best, d0, lt0);
+        const __m256d lt0 = sign_mask(_mm256_cmp_pd(d0, best, _CMP_LT_OQ));
+        const __m256d lt1 = sign_mask(_mm256_cmp_pd(d1, best1, _CMP_LT_OQ));
+        best = _mm256_min_pd(d0, best);  // d0 < best ? d0 : best, per lane: the blend by lt0
         best_slot = _mm256_blendv_pd(best_slot, slot, lt0);
-        best1 = _mm256_blendv_pd(best1, d1, lt1);
+        best1 = _mm256_min_pd(d1, best1);
         best_slot1 = _mm256_blendv_pd(best_slot1, slot1, lt1);
         slot = _mm256_add_pd(slot, eight);
         slot1 = _mm256_add_pd(slot1, eight);
@@ -89,8 +97,8 @@ struct Avx2Scan {
     }
     for (; s + 4 <= b; s += 4) {
       const __m256d d2 = dist2(t, q, s);
-      const __m256d lt = _mm256_cmp_pd(d2, best, _CMP_LT_OQ);
-      best = _mm256_blendv_pd(best, d2, lt);
+      const __m256d lt = sign_mask(_mm256_cmp_pd(d2, best, _CMP_LT_OQ));
+      best = _mm256_min_pd(d2, best);
       best_slot = _mm256_blendv_pd(best_slot, slot, lt);
       slot = _mm256_add_pd(slot, four);
     }
