@@ -130,12 +130,15 @@ class RobustKernelT : public RobustFlags {
   // everything (it is still inside, farther than its step from the zero surface). An empty sphere stays where
   // it is: no point is inside it wherever its centre (Sphere::contains), and its state's bytes then do not
   // change from step to step while the point is not a candidate.
+  // Nothing is stored that does not change: most rows of a step with a broad phase are not candidates, and a store
+  // of the same value still makes the state's cache line one to write back.
   Index not_candidate(State& s, const TestPoint& pt) const {
-    s.flags &= static_cast<std::uint8_t>(~kCrossed);
-    if (leaves(s, pt) && !(s.flags & kColliding)) {
-      s.flags |= kFirstUpdate;
+    std::uint8_t flags = static_cast<std::uint8_t>(s.flags & ~kCrossed);
+    if (leaves(s, pt) && !(flags & kColliding)) {
+      flags |= kFirstUpdate;
       if (s.sphere.rho2 != 0.0) s.sphere = {pt.p, 0.0};
     }
+    if (flags != s.flags) s.flags = flags;
     finish(s, pt);
     return 0;
   }
