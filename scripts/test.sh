@@ -3,13 +3,16 @@
 # C++ tests (ctest) and the Python tests (pytest; they start real servers on unique domains).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# stage NAME: a section header with the seconds since the start (setup included), so a slow CI run shows where.
+stage() { echo "== $* (at ${SECONDS} s)"; }
 "$ROOT/scripts/setup.sh"
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
+export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"  # as in setup.sh
 BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
 export SURFELEDIT_SECURE_PROBE="$BUILD/tests/surfeledit-secure-probe"
-echo "== C++ tests"
+stage "C++ tests"
 ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)"
 # sanitizer_build NAME DIR CMAKE_OPTION [EXTRA_CMAKE_ARGS...] TARGETS: a separate instrumented build (no Python
 # module, no benchmarks) of the given test targets in DIR; logs in $BUILD/setup-NAME-*.log.
@@ -27,11 +30,15 @@ sanitizer_build() {
     || { "$ROOT/scripts/build_failed.sh" "$BUILD/setup-$name-build.log" "$dir"; exit 1; }
 }
 
-echo "== ThreadSanitizer: background hierarchy rebuilds while steps run"
+# Both instrumented builds compile with -O1 -g: quicker to build than -O2, still optimised enough to keep the
+# tests fast.
+SANITIZER_FLAGS=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g")
+
+stage "ThreadSanitizer: background hierarchy rebuilds while steps run"
 # The suppression covers a load-time mutex misuse in libOpenNI2, which PCL pulls in (tests/tsan_suppressions.txt).
 TSAN_BUILD="${SURFELEDIT_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
 export TSAN_OPTIONS="suppressions=$ROOT/tests/tsan_suppressions.txt halt_on_error=1"
-sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_tsan_tests
+sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_tsan_tests "${SANITIZER_FLAGS[@]}"
 "$TSAN_BUILD/tests/surfeledit_tsan_tests" \
   --gtest_filter='BvhRebuild.*:BvhUpdate.StatusFreshRefitRebuilding:CollisionBvh.BackgroundRebuildWhileStepsArrive' \
   --gtest_brief=1
@@ -39,9 +46,7 @@ unset TSAN_OPTIONS
 
 # AddressSanitizer and UndefinedBehaviorSanitizer in one build (they combine; one instrumented build instead of
 # two keeps CI's cold build short): the service tests and most core tests
-# (-O1 -g: quicker to build and run than -O2, still optimised enough to keep the tests fast).
 SANITIZED_TESTS="surfeledit_core_tests surfeledit_service_tests"
-SANITIZER_FLAGS=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g")
 # The core tests except the slowest sweeps, which repeat code paths the rest covers on more data
 # (together ~80% of the instrumented run time; docs/hardening.md §5).
 SANITIZER_SKIP="BvhTree.TreeTreeHasNoFalseNegativesEachRowOnce:*.ThreadsGiveIdenticalResults:ParticleStability.*"
@@ -54,14 +59,14 @@ run_sanitized() {  # run_sanitized DIR: both test binaries, brief output
   "$1/tests/surfeledit_service_tests" --gtest_brief=1 >"$1/service-tests.log" 2>&1 \
     || { tail -n 60 "$1/service-tests.log"; exit 1; }
 }
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer: service tests, core tests but the slowest sweeps"
+stage "AddressSanitizer + UndefinedBehaviorSanitizer: service tests, core tests but the slowest sweeps"
 SAN_BUILD="${SURFELEDIT_ASAN_BUILD_DIR:-$ROOT/build-asan}"
 sanitizer_build asan "$SAN_BUILD" SURFELEDIT_ASAN "$SANITIZED_TESTS" -DSURFELEDIT_UBSAN=ON "${SANITIZER_FLAGS[@]}"
 # Leak checking is off: OpenMP, PCL and Cyclone keep process-lifetime allocations it would list.
 ASAN_OPTIONS="detect_leaks=0 abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" \
   run_sanitized "$SAN_BUILD"
 
-echo "== Python tests"
+stage "Python tests"
 cd "$ROOT"
 # Parallel workers (pytest-xdist): each test starts its own server on a domain that its process holds
 # a lock on (tests/python/service/domains.py), so workers, other runs and benchmarks never meet on one.
@@ -72,6 +77,7 @@ WORKERS="$(nproc)"
 # The secured Python client (connect(security=...)) runs on the cyclonedds 0.10.2 binding of
 # .venv-secure (scripts/setup.sh); under .venv those tests are skipped.
 if [ -x "$ROOT/.venv-secure/bin/python" ]; then
-  echo "== Python tests with DDS Security (.venv-secure)"
+  stage "Python tests with DDS Security (.venv-secure)"
   "$ROOT/.venv-secure/bin/python" -m pytest tests/python/security -q -rs
 fi
+stage "all tests passed"
