@@ -30,9 +30,9 @@ sanitizer_build() {
     || { "$ROOT/scripts/build_failed.sh" "$BUILD/setup-$name-build.log" "$dir"; exit 1; }
 }
 
-# Both instrumented builds compile with -O1 -g: quicker to build than -O2, still optimised enough to keep the
-# tests fast.
-SANITIZER_FLAGS=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g")
+# Both instrumented builds compile with -O1 -g1: quicker to build than -O2 -g (-g1: line tables only, ~20 % less
+# compile time, enough for the sanitizers' stack traces), still optimised enough to keep the tests fast.
+SANITIZER_FLAGS=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1")
 
 stage "ThreadSanitizer: background hierarchy rebuilds while steps run"
 # The suppression covers a load-time mutex misuse in libOpenNI2, which PCL pulls in (tests/tsan_suppressions.txt).
@@ -54,6 +54,10 @@ SANITIZER_SKIP+=":*.NumericalExtremes:ApproximateDetection.*:BvhOverlap.FullSatI
 SANITIZER_SKIP+=":CollisionBvh.EveryConfigurationEqualsNoHierarchyEveryStep:*.EqualsOracleEveryStep"
 SANITIZER_SKIP+=":BvhUpdate.PropertyAllStrategiesWithInsertionsAndRemovals:Curves.AgainstTheExactIntersection"
 SANITIZER_SKIP+=":Merge.AgainstExactTruth"
+# Brute-force sweeps over many queries or steps (each 19-45 s instrumented, 163 s of the remaining 360 s).
+SANITIZER_SKIP+=":KdTreeFromLeaf.TiesAcrossCutsThroughEqualCoordinates:KdTreeFromLeaf.TiesOnALatticeWithDuplicatesFromEveryStart"
+SANITIZER_SKIP+=":CollisionTemporal.LeafStartEqualsTheRootDescentEveryStep:BvhBounded.CandidatesContainEveryOverlapEveryStep"
+SANITIZER_SKIP+=":CollisionSimple.BoundaryMarksOnInterleavedRegionsFollowTheOracle:BvhBounded.HullPruningKeepsEveryOverlap"
 run_sanitized() {  # run_sanitized DIR: both test binaries, brief output
   "$1/tests/surfeledit_core_tests" --gtest_brief=1 --gtest_filter="-$SANITIZER_SKIP"
   "$1/tests/surfeledit_service_tests" --gtest_brief=1 >"$1/service-tests.log" 2>&1 \
