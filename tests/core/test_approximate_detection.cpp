@@ -136,11 +136,10 @@ TEST(ApproximateDetection, PrecisionAndRecallAgainstExact) {
             EXPECT_EQ(g.fp + g.fn, 0u);
             continue;
           }
-          // With the margin the members of every cluster near the slab are tested: nearly exact.
-          // Without it (the thesis) clusters whose centroid has not yet entered miss their members.
-          // Thresholds: measured figures (bench/RESULTS.md) minus a margin.
-          // Measured (spacing 0.04, both algorithms, both clusterings): margin 1 gives P = R = 1 (the same
-          // results, checked above); margin 0 gives P = 1.0000 and R 0.93-0.94 at size 18, 0.85-0.88 at size 100 (the worst
+          // With the margin the members of every cluster near the slab are tested: the same results (checked
+          // above). Without it (the thesis) clusters whose centroid has not yet entered miss their members.
+          // Recall thresholds: measured figures (bench/RESULTS.md) minus a margin. Measured (spacing 0.04, both
+          // algorithms, both clusterings), margin 0: R 0.93-0.94 at size 18, 0.85-0.88 at size 100 (the worst
           // single step: a cluster of 100 whose centroid is still outside while members are inside).
           // No false positive without the margin either: a member that skipped steps while its cluster entered the
           // slab is re-tested from its held old position (Robust, RobustHeldState), where it did not collide. A
