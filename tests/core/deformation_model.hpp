@@ -1,11 +1,14 @@
-// The deformation tests' model (test_deformation.cpp, test_deformation_step.cpp): a sampled capsule with
-// tangent axes and regions, and independent truth: brute-force region distances and lambda, the step map
-// written without the library, F1's centroid.
+// The deformation tests' models: a sampled capsule with tangent axes and regions (test_deformation.cpp,
+// test_deformation_step.cpp), a sphere over a slab with random tangent axes (the kernels' bit-for-bit tests), and
+// independent truth: brute-force region distances and lambda, the step map written without the library, F1's
+// centroid.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "surfeledit/core/deformation.hpp"
@@ -38,6 +41,39 @@ inline Model make_model(double spacing = 0.04, double z0 = -0.3, double z1 = 0.3
     m.regions.push_back(z < z0 ? Region::Zero : (z > z1 ? Region::One : Region::Blend));
   }
   return m;
+}
+
+// A sphere (radius 0.5, centre 0.8 above the origin) over a slab (half extents 0.8, 0.8, 0.1), both sampled at
+// spacing 0.03: the slab's `slab_rows` rows first, region Zero, then the sphere's, region One (callers re-mark
+// them). The tangent axes are random, uniform in [-0.02, 0.02) per coordinate from `seed`, so that every lane of
+// a vector kernel sees different values.
+inline Model sphere_over_slab(unsigned seed, Eigen::Index* slab_rows = nullptr) {
+  Pose above;
+  above.translation = Vec3(0.0, 0.0, 0.8);
+  const SampledSurfels s = make_sphere(0.5, above)->sample(SampleParams{0.03, 11, 0.25});
+  const SampledSurfels b = make_box(Vec3(0.8, 0.8, 0.1))->sample(SampleParams{0.03, 11, 0.25});
+  Model m;
+  const Eigen::Index nb = b.positions.rows(), n = nb + s.positions.rows();
+  m.positions.resize(n, 3);
+  m.normals.resize(n, 3);
+  m.positions << b.positions, s.positions;
+  m.normals << b.normals, s.normals;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  m.tu.resize(n, 3);
+  m.tv.resize(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int j = 0; j < 3; ++j) m.tu(i, j) = u(rng), m.tv(i, j) = u(rng);
+  m.regions.assign(static_cast<std::size_t>(nb), Region::Zero);
+  m.regions.resize(static_cast<std::size_t>(n), Region::One);
+  if (slab_rows) *slab_rows = nb;
+  return m;
+}
+
+// Whether two #P by 3 arrays hold the same doubles, bit for bit.
+inline bool same_bits(const Points& x, const Points& y) {
+  return x.rows() == y.rows() &&
+         std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<std::size_t>(x.size())) == 0;
 }
 
 // Brute-force distances (model units, not squared) from x to the nearest row of region r.

@@ -5,10 +5,9 @@
 // deformable row is F1.
 #include <gtest/gtest.h>
 
-#include <cstring>
-#include <random>
 #include <string>
 
+#include "deformation_model.hpp"
 #include "expect_error.hpp"
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
@@ -16,42 +15,11 @@
 namespace surfeledit {
 namespace {
 
-struct Arrays {
-  Points positions, normals, tu, tv;  // #P by 3
-};
+using deformation_model::Model;
+using deformation_model::same_bits;
 
-// A sphere (radius 0.5) over a slab: the slab is F0, the whole sphere F1. Random tangent axes (fixed seed).
-struct RigidToolScene {
-  Arrays arrays;
-  std::vector<Region> regions;  // #P
-};
-
-RigidToolScene make_scene() {
-  Pose above;
-  above.translation = Vec3(0.0, 0.0, 0.8);
-  const SampledSurfels s = make_sphere(0.5, above)->sample(SampleParams{0.03, 11, 0.25});
-  const SampledSurfels b = make_box(Vec3(0.8, 0.8, 0.1))->sample(SampleParams{0.03, 11, 0.25});
-  RigidToolScene sc;
-  Arrays& a = sc.arrays;
-  const Eigen::Index nb = b.positions.rows(), n = nb + s.positions.rows();
-  a.positions.resize(n, 3);
-  a.normals.resize(n, 3);
-  a.positions << b.positions, s.positions;
-  a.normals << b.normals, s.normals;
-  std::mt19937_64 rng(9);
-  std::uniform_real_distribution<double> u(-0.02, 0.02);
-  a.tu.resize(n, 3);
-  a.tv.resize(n, 3);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (int j = 0; j < 3; ++j) a.tu(i, j) = u(rng), a.tv(i, j) = u(rng);
-  sc.regions.assign(static_cast<std::size_t>(n), Region::Zero);
-  for (Eigen::Index i = nb; i < n; ++i) sc.regions[static_cast<std::size_t>(i)] = Region::One;
-  return sc;
-}
-
-bool same_bits(const Points& x, const Points& y) {
-  return x.rows() == y.rows() && std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<std::size_t>(x.size())) == 0;
-}
+// The sphere over the slab: the slab is F0, the whole sphere F1.
+Model make_rigid_tool_scene() { return deformation_model::sphere_over_slab(9); }
 
 // The same fields with every deformable row's blend stored explicitly (lambda 1, gradient 0).
 DeformationFields with_stored_rows(DeformationFields f) {
@@ -61,8 +29,8 @@ DeformationFields with_stored_rows(DeformationFields f) {
 }
 
 TEST(DeformationF1Fields, NoBlendRowIsStoredAndTheViewsStillSayLambdaOne) {
-  const RigidToolScene sc = make_scene();
-  const DeformationFields f = compute_fields(sc.arrays.positions, sc.regions);
+  const Model sc = make_rigid_tool_scene();
+  const DeformationFields f = compute_fields(sc.positions, sc.regions);
   ASSERT_GT(f.deformable.size(), 1000u);
   EXPECT_EQ(f.blend.rows(), 0);
   const DeformationFields copy = f;  // capacities as the copy below has them
@@ -79,12 +47,12 @@ TEST(DeformationF1Fields, NoBlendRowIsStoredAndTheViewsStillSayLambdaOne) {
   // One region that blends: every row is stored again.
   std::vector<Region> mixed = sc.regions;
   mixed.back() = Region::Blend;
-  EXPECT_EQ(compute_fields(sc.arrays.positions, mixed).blend.rows(), static_cast<Eigen::Index>(f.deformable.size()));
+  EXPECT_EQ(compute_fields(sc.positions, mixed).blend.rows(), static_cast<Eigen::Index>(f.deformable.size()));
 }
 
 TEST(DeformationF1Fields, StepsEqualTheStepsOverStoredRowsBitForBit) {
-  const RigidToolScene sc = make_scene();
-  const DeformationFields f = compute_fields(sc.arrays.positions, sc.regions);
+  const Model sc = make_rigid_tool_scene();
+  const DeformationFields f = compute_fields(sc.positions, sc.regions);
   ASSERT_EQ(f.blend.rows(), 0);
   const DeformationFields stored = with_stored_rows(f);
   IndexList subset;  // every third deformable row: lists that end in every lane count
@@ -103,7 +71,7 @@ TEST(DeformationF1Fields, StepsEqualTheStepsOverStoredRowsBitForBit) {
             p.axis = Vec3(0.3, -1.0, 0.6);
             p.angle = angle;
             p.blend = blend;
-            Arrays mine = sc.arrays, theirs = sc.arrays;
+            Model mine = sc, theirs = sc;
             for (int step = 0; step < 2; ++step) {
               const DeformResult a = apply_step(f, p, mine.positions, mine.normals, tangents ? &mine.tu : nullptr,
                                                 tangents ? &mine.tv : nullptr, 1, part ? &subset : nullptr, kernel);
@@ -120,7 +88,7 @@ TEST(DeformationF1Fields, StepsEqualTheStepsOverStoredRowsBitForBit) {
             EXPECT_TRUE(same_bits(mine.normals, theirs.normals)) << what;
             EXPECT_TRUE(same_bits(mine.tu, theirs.tu)) << what;
             EXPECT_TRUE(same_bits(mine.tv, theirs.tv)) << what;
-            EXPECT_FALSE(same_bits(mine.positions, sc.arrays.positions)) << what;  // the step moved rows
+            EXPECT_FALSE(same_bits(mine.positions, sc.positions)) << what;  // the step moved rows
             ++compared;
           }
         }
@@ -131,22 +99,22 @@ TEST(DeformationF1Fields, StepsEqualTheStepsOverStoredRowsBitForBit) {
 }
 
 TEST(DeformationF1Fields, FieldsWithoutRowsAreRefusedUnlessEveryDeformableRowIsF1) {
-  const RigidToolScene sc = make_scene();
-  DeformationFields f = compute_fields(sc.arrays.positions, sc.regions);
+  const Model sc = make_rigid_tool_scene();
+  DeformationFields f = compute_fields(sc.positions, sc.regions);
   ASSERT_EQ(f.blend.rows(), 0);
   DeformParams p;
   p.translation = Vec3(0.01, 0.0, 0.0);
   // A deformable row claimed to blend, with no stored row for it.
   f.regions[static_cast<std::size_t>(f.deformable[f.deformable.size() / 2])] = Region::Blend;
-  Arrays a = sc.arrays;
+  Model a = sc;
   testing_util::expect_error([&] { apply_step(f, p, a.positions, a.normals); }, ErrorCode::InvalidArgument, "fields");
-  EXPECT_TRUE(same_bits(a.positions, sc.arrays.positions));
+  EXPECT_TRUE(same_bits(a.positions, sc.positions));
   // Stored rows that do not match the deformable list.
-  DeformationFields short_rows = compute_fields(sc.arrays.positions, sc.regions);
+  DeformationFields short_rows = compute_fields(sc.positions, sc.regions);
   short_rows.blend = BlendRows::Zero(3, 4);
   testing_util::expect_error([&] { apply_step(short_rows, p, a.positions, a.normals); }, ErrorCode::InvalidArgument,
                              "fields.blend");
-  EXPECT_TRUE(same_bits(a.positions, sc.arrays.positions));
+  EXPECT_TRUE(same_bits(a.positions, sc.positions));
 }
 
 }  // namespace

@@ -7,60 +7,40 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
-#include <random>
 #include <set>
 
 #include "surfeledit/core/deformation.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "deformation_model.hpp"
 #include "expect_error.hpp"
 
 namespace surfeledit {
 namespace {
 
-// A sphere (radius 0.5) over a slab: slab rows are F0, the sphere's top third F1, the rest blends. Tangent
-// axes are random (fixed seed) so that every lane sees different values.
-struct Arrays {
-  Points positions, normals, tu, tv;  // #P by 3
-};
+using deformation_model::Model;
+using deformation_model::same_bits;
 
-struct Scene {
-  Arrays arrays;
+// The sphere over the slab: slab rows are F0, the sphere's top third F1, the rest blends.
+struct KernelScene {
+  Model arrays;
   DeformationFields fields;
 };
 
-Scene make_scene() {
-  Pose above;
-  above.translation = Vec3(0.0, 0.0, 0.8);
-  const SampledSurfels s = make_sphere(0.5, above)->sample(SampleParams{0.03, 11, 0.25});
-  const SampledSurfels b = make_box(Vec3(0.8, 0.8, 0.1))->sample(SampleParams{0.03, 11, 0.25});
-  Scene sc;
-  Arrays& a = sc.arrays;
-  const Eigen::Index nb = b.positions.rows(), n = nb + s.positions.rows();
-  a.positions.resize(n, 3);
-  a.normals.resize(n, 3);
-  a.positions << b.positions, s.positions;
-  a.normals << b.normals, s.normals;
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-0.02, 0.02);
-  a.tu.resize(n, 3);
-  a.tv.resize(n, 3);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (int j = 0; j < 3; ++j) a.tu(i, j) = u(rng), a.tv(i, j) = u(rng);
-  std::vector<Region> regions(static_cast<std::size_t>(n), Region::Zero);
-  for (Eigen::Index i = nb; i < n; ++i) regions[static_cast<std::size_t>(i)] = a.positions(i, 2) > 0.95 ? Region::One : Region::Blend;
-  sc.fields = compute_fields(a.positions, regions);
+KernelScene make_kernel_scene() {
+  KernelScene sc;
+  Eigen::Index nb = 0;
+  sc.arrays = deformation_model::sphere_over_slab(5, &nb);
+  Model& a = sc.arrays;
+  for (Eigen::Index i = nb; i < a.positions.rows(); ++i)
+    a.regions[static_cast<std::size_t>(i)] = a.positions(i, 2) > 0.95 ? Region::One : Region::Blend;
+  sc.fields = compute_fields(a.positions, a.regions);
   return sc;
-}
-
-bool same_bits(const Points& x, const Points& y) {
-  return x.rows() == y.rows() && std::memcmp(x.data(), y.data(), sizeof(double) * static_cast<std::size_t>(x.size())) == 0;
 }
 
 TEST(DeformationKernels, Avx2MatchesBaselineBitForBit) {
   if (!step_kernel_available(StepKernel::Avx2)) GTEST_SKIP() << "no AVX2 on this CPU or build";
-  const Scene sc = make_scene();
+  const KernelScene sc = make_kernel_scene();
   ASSERT_GT(sc.fields.deformable.size(), 1000u);
   // Subsets of the deformable rows whose per-block lists leave 0, 1, 2 and 3 rows after the groups of four.
   std::vector<IndexList> subsets(4);
@@ -78,7 +58,7 @@ TEST(DeformationKernels, Avx2MatchesBaselineBitForBit) {
           p.angle = angle;
           p.blend = blend;
           const IndexList* only = subset < 0 ? nullptr : &subsets[static_cast<std::size_t>(subset)];
-          Arrays base = sc.arrays, wide = sc.arrays;
+          Model base = sc.arrays, wide = sc.arrays;
           // Two steps: the second starts from the first's results (a drag).
           for (int step = 0; step < 2; ++step) {
             const DeformResult rb = apply_step(sc.fields, p, base.positions, base.normals, tangents ? &base.tu : nullptr,
@@ -108,7 +88,7 @@ TEST(DeformationKernels, Avx2MatchesBaselineBitForBit) {
 // a valid row that does not move (lambda 0) leaves the step to the row-by-row pass with the same result;
 // and the centroid both scans sum is the mean of F1's positions.
 TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
-  const Scene sc = make_scene();
+  const KernelScene sc = make_kernel_scene();
   const std::size_t count = sc.fields.deformable.size();
   ASSERT_GT(count, 100u);
   std::set<std::size_t> where;
@@ -148,7 +128,7 @@ TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
             field = "fields.deformable";
             break;
         }
-        Arrays a = sc.arrays;
+        Model a = sc.arrays;
         testing_util::expect_error([&] { apply_step(f, p, a.positions, a.normals, nullptr, nullptr, 1, nullptr, kernel); },
                                    ErrorCode::InvalidArgument, field);
         EXPECT_TRUE(same_bits(a.positions, sc.arrays.positions)) << "kind " << kind << " at " << k;
@@ -165,7 +145,7 @@ TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
   while (k0 + 1 < count && still.regions[static_cast<std::size_t>(still.deformable[k0])] != Region::Blend) ++k0;
   ASSERT_LT(k0 + 1, count);
   still.blend.row(static_cast<Eigen::Index>(k0)).setZero();
-  std::vector<Arrays> results;
+  std::vector<Model> results;
   std::vector<DeformResult> steps;
   for (const StepKernel kernel : kernels) {
     for (const DeformationFields* f : {&sc.fields, static_cast<const DeformationFields*>(&still)}) {
@@ -198,7 +178,7 @@ TEST(DeformationKernels, ScansRefuseEveryBadRowAndAgree) {
 // small step, false after one whose translation overflows (positions and the blend rows' normals), for every
 // kernel, with and without rotation, all rows, every second one or the F1 rows alone.
 TEST(DeformationKernels, FiniteFlagAgreesWithTheRowsWritten) {
-  const Scene sc = make_scene();
+  const KernelScene sc = make_kernel_scene();
   DeformationFields fields = sc.fields;
   fields.box_extent = std::numeric_limits<double>::infinity();  // extent unknown: no reach check of the step
   std::vector<StepKernel> kernels{StepKernel::Baseline};
@@ -207,7 +187,7 @@ TEST(DeformationKernels, FiniteFlagAgreesWithTheRowsWritten) {
   for (std::size_t k = 0; k < sc.fields.deformable.size(); k += 2) half.push_back(sc.fields.deformable[k]);
   for (const Index r : sc.fields.deformable)
     if (sc.fields.regions[static_cast<std::size_t>(r)] == Region::One) ones.push_back(r);
-  auto all_finite = [](const Arrays& a, const IndexList& rows) {
+  auto all_finite = [](const Model& a, const IndexList& rows) {
     for (const Index r : rows)
       if (!a.positions.row(r).allFinite() || !a.normals.row(r).allFinite()) return false;
     return true;
@@ -222,7 +202,7 @@ TEST(DeformationKernels, FiniteFlagAgreesWithTheRowsWritten) {
           p.translation = Vec3(x, 0.0, 0.0);
           p.axis = Vec3(0.0, 0.0, 1.0);
           p.angle = angle;
-          Arrays a = sc.arrays;
+          Model a = sc.arrays;
           for (int step = 0; step < 2; ++step) {
             const DeformResult r = apply_step(fields, p, a.positions, a.normals, nullptr, nullptr, 1, only, kernel);
             EXPECT_EQ(r.finite, all_finite(a, r.moved)) << "x " << x << " angle " << angle << " step " << step;
@@ -239,12 +219,12 @@ TEST(DeformationKernels, FiniteFlagAgreesWithTheRowsWritten) {
 
 // Auto picks an available kernel and gives its bits; an unavailable kernel is refused before anything moves.
 TEST(DeformationKernels, AutoMatchesBaselineAndUnavailableKernelsAreRefused) {
-  const Scene sc = make_scene();
+  const KernelScene sc = make_kernel_scene();
   DeformParams p;
   p.translation = Vec3(0.0, 0.01, 0.02);
   p.axis = Vec3(1.0, 0.0, 0.0);
   p.angle = 0.3;
-  Arrays base = sc.arrays, automatic = sc.arrays;
+  Model base = sc.arrays, automatic = sc.arrays;
   apply_step(sc.fields, p, base.positions, base.normals, &base.tu, &base.tv, 1, nullptr, StepKernel::Baseline);
   apply_step(sc.fields, p, automatic.positions, automatic.normals, &automatic.tu, &automatic.tv, 1, nullptr);
   EXPECT_TRUE(same_bits(base.positions, automatic.positions));
@@ -252,7 +232,7 @@ TEST(DeformationKernels, AutoMatchesBaselineAndUnavailableKernelsAreRefused) {
   EXPECT_TRUE(same_bits(base.tu, automatic.tu));
   EXPECT_TRUE(step_kernel_available(StepKernel::Baseline));
   EXPECT_TRUE(step_kernel_available(StepKernel::Auto));
-  Arrays m = sc.arrays;
+  Model m = sc.arrays;
   try {
     apply_step(sc.fields, p, m.positions, m.normals, nullptr, nullptr, 1, nullptr, static_cast<StepKernel>(7));
     ADD_FAILURE() << "accepted an unknown kernel";

@@ -11,8 +11,8 @@ namespace surfeledit {
 namespace {
 
 // The default scene (slab + sphere 0.35 above it) with its regions set, sphere deformable.
-struct Fixture : SessionFixture {
-  Fixture() : SessionFixture("alice") { session.set_regions({zero, {}}, {one, {}}); }
+struct HistoryFixture : SessionFixture {
+  HistoryFixture() : SessionFixture("alice") { session.set_regions({zero, {}}, {one, {}}); }
 };
 
 DeformParams down(double dz) {
@@ -22,7 +22,7 @@ DeformParams down(double dz) {
 }
 
 TEST(History, UndoRedoOfStepsIsBitExact) {
-  Fixture f;
+  HistoryFixture f;
   const Snapshot s0(f.session);
   std::vector<Snapshot> after;
   std::vector<StepResult> results;
@@ -84,7 +84,7 @@ TEST(History, NothingToUndoIsConflict) {
 }
 
 TEST(History, RandomSequencesAgainstSnapshots) {
-  Fixture f;
+  HistoryFixture f;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   UndoChecker stack;
@@ -122,7 +122,7 @@ TEST(History, RandomSequencesAgainstSnapshots) {
 }
 
 TEST(History, MemoryIsBoundedAndReported) {
-  Fixture f;
+  HistoryFixture f;
   f.session.configure({{"history_mb", 0.0}});
   f.session.deform(down(0.1));
   EXPECT_TRUE(f.session.history().empty());
@@ -133,7 +133,7 @@ TEST(History, MemoryIsBoundedAndReported) {
 }
 
 TEST(Response, CancelRestoresTheStateBitForBit) {
-  Fixture f;
+  HistoryFixture f;
   f.session.configure({{"response", std::string("cancel")}});
   for (int k = 0; k < 3; ++k) EXPECT_EQ(f.session.deform(down(0.1)).response, "none");
   const Snapshot b(f.session);
@@ -151,7 +151,7 @@ TEST(Response, CancelRestoresTheStateBitForBit) {
 }
 
 TEST(Response, BadSettingsAreTypedAndChangeNothing) {
-  Fixture f;
+  HistoryFixture f;
   f.session.deform(down(0.1));
   const Snapshot b(f.session);
   const std::uint64_t v = f.session.version();

@@ -17,12 +17,12 @@ namespace {
 // A plate (zero region) of 2,000 surfels under a cloud of 150,000 (the deformation's parallel
 // threshold is 50,000 moved rows): the first `one` of them in F1, the rest blend. Random unit normals; with `tangents`,
 // random tangent axes too.
-struct Scene {
+struct ImageScene {
   SurfelModel model;
   IdList zero, one;
 };
 
-Scene make_scene(std::size_t one, bool tangents) {
+ImageScene make_image_scene(std::size_t one, bool tangents) {
   constexpr std::size_t kZero = 2000, kCloud = 150000;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -36,7 +36,7 @@ Scene make_scene(std::size_t one, bool tangents) {
     while (v.norm() < 0.1) v = Vec3(u(rng), u(rng), u(rng));
     return Vec3(v.normalized());
   };
-  Scene s;
+  ImageScene s;
   for (Eigen::Index i = 0; i < n; ++i) {
     const bool plate = static_cast<std::size_t>(i) < kZero;
     a.positions.row(i) = plate ? Vec3(u(rng), u(rng), -1.0 + 0.01 * u(rng)) : Vec3(u(rng), u(rng), 0.5 + 0.4 * u(rng));
@@ -99,7 +99,7 @@ TEST_P(StepImages, UndoAfterDragStepsIsBitForBitAtOneAndTwoThreads) {
   std::vector<State> after_steps;
   for (int threads : {1, 2}) {
     SCOPED_TRACE("threads " + std::to_string(threads));
-    Scene sc = make_scene(c.one, c.tangents);
+    ImageScene sc = make_image_scene(c.one, c.tangents);
     EditSession s("t", SessionParams{threads});
     s.load(std::move(sc.model));
     s.set_regions({sc.zero, {}}, {sc.one, {}});
@@ -139,7 +139,7 @@ TEST(StepImages, ATranslationKeepsNoNormalOfF1Rows) {
   // Bytes of one step's image: all F1 without rotation keeps no normal; with a rotation, every normal.
   std::size_t bytes[2] = {0, 0};
   for (int rotate : {0, 1}) {
-    Scene sc = make_scene(150000, false);
+    ImageScene sc = make_image_scene(150000, false);
     EditSession s("t", SessionParams{2});
     s.load(std::move(sc.model));
     s.set_regions({sc.zero, {}}, {sc.one, {}});
@@ -155,7 +155,7 @@ TEST(StepImages, ATranslationKeepsNoNormalOfF1Rows) {
 TEST(StepImages, ASnapshotKeepsTheBentRows) {
   // Steps without rotation over half F1, saved and restored into a fresh session: undoing them there gives
   // the state before them, as in the session that was saved.
-  Scene sc = make_scene(75000, true);
+  ImageScene sc = make_image_scene(75000, true);
   EditSession s("t", SessionParams{2});
   s.load(std::move(sc.model));
   s.set_regions({sc.zero, {}}, {sc.one, {}});

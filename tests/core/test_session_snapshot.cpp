@@ -33,7 +33,7 @@ using test::ScriptOp;
 using Op = ScriptOp;
 
 // Steps, undos and redos (no configure).
-std::vector<Op> script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {6, 2, 2, 10}); }
+std::vector<Op> future_script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {6, 2, 2, 10}); }
 
 Outcome apply(EditSession& s, const Op& op) {
   Outcome out;
@@ -99,17 +99,17 @@ void expect_same_state(const EditSession& x, const EditSession& y, const std::st
   }
 }
 
-struct Case {
+struct FutureCase {
   const char* algorithm;
   const char* response;
 };
 
-class SnapshotFuture : public testing::TestWithParam<Case> {};
+class SnapshotFuture : public testing::TestWithParam<FutureCase> {};
 
 // N scripted ops by two authors (undo and redo among them), save, restore into a fresh session, then
 // the same M ops on both.
 TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
-  const Case c = GetParam();
+  const FutureCase c = GetParam();
   TwoArms scene{SampleParams{0.03, 3, 0.25}};
   EditSession live{"live"};
   live.load(scene.model(), "owner");
@@ -118,7 +118,7 @@ TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
   }
   live.set_regions({TwoArms::join(scene.body, scene.b), {}}, {scene.a, {}}, "a");
   live.set_regions({TwoArms::join(scene.body, scene.a), {}}, {scene.b, {}}, "b");
-  const std::vector<Op> ops = script(13, 40);
+  const std::vector<Op> ops = future_script(13, 40);
   const std::size_t n = 22;
   for (std::size_t k = 0; k < n; ++k) apply(live, ops[k]);
   ASSERT_EQ(live.not_snapshottable(), "");
@@ -159,11 +159,11 @@ TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
 
 INSTANTIATE_TEST_SUITE_P(
     AlgorithmsAndResponses, SnapshotFuture,
-    testing::Values(Case{"robust", "report"}, Case{"robust", "cancel"}, Case{"robust", "backoff"},
-                    Case{"robust", "merge"}, Case{"temporal", "report"}, Case{"temporal", "cancel"},
-                    Case{"temporal", "backoff"}, Case{"temporal", "merge"}, Case{"simple", "report"},
-                    Case{"simple", "cancel"}, Case{"simple", "backoff"}, Case{"simple", "merge"}),
-    [](const testing::TestParamInfo<Case>& info) {
+    testing::Values(FutureCase{"robust", "report"}, FutureCase{"robust", "cancel"}, FutureCase{"robust", "backoff"},
+                    FutureCase{"robust", "merge"}, FutureCase{"temporal", "report"}, FutureCase{"temporal", "cancel"},
+                    FutureCase{"temporal", "backoff"}, FutureCase{"temporal", "merge"}, FutureCase{"simple", "report"},
+                    FutureCase{"simple", "cancel"}, FutureCase{"simple", "backoff"}, FutureCase{"simple", "merge"}),
+    [](const testing::TestParamInfo<FutureCase>& info) {
       return std::string(info.param.algorithm) + "_" + info.param.response;
     });
 
@@ -175,7 +175,7 @@ TEST(SessionSnapshot, ScriptCollides) {
   s.set_regions({TwoArms::join(scene.body, scene.b), {}}, {scene.a, {}}, "a");
   s.set_regions({TwoArms::join(scene.body, scene.a), {}}, {scene.b, {}}, "b");
   int colliding = 0;
-  for (const Op& op : script(13, 40)) colliding += !apply(s, op).colliding.empty();
+  for (const Op& op : future_script(13, 40)) colliding += !apply(s, op).colliding.empty();
   EXPECT_GT(colliding, 3);
 }
 
@@ -206,7 +206,7 @@ std::unique_ptr<EditSession> scripted(const char* algorithm) {
   s->load(scene.model(), "a");
   s->configure({{"algorithm", std::string(algorithm)}}, "a");
   s->set_regions({TwoArms::join(scene.body, scene.b), {}}, {scene.a, {}}, "a");
-  for (const Op& op : script(3, 8)) {
+  for (const Op& op : future_script(3, 8)) {
     Op mine = op;
     mine.author = "a";
     apply(*s, mine);

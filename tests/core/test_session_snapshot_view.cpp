@@ -22,7 +22,7 @@ using test::ScriptOp;
 using Op = ScriptOp;
 
 // Steps, undos, redos and configures (tool-only images).
-std::vector<Op> script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {7, 2, 2, 12}); }
+std::vector<Op> view_script(std::uint32_t seed, int n) { return test::two_author_script(seed, n, {7, 2, 2, 12}); }
 
 // The op's outcome as text (a step's colliding count and response, a version, or the error).
 std::string apply(EditSession& s, const Op& op, int k) {
@@ -58,12 +58,12 @@ std::string observe(const EditSession& s, bool restored = false) {
   return out;
 }
 
-struct Case {
+struct ViewCase {
   const char* algorithm;
   const char* response;
 };
 
-void prepare(EditSession& s, const TwoArms& scene, const Case& c, double history_mb) {
+void prepare(EditSession& s, const TwoArms& scene, const ViewCase& c, double history_mb) {
   s.load(scene.model(), "owner");
   for (const char* author : {"a", "b"}) {
     s.configure({{"algorithm", std::string(c.algorithm)}, {"response", std::string(c.response)},
@@ -80,12 +80,12 @@ std::size_t first_difference(const std::string& x, const std::string& y) {
   return k;
 }
 
-class SnapshotView : public testing::TestWithParam<Case> {};
+class SnapshotView : public testing::TestWithParam<ViewCase> {};
 
 // The view outlives the point by many ops (entries dropped and replaced, spares reused) and is encoded
 // on another thread while the session goes on; then the session is closed before a second encode.
 TEST_P(SnapshotView, EncodesThePointWhileTheSessionGoesOn) {
-  const Case c = GetParam();
+  const ViewCase c = GetParam();
   const TwoArms scene{SampleParams{0.03, 3, 0.25}};
   // A bound small enough that entries are dropped after the point (checked below).
   const double history_mb = 0.5;
@@ -93,7 +93,7 @@ TEST_P(SnapshotView, EncodesThePointWhileTheSessionGoesOn) {
   EditSession twin{"live"};
   prepare(*live, scene, c, history_mb);
   prepare(twin, scene, c, history_mb);
-  const std::vector<Op> ops = script(29, 90);
+  const std::vector<Op> ops = view_script(29, 90);
   const std::size_t point = 45;
   for (std::size_t k = 0; k < point; ++k) ASSERT_EQ(apply(*live, ops[k], int(k)), apply(twin, ops[k], int(k)));
   ASSERT_EQ(live->not_snapshottable(), "");
@@ -139,10 +139,10 @@ TEST_P(SnapshotView, EncodesThePointWhileTheSessionGoesOn) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AlgorithmsAndResponses, SnapshotView,
-                         testing::Values(Case{"none", "report"}, Case{"robust", "merge"}, Case{"robust", "cancel"},
-                                         Case{"temporal", "backoff"}, Case{"temporal", "merge"},
-                                         Case{"simple", "report"}),
-                         [](const testing::TestParamInfo<Case>& info) {
+                         testing::Values(ViewCase{"none", "report"}, ViewCase{"robust", "merge"},
+                                         ViewCase{"robust", "cancel"}, ViewCase{"temporal", "backoff"},
+                                         ViewCase{"temporal", "merge"}, ViewCase{"simple", "report"}),
+                         [](const testing::TestParamInfo<ViewCase>& info) {
                            return std::string(info.param.algorithm) + "_" + info.param.response;
                          });
 

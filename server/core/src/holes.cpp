@@ -10,16 +10,11 @@
 #include "surfeledit/core/kdtree.hpp"
 #include "surfeledit/core/particles/engine.hpp"
 #include "surfeledit/core/util.hpp"
+#include "param_checks.hpp"
 
 namespace surfeledit {
 
 namespace {
-
-void require(bool ok, const char* field, double value, const char* rule) {
-  if (!ok || !std::isfinite(value))
-    throw Error(ErrorCode::InvalidArgument, field,
-                std::string(field) + " = " + std::to_string(value) + ": must be " + rule);
-}
 
 // Two unit vectors spanning the plane normal to unit n.
 void basis(const Vec3& n, Vec3& e1, Vec3& e2) {
@@ -83,14 +78,15 @@ HeightField fit_height_field(const SurfelModel& model, const IndexList& ring, co
 }  // namespace
 
 void validate(const HoleParams& p) {
-  require(p.max_diameter > 0.0, "max_diameter", p.max_diameter, "a finite number > 0");
-  require(p.iterations >= 0 && p.iterations <= 10000, "iterations", p.iterations, "in [0, 10000]");
-  require(p.neighbours >= 4 && p.neighbours <= 64, "neighbours", p.neighbours, "in [4, 64]");
-  require(p.gap_angle > 0.0 && p.gap_angle < 2.0 * M_PI, "gap_angle", p.gap_angle, "in (0, 2 pi)");
-  require(p.link_factor > 0.0, "link_factor", p.link_factor, "> 0");
-  require(p.min_loop >= 3, "min_loop", p.min_loop, ">= 3");
-  require(p.ring_factor > 0.0, "ring_factor", p.ring_factor, "> 0");
-  require(p.mls_width > 0.0, "mls_width", p.mls_width, "> 0");
+  using param_checks::require_finite;
+  require_finite(p.max_diameter > 0.0, "max_diameter", p.max_diameter, "a finite number > 0");
+  require_finite(p.iterations >= 0 && p.iterations <= 10000, "iterations", p.iterations, "in [0, 10000]");
+  require_finite(p.neighbours >= 4 && p.neighbours <= 64, "neighbours", p.neighbours, "in [4, 64]");
+  require_finite(p.gap_angle > 0.0 && p.gap_angle < 2.0 * M_PI, "gap_angle", p.gap_angle, "in (0, 2 pi)");
+  require_finite(p.link_factor > 0.0, "link_factor", p.link_factor, "> 0");
+  require_finite(p.min_loop >= 3, "min_loop", p.min_loop, ">= 3");
+  require_finite(p.ring_factor > 0.0, "ring_factor", p.ring_factor, "> 0");
+  require_finite(p.mls_width > 0.0, "mls_width", p.mls_width, "> 0");
 }
 
 IndexList boundary_rows(const SurfelModel& model, const HoleParams& params) {

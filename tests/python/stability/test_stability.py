@@ -7,8 +7,6 @@ module's constants and are stated in the README's "Precision" section."""
 
 import math
 
-import pytest
-
 from surfeledit import stability as M
 
 # Cells that fail by design, with the bound the README states: after a step of 10x the model size the
@@ -17,21 +15,15 @@ from surfeledit import stability as M
 KNOWN = {(row, "huge") for row in ("simple", "improved", "temporal/nearest", "temporal+simplify")}
 
 
-@pytest.fixture(scope="module")
-def matrix():
+def test_every_condition_within_tolerance_and_known_failures_finite():
+    """One test over the whole matrix (~24 s), so that it is computed once whichever pytest-xdist worker runs it
+    (a fixture is computed again by every worker that draws a test using it, and by a worker that switched modules)."""
     rows, columns = list(M.ALGORITHMS), list(M.CONDITIONS)
-    result = M.matrix(rows, columns, long_steps=2000)
-    print("\n" + M.format_table(result, rows, columns))
-    return result
-
-
-@pytest.mark.parametrize("row", list(M.ALGORITHMS))
-def test_every_condition_within_tolerance(matrix, row):
-    failed = [f"{c}: {matrix[row, c][0]}" for c in M.CONDITIONS if not matrix[row, c][1] and (row, c) not in KNOWN]
-    assert not failed, f"{row}: {failed}"
-
-
-def test_known_failures_still_give_finite_answers(matrix):
+    matrix = M.matrix(rows, columns, long_steps=2000)
+    print("\n" + M.format_table(matrix, rows, columns))
+    failed = [f"{row} / {c}: {matrix[row, c][0]}" for row in rows for c in columns
+              if not matrix[row, c][1] and (row, c) not in KNOWN]
+    assert not failed, failed
     for row, col in KNOWN:
         text, _ = matrix[row, col]
         assert text.endswith("wrong"), text  # a measured fraction, not NaN or a crash

@@ -7,6 +7,7 @@
 
 #include "surfeledit/core/kdtree.hpp"
 #include "surfeledit/core/particles/engine.hpp"
+#include "../param_checks.hpp"
 
 namespace surfeledit {
 
@@ -14,15 +15,10 @@ namespace {
 
 constexpr Eigen::Index kBlendParallelFrom = 20000;  // particles
 
-void require(bool ok, const char* field, double value, const char* rule) {
-  if (!ok || std::isnan(value))
-    throw Error(ErrorCode::InvalidArgument, field,
-                std::string(field) + " = " + std::to_string(value) + ": must be " + rule);
-}
-
 }  // namespace
 
 void validate(const BlendParams& p) {
+  using param_checks::require;
   require(p.iterations >= 0 && p.iterations <= 100000, "iterations", p.iterations, "in [0, 100000]");
   require(p.range_factor > 0.0 && std::isfinite(p.range_factor), "range_factor", p.range_factor, "> 0");
   require(p.neighbour_factor > 0.0 && std::isfinite(p.neighbour_factor), "neighbour_factor", p.neighbour_factor,
@@ -86,7 +82,7 @@ BlendRun run_blend(const Points& positions, const Points& normals, const Points&
   validate(params);
   if (rigid_normals.rows() != 0 && rigid_normals.rows() != rigid.rows())
     throw Error(ErrorCode::InvalidArgument, "rigid_normals", "expected none or one per rigid point");
-  require(mean_radius > 0.0 && std::isfinite(mean_radius), "mean_radius", mean_radius, "> 0");
+  param_checks::require(mean_radius > 0.0 && std::isfinite(mean_radius), "mean_radius", mean_radius, "> 0");
   BlendRun out;
   if (positions.rows() == 0) return out;
   // Spacing units about the region's centroid.

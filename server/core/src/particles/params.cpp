@@ -5,19 +5,12 @@
 #include <string>
 
 #include "surfeledit/core/types.hpp"
+#include "../param_checks.hpp"
 
 namespace surfeledit {
 
-namespace {
-
-void require(bool ok, const char* field, double value, const char* rule) {
-  if (!ok || std::isnan(value))
-    throw Error(ErrorCode::InvalidArgument, field, std::string(field) + " = " + std::to_string(value) + ": must be " + rule);
-}
-
-}  // namespace
-
 void validate(const ParticleParams& p) {
+  using param_checks::require;
   require(p.weight.radius > 0.0 && std::isfinite(p.weight.radius), "weight.radius", p.weight.radius, "> 0");
   require(p.weight.eps > 0.0 && p.weight.eps < 1.0, "weight.eps", p.weight.eps, "in (0, 1)");
   require(p.repulsion.amplitude >= 0.0, "repulsion.amplitude", p.repulsion.amplitude, ">= 0");
