@@ -51,7 +51,7 @@ unset TSAN_OPTIONS
 # two keeps CI's cold build short): the service tests and most core tests
 SANITIZED_TESTS="surfeledit_core_tests surfeledit_service_tests"
 # The core tests except the slowest sweeps, which repeat code paths the rest covers on more data
-# (together ~80% of the instrumented run time; docs/hardening.md §5).
+# (this first group took ~80% of the instrumented run time before it was skipped; docs/hardening.md §5).
 SANITIZER_SKIP="BvhTree.TreeTreeHasNoFalseNegativesEachRowOnce:*.ThreadsGiveIdenticalResults:ParticleStability.*"
 SANITIZER_SKIP+=":*.NumericalExtremes:ApproximateDetection.*:BvhOverlap.FullSatIsExactAndLiteIsConservative"
 SANITIZER_SKIP+=":CollisionBvh.EveryConfigurationEqualsNoHierarchyEveryStep:*.EqualsOracleEveryStep"
