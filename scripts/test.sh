@@ -61,12 +61,14 @@ SANITIZER_SKIP+=":Merge.AgainstExactTruth"
 SANITIZER_SKIP+=":KdTreeFromLeaf.TiesAcrossCutsThroughEqualCoordinates:KdTreeFromLeaf.TiesOnALatticeWithDuplicatesFromEveryStart"
 SANITIZER_SKIP+=":CollisionTemporal.LeafStartEqualsTheRootDescentEveryStep:BvhBounded.CandidatesContainEveryOverlapEveryStep"
 SANITIZER_SKIP+=":CollisionSimple.BoundaryMarksOnInterleavedRegionsFollowTheOracle:BvhBounded.HullPruningKeepsEveryOverlap"
-# run_sharded LOG BINARY [ARGS...]: the binary's tests split over $(nproc) processes that run at once (GoogleTest's
-# sharding; an instrumented test binary keeps about one core busy), shard K's output in LOG-K.log, shown when it fails.
+# run_sharded LOG BINARY [ARGS...]: the binary's tests split over one process per core (at most 8: an instrumented
+# process holds up to ~1 GB) that run at once (GoogleTest's sharding; an instrumented test binary keeps about one core
+# busy), shard K's output in LOG-K.log, shown when it fails.
 run_sharded() {
   local log="$1" shards k failed=0
   shift
   shards="$(nproc)"
+  [ "$shards" -le 8 ] || shards=8
   local pids=()
   for ((k = 0; k < shards; k++)); do
     GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$k" "$@" >"$log-$k.log" 2>&1 &
