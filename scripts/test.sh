@@ -16,8 +16,8 @@ stage "C++ tests"
 ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)"
 # sanitizer_build NAME DIR CMAKE_OPTION TARGETS [EXTRA_CMAKE_ARGS...]: a separate instrumented build (no Python
 # module, no benchmarks) of the given test targets in DIR; logs in $BUILD/setup-NAME-*.log. A unity build (CMake
-# compiles up to eight sources of a target as one file; sources with flags of their own stay alone): about half
-# the compile time, since every instrumented file otherwise parses Eigen, the session API and gtest again. So
+# compiles up to eight sources of a target as one file; sources with flags of their own stay alone): about a third
+# less compile time, since every instrumented file otherwise parses Eigen, the session API and gtest again. So
 # helpers in anonymous namespaces need names unique across their target's files (docs/hardening.md §5).
 sanitizer_build() {
   local name="$1" dir="$2" option="$3" targets="$4"
