@@ -1,4 +1,5 @@
-// Validation of parameter structs' fields (private to the core): one message format for every refusal.
+// Validation of the particle, blend and hole-filling parameters (private to the core): one message format,
+// "field = value: must be rule".
 #pragma once
 
 #include <cmath>

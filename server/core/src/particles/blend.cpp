@@ -19,14 +19,14 @@ constexpr Eigen::Index kBlendParallelFrom = 20000;  // particles
 
 void validate(const BlendParams& p) {
   using param_checks::require;
+  using param_checks::require_finite;
   require(p.iterations >= 0 && p.iterations <= 100000, "iterations", p.iterations, "in [0, 100000]");
-  require(p.range_factor > 0.0 && std::isfinite(p.range_factor), "range_factor", p.range_factor, "> 0");
-  require(p.neighbour_factor > 0.0 && std::isfinite(p.neighbour_factor), "neighbour_factor", p.neighbour_factor,
-          "> 0");
-  require(p.dt > 0.0 && std::isfinite(p.dt), "dt", p.dt, "> 0");
-  require(p.gamma >= 0.0 && std::isfinite(p.gamma), "gamma", p.gamma, ">= 0");
-  require(p.spring_r0 > 0.0 && std::isfinite(p.spring_r0), "spring_r0", p.spring_r0, "> 0");
-  require(p.mls_width > 0.0 && std::isfinite(p.mls_width), "mls_width", p.mls_width, "> 0");
+  require_finite(p.range_factor > 0.0, "range_factor", p.range_factor, "> 0");
+  require_finite(p.neighbour_factor > 0.0, "neighbour_factor", p.neighbour_factor, "> 0");
+  require_finite(p.dt > 0.0, "dt", p.dt, "> 0");
+  require_finite(p.gamma >= 0.0, "gamma", p.gamma, ">= 0");
+  require_finite(p.spring_r0 > 0.0, "spring_r0", p.spring_r0, "> 0");
+  require_finite(p.mls_width > 0.0, "mls_width", p.mls_width, "> 0");
   require(p.split_below >= 1, "split_below", p.split_below, ">= 1");
   require(p.kill_above > p.split_below, "kill_above", p.kill_above, "> split_below");
   validate(blend_particle_params(p));
@@ -82,7 +82,7 @@ BlendRun run_blend(const Points& positions, const Points& normals, const Points&
   validate(params);
   if (rigid_normals.rows() != 0 && rigid_normals.rows() != rigid.rows())
     throw Error(ErrorCode::InvalidArgument, "rigid_normals", "expected none or one per rigid point");
-  param_checks::require(mean_radius > 0.0 && std::isfinite(mean_radius), "mean_radius", mean_radius, "> 0");
+  param_checks::require_finite(mean_radius > 0.0, "mean_radius", mean_radius, "> 0");
   BlendRun out;
   if (positions.rows() == 0) return out;
   // Spacing units about the region's centroid.
