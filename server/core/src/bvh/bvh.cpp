@@ -1,7 +1,8 @@
 // The one place Bvh<Box> is compiled: explicit instantiations for the three box kinds (bvh.hpp
-// declares them `extern template`), and the Aabb-only members of deforming trees.
+// declares them `extern template`), the Aabb-only members of deforming trees and the step journal.
 #include "surfeledit/core/bvh/bvh-inl.hpp"
 #include "surfeledit/core/bvh/bvh_bounded-inl.hpp"
+#include "surfeledit/core/bvh/bvh_journal-inl.hpp"
 
 namespace surfeledit::bvh {
 

@@ -58,6 +58,7 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
   } else {
     zero_hull_ = bvh::Bvh<bvh::Aabb>();
   }
+  drop_journal();
   zero_ = std::move(zero);
   def_ = std::move(def);
   filter_ = std::move(filter);
@@ -192,7 +193,10 @@ Index HierarchicalDetector::surfel_tree(const CollisionScene& scene, const Point
 }
 
 StepShift HierarchicalDetector::shift_of(const CollisionScene& scene, const Points& previous) {
-  if (!scene.displacement_bound) return step_shift(scene, previous, deformable_, prev_radius_);
+  if (!scene.displacement_bound) {
+    keep_journal_reach();  // step_shift() takes the new radii
+    return step_shift(scene, previous, deformable_, prev_radius_);
+  }
   const double bound = *scene.displacement_bound;
   if (!(bound >= 0.0 && std::isfinite(bound))) {
     throw Error(ErrorCode::InvalidArgument, "displacement_bound",
@@ -211,6 +215,7 @@ StepShift HierarchicalDetector::shift_of(const CollisionScene& scene, const Poin
 
 void HierarchicalDetector::on_removed(const std::vector<bool>& keep) {
   if (static_cast<Index>(keep.size()) != rows_) throw Error(ErrorCode::Internal, "keep", "row count differs");
+  drop_journal();
   if (extended_) {
     extended_->on_removed(keep);
   } else {
@@ -237,6 +242,7 @@ void HierarchicalDetector::on_removed(const std::vector<bool>& keep) {
 void HierarchicalDetector::on_inserted(const CollisionScene& scene, const IndexList& parents) {
   const Index added = static_cast<Index>(parents.size());
   require_scene_rows(scene, rows_ + added, "on_inserted");
+  drop_journal();
   if (extended_) {
     require_deformable_parents(scene, rows_, parents);
     extended_->on_inserted(parents);
@@ -306,6 +312,7 @@ void HierarchicalDetector::adopt_rebuilt_tree() {
   if (!tree) return;
   last_rebuild_ms_ = rebuilder_.last_build_ms();
   if (tag != topology_) return;
+  keep_journal_tree();
   def_ = std::move(tree);
   // Its boxes are of the rows where they were when it started (an undo may have moved them since).
   if (bounded_) def_->refit_all_next_step();

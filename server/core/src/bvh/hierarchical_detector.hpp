@@ -73,10 +73,13 @@ class HierarchicalDetector final : public CollisionDetector {
   // A deep copy (trees included); a background rebuild under way is not copied.
   std::unique_ptr<CollisionDetector> clone() const override;
   // The journal: the narrow phase's (the states its sweeps change), beside the rest of an image -- the
-  // deformable tree, the reach, the counters, which change every step -- taken when it starts. None with the
-  // extended narrow phase, nor when the narrow phase keeps no states this time (save_image() then). It tells no
-  // tested rows (journal_tested() false: a back-off re-detects its kept fraction whole): a row outside the broad
-  // phase may leave its sphere without a query.
+  // counters and, when the step may change them, the reach -- taken when it starts. A bounded deformable tree
+  // keeps a journal of the nodes its steps change (bvh.hpp, step journal), so a step's image holds those
+  // rather than a copy of the tree; other trees are copied when the journal starts, and a rebuilt tree adopted
+  // meanwhile takes the old one, put back as it was at the start, into the image. None with the extended narrow
+  // phase, nor when the narrow phase keeps no states this time (save_image() then). It tells no tested rows
+  // (journal_tested() false: a back-off re-detects its kept fraction whole): a row outside the broad phase may
+  // leave its sphere without a query.
   bool start_journal() override;
   std::shared_ptr<const DetectorImage> journal_image() const override;
   void restore_journal() override;
@@ -87,24 +90,35 @@ class HierarchicalDetector final : public CollisionDetector {
   struct Image final : DetectorImage {
     std::shared_ptr<const DetectorImage> narrow;             // narrow phase's image (without extended)
     std::shared_ptr<const bvh::ExtendedNarrow> extended;     // extended narrow phase (with it)
-    std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;          // the deformable tree (with one)
+    // The deformable tree (with one): a copy, or (journal images of a bounded tree) the nodes the steps changed.
+    std::shared_ptr<const bvh::Bvh<bvh::Aabb>> def;
+    std::shared_ptr<const bvh::Bvh<bvh::Aabb>::StepImage> def_steps;
     // Per deformable row (bounded: its radius); shared, so the journal's image hands it over without a copy.
+    // Null in a journal image of bounded steps that changed no radius (the deformation step's bound says so).
     std::shared_ptr<const std::vector<double>> reach;
     Index rows = 0;
     std::int64_t step = 0, evaluations = 0;
     Index inserted_nu = 0, rebuilds_adopted = 0;
     std::size_t bytes() const override {
       return sizeof(*this) + (narrow ? narrow->bytes() : 0) + (def ? def->memory_bytes() : 0) +
+             (def_steps ? def_steps->bytes() : 0) +
              (reach ? reach->capacity() * sizeof(double) : 0) +
              (extended ? extended->colliding().capacity() * (1 + 2 * sizeof(std::int64_t)) : 0);
     }
   };
 
-  // An image without the narrow phase's part (`narrow`, `extended` null); whether an image's part fits this
-  // detector's rows; that part put back (once it fits).
-  std::shared_ptr<Image> image_but_narrow() const;
-  bool fits(const Image& image) const;
+  // An image without the narrow phase's part (`narrow`, `extended` null; `tree` false: nor the deformable tree,
+  // nor a bounded reach); whether an image's part fits this detector's rows and tree (`tree` false: but the
+  // tree's); that part put back (once it fits).
+  std::shared_ptr<Image> image_but_narrow(bool tree = true) const;
+  bool fits(const Image& image, bool tree = true) const;
   void restore_but_narrow(const Image& image);
+  // Ends the journal's own part (reset, removal, insertion, stop_journal). While one runs: prev_radius_ is kept
+  // before a step may change it (keep_journal_reach), and def_, put back as it was at the start, becomes the
+  // journal's tree before a rebuilt tree replaces it (keep_journal_tree; def_ is null after it).
+  void drop_journal();
+  void keep_journal_reach();
+  void keep_journal_tree();
 
   // Surfel/tree: marks the candidates among the deformable rows, each ball (p, r + reach) tested against
   // zero_bounds_ and then down the zero tree; only the rows in filter_'s leaves that reach zero_hull_.
@@ -144,6 +158,9 @@ class HierarchicalDetector final : public CollisionDetector {
   double last_rebuild_ms_ = 0.0;                    // the last finished background rebuild
   Index rebuilds_adopted_ = 0;                      // background rebuilds swapped in since the reset
   std::shared_ptr<const Image> journal_;            // while a journal keeps states: image_but_narrow() at its start
+  bool def_journal_ = false;                        // def_ keeps the journal's changes (a bounded tree)
+  std::shared_ptr<const bvh::Bvh<bvh::Aabb>> journal_def_;  // the journal's start tree, when a rebuild replaced it
+  std::shared_ptr<const std::vector<double>> journal_reach_;  // bounded: prev_radius_ before a step changed it
 };
 
 }  // namespace surfeledit::detail

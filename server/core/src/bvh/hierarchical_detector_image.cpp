@@ -3,11 +3,12 @@
 
 namespace surfeledit::detail {
 
-std::shared_ptr<HierarchicalDetector::Image> HierarchicalDetector::image_but_narrow() const {
+std::shared_ptr<HierarchicalDetector::Image> HierarchicalDetector::image_but_narrow(bool tree) const {
   auto image = std::make_shared<Image>();
-  if (def_) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
+  if (def_ && tree) image->def = std::make_shared<const bvh::Bvh<bvh::Aabb>>(*def_);
   if (bounded_) {
-    image->reach = std::make_shared<const std::vector<double>>(prev_radius_);  // the radii the next shift compares with
+    // The radii the next shift compares with.
+    if (tree) image->reach = std::make_shared<const std::vector<double>>(prev_radius_);
   } else {
     auto reach = std::make_shared<std::vector<double>>();
     reach->reserve(deformable_.size());
@@ -43,17 +44,24 @@ void HierarchicalDetector::restore_image(const DetectorImage& image) {
   restore_but_narrow(*mine);
 }
 
-bool HierarchicalDetector::fits(const Image& image) const {
-  return image.rows == rows_ && image.reach && image.reach->size() == deformable_.size() && !image.def == !def_;
+bool HierarchicalDetector::fits(const Image& image, bool tree) const {
+  if (image.rows != rows_) return false;
+  if (image.reach ? image.reach->size() != deformable_.size() : !bounded_) return false;
+  if (!tree) return !def_journal_ || def_->journaling();
+  if (!def_) return !image.def && !image.def_steps;
+  return image.def || (image.def_steps && def_->fits(*image.def_steps));
 }
 
 void HierarchicalDetector::restore_but_narrow(const Image& image) {
-  if (def_) *def_ = *image.def;
+  if (image.def) *def_ = *image.def;
+  else if (image.def_steps) def_->restore(*image.def_steps);
   // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
   if (filter_) filter_->refit_all_next_step();
-  const std::vector<double>& reach = *image.reach;
-  if (bounded_) prev_radius_ = reach;
-  else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = reach[q];
+  if (image.reach) {
+    const std::vector<double>& reach = *image.reach;
+    if (bounded_) prev_radius_ = reach;
+    else for (std::size_t q = 0; q < deformable_.size(); ++q) reach_[deformable_[q]] = reach[q];
+  }
   step_ = image.step;
   evaluations_ = image.evaluations;
   inserted_nu_ = image.inserted_nu;
@@ -61,30 +69,58 @@ void HierarchicalDetector::restore_but_narrow(const Image& image) {
 }
 
 bool HierarchicalDetector::start_journal() {
-  journal_.reset();
+  drop_journal();
   if (extended_ || !narrow_->start_journal()) return false;
-  journal_ = image_but_narrow();
+  def_journal_ = def_ && def_->start_journal();
+  // Bounded, with no tree or a journaled one: neither the tree nor the radii are copied now.
+  journal_ = image_but_narrow(!(bounded_ && (!def_ || def_journal_)));
   return true;
 }
 
 std::shared_ptr<const DetectorImage> HierarchicalDetector::journal_image() const {
-  if (!journal_) return nullptr;
+  if (!journal_ || !fits(*journal_, false)) return nullptr;
   auto narrow = narrow_->journal_image();
   if (!narrow) return nullptr;
   auto image = std::make_shared<Image>(*journal_);  // shares the journal's tree copy and reach
   image->narrow = std::move(narrow);
+  if (journal_def_) image->def = journal_def_;
+  else if (def_journal_) image->def_steps = std::make_shared<const bvh::Bvh<bvh::Aabb>::StepImage>(def_->journal());
+  if (journal_reach_) image->reach = journal_reach_;
   return image;
 }
 
 void HierarchicalDetector::restore_journal() {
-  if (!journal_ || !fits(*journal_)) throw Error(ErrorCode::Internal, "history", "no journal to restore");
+  if (!journal_ || !fits(*journal_, false)) throw Error(ErrorCode::Internal, "history", "no journal to restore");
   narrow_->restore_journal();
+  if (journal_def_) *def_ = *journal_def_;
+  else if (def_journal_) def_->restore_journal();
   restore_but_narrow(*journal_);
+  if (journal_reach_) prev_radius_ = *journal_reach_;
 }
 
 void HierarchicalDetector::stop_journal() {
   if (!extended_) narrow_->stop_journal();
+  drop_journal();
+}
+
+void HierarchicalDetector::drop_journal() {
+  if (def_) def_->stop_journal();
   journal_.reset();
+  def_journal_ = false;
+  journal_def_.reset();
+  journal_reach_.reset();
+}
+
+void HierarchicalDetector::keep_journal_reach() {
+  if (journal_ && !journal_->reach && !journal_reach_) journal_reach_ = std::make_shared<const std::vector<double>>(prev_radius_);
+}
+
+void HierarchicalDetector::keep_journal_tree() {
+  if (!def_journal_) return;
+  def_->restore_journal();
+  def_->stop_journal();
+  journal_def_ = std::move(def_);
+  def_journal_ = false;
 }
 
 std::unique_ptr<CollisionDetector> HierarchicalDetector::clone() const {

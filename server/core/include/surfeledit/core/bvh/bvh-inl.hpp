@@ -17,6 +17,7 @@ namespace surfeledit::bvh {
 
 template <class Box>
 void Bvh<Box>::reset_steps(const BvhParams& params) {
+  stop_journal();
   params_ = params;
   live_ = static_cast<Index>(order_.size());
   extras_ = 0;
@@ -252,6 +253,7 @@ int Bvh<Box>::bottom_up_levels() const {
 template <class Box>
 template <class B, class>
 BvhCounters Bvh<Box>::refit(const Points& positions, const Values& radii) {
+  if (journal_on_) throw Error(ErrorCode::Internal, "journal", "refit() of a journaled tree (only bounded steps are)");
   BvhCounters c;
   positions_ = &positions;
   radii_ = &radii;
@@ -315,6 +317,7 @@ void Bvh<Box>::touch_all(BvhCounters& counters) {
 
 template <class Box>
 void Bvh<Box>::on_removed(const std::vector<bool>& keep) {
+  stop_journal();
   std::vector<Index> remap(keep.size(), kDeadRow);
   Index next = 0;
   for (std::size_t r = 0; r < keep.size(); ++r)
@@ -345,6 +348,7 @@ void Bvh<Box>::on_removed(const std::vector<bool>& keep) {
 
 template <class Box>
 BvhCounters Bvh<Box>::on_inserted(const Points& positions, const Values& radii, const IndexList& parents) {
+  stop_journal();
   BvhCounters c;
   const Index first = static_cast<Index>(positions.rows() - static_cast<Eigen::Index>(parents.size()));
   leaf_of_row_.resize(static_cast<std::size_t>(positions.rows()), -1);

@@ -135,6 +135,47 @@ class Bvh {
   // The next step_bounded() refits every node from its rows (after adopting a tree built elsewhere).
   void refit_all_next_step() { refit_all_ = true; }
 
+  // ---- step journal (bounded AABB trees: undo of steps, history.hpp) --------------------------
+  // A bounded step changes only the nodes it fits or narrows (box, stamp, since: step_bounded's fit of every
+  // node, refit_leaf, tighten) and the step's scalars, so the undo image of a step holds those nodes as they
+  // were instead of a copy of the tree. Marks are not kept: every traversal starts a new epoch (new_marks), so
+  // no mark of an undone step reads as set.
+  struct StepImage {
+    struct Saved {
+      std::int32_t node = 0;    // its index
+      std::uint64_t stamp = 0;  // its stamp, since and box before its first change in a step
+      double since = 0.0;
+      Box box;
+    };
+    std::vector<Saved> saved;           // in the order of the changes (put back in reverse)
+    std::uint64_t step = 0;             // the step scalars when the journal started
+    double shift = 0.0, reach = 0.0;
+    bool refit_all = false, refit_since_build = false;
+    const Points* positions = nullptr;  // the arrays of the step before the journal
+    const Points* previous = nullptr;
+    const Values* radii = nullptr;
+    std::uint64_t step_after = 0;       // the tree's step when the image was taken, and its node count:
+    std::size_t node_count = 0;         // restore() takes the image only while they are the tree's
+    std::size_t bytes() const { return sizeof(*this) + saved.capacity() * sizeof(Saved); }
+  };
+  // Starts noting changes (an earlier journal is dropped). False, and no journal, unless this is a bounded
+  // AABB tree without dead slots (a leaf's compaction would move rows). build(), adopt(), on_removed(),
+  // on_inserted() and stop_journal() end it; refit() of a journaled tree throws Internal.
+  bool start_journal();
+  bool journaling() const { return journal_on_; }
+  void stop_journal() {
+    journal_on_ = false;
+    journal_.saved.clear();
+  }
+  // The changes since start_journal(): an image restore() takes while the tree is as it is now.
+  StepImage journal() const;
+  // Whether restore(image) fits this tree: the node count and the step it was taken at.
+  bool fits(const StepImage& image) const;
+  // Puts the tree back as it was when the image's journal started; Internal, nothing changed, unless it fits.
+  void restore(const StepImage& image);
+  // restore(journal()) without the copy; the journal goes on (later changes are noted as well).
+  void restore_journal();
+
   // The model dropped rows: `keep` has one flag per old row. Dropped surfels become dead slots
   // (boxes unchanged until their leaf's next refit); kept rows are renumbered.
   void on_removed(const std::vector<bool>& keep);
@@ -165,6 +206,12 @@ class Bvh {
   template <class B = Box, class = std::enable_if_t<std::is_same_v<B, Aabb>>>
   void refit_touched(std::int32_t node, BvhCounters& counters);
   void compact_leaf(std::int32_t leaf);
+  // Before a journaled change of node k (box, stamp, since): keeps it at its first change in this step.
+  void note(std::size_t k) {
+    if (journal_on_ && stamp_[k] != step_) journal_.saved.push_back({static_cast<std::int32_t>(k), stamp_[k], since_[k], nodes_[k].box});
+  }
+  // The journal's nodes in reverse, then its start scalars (restore(), restore_journal()).
+  void put_back(const StepImage& image);
   Aabb tight_aabb(std::int32_t node) const;
   unsigned refit_axes(Aabb& box, const Aabb& tight, unsigned axes) const;
   void grow_ancestors(std::int32_t node);
@@ -203,6 +250,9 @@ class Bvh {
   // Marks of the tree/tree traversal.
   std::vector<std::uint32_t> marks_;
   std::uint32_t mark_ = 1;
+  // Step journal: the start scalars and the nodes noted since (step scratch: not in memory_bytes()).
+  bool journal_on_ = false;
+  StepImage journal_;
 };
 
 template <class Box>

@@ -78,6 +78,7 @@ template <class B, class>
 void Bvh<Box>::fit_all_bounded(BvhCounters& counters) {
   for (std::size_t k = nodes_.size(); k-- > 0;) {
     const std::int32_t i = static_cast<std::int32_t>(k);
+    note(k);
     Node& nd = nodes_[k];
     if (nd.leaf()) {
       compact_leaf(i);
@@ -118,6 +119,7 @@ template <class B, class>
 bool Bvh<Box>::refit_leaf(std::int32_t node, BvhCounters& counters) {
   const std::size_t k = static_cast<std::size_t>(node);
   if (stamp_[k] == step_) return false;
+  note(k);
   compact_leaf(node);
   nodes_[k].box = tight_reach(node);
   stamp_[k] = step_;
@@ -140,6 +142,7 @@ void Bvh<Box>::tighten(std::int32_t node) {
   b.lo = own.lo.cwiseMax(u.lo);
   b.hi = own.hi.cwiseMin(u.hi);
   if (b.empty()) b = Aabb{};
+  note(k);
   nodes_[k].box = b;
   stamp_[k] = step_;
   since_[k] = shift_;
