@@ -40,7 +40,7 @@ CollisionResult image_step(CollisionDetector& det, TestScene& scene, const Vec3&
   return det.detect(view, previous);
 }
 
-void expect_same(const CollisionResult& a, const CollisionResult& b, const std::string& where) {
+void expect_same_detection(const CollisionResult& a, const CollisionResult& b, const std::string& where) {
   EXPECT_EQ(a.colliding, b.colliding) << where;
   EXPECT_EQ(a.depths, b.depths) << where;
   EXPECT_EQ(a.stats.tested, b.stats.tested) << where;
@@ -99,7 +99,7 @@ TEST(HierarchicalImage, JournalImageOfABoundedTreeRestoresWhatACloneHolds) {
     }
     for (int k = 0; k < 5; ++k) {
       const Vec3 t(0.003 * (k % 2), 0, k < 3 ? -0.03 : 0.02);
-      expect_same(image_step(*det, scene, t, bound), image_step(*twin, twin_scene, t, bound),
+      expect_same_detection(image_step(*det, scene, t, bound), image_step(*twin, twin_scene, t, bound),
                   "step " + std::to_string(k));
     }
   }
