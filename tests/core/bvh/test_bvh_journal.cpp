@@ -81,12 +81,17 @@ struct JournalSheets {
     std::sort(narrow.rows.begin(), narrow.rows.end());
     return narrow.rows;
   }
+  // A bounded tree over the deformable rows after steps 0 .. steps-1.
+  Bvh<Aabb> tree_after(int steps) {
+    Bvh<Aabb> tree(p, r, def, bounded());
+    for (int k = 0; k < steps; ++k) step(tree, k);
+    return tree;
+  }
 };
 
 TEST(BvhJournal, RestoredStepsLeaveTheTreeAsACopyTakenBefore) {
   JournalSheets s;
-  Bvh<Aabb> tree(s.p, s.r, s.def, s.bounded());
-  for (int k = 0; k < 3; ++k) s.step(tree, k);
+  Bvh<Aabb> tree = s.tree_after(3);
   const Bvh<Aabb> copy = tree;
   const Points p0 = s.p;
   ASSERT_TRUE(tree.start_journal());
@@ -120,8 +125,7 @@ TEST(BvhJournal, RestoredStepsLeaveTheTreeAsACopyTakenBefore) {
 // box it had before; for a step near first contact that is part of the tree.
 TEST(BvhJournal, AStepKeepsExactlyTheNodesItChanged) {
   JournalSheets s;
-  Bvh<Aabb> tree(s.p, s.r, s.def, s.bounded());
-  for (int k = 0; k < 2; ++k) s.step(tree, k);
+  Bvh<Aabb> tree = s.tree_after(2);
   const Bvh<Aabb> copy = tree;
   ASSERT_TRUE(tree.start_journal());
   s.step(tree, 8);
@@ -144,8 +148,7 @@ TEST(BvhJournal, AStepKeepsExactlyTheNodesItChanged) {
 // leads back to the start.
 TEST(BvhJournal, StepsTakenBackWithinTheJournalStillLeadBackToItsStart) {
   JournalSheets s;
-  Bvh<Aabb> tree(s.p, s.r, s.def, s.bounded());
-  for (int k = 0; k < 4; ++k) s.step(tree, k);
+  Bvh<Aabb> tree = s.tree_after(4);
   const Bvh<Aabb> copy = tree;
   const Points p0 = s.p;
   ASSERT_TRUE(tree.start_journal());
@@ -163,8 +166,7 @@ TEST(BvhJournal, StepsTakenBackWithinTheJournalStillLeadBackToItsStart) {
 // An image of another step, or of another tree, is refused and changes nothing.
 TEST(BvhJournal, AnImageThatDoesNotFitIsRefused) {
   JournalSheets s;
-  Bvh<Aabb> tree(s.p, s.r, s.def, s.bounded());
-  for (int k = 0; k < 4; ++k) s.step(tree, k);
+  Bvh<Aabb> tree = s.tree_after(4);
   ASSERT_TRUE(tree.start_journal());
   s.step(tree, 4);
   const Bvh<Aabb>::StepImage image = tree.journal();
