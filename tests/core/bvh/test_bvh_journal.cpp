@@ -186,12 +186,18 @@ TEST(BvhJournal, AnImageThatDoesNotFitIsRefused) {
 }
 
 // No journal where a step may change more than boxes: a tree with dead slots (compaction moves rows), a tree
-// refit by another update mode, other box kinds. Insertions end a journal; refit() of a journaled tree throws.
+// refit by another update mode, other box kinds. Copies take none, insertions end one; refit() of a journaled
+// tree throws.
 TEST(BvhJournal, OnlyBoundedAabbTreesWithoutDeadSlotsKeepOne) {
   JournalSheets s;
   Bvh<Aabb> tree(s.p, s.r, s.def, s.bounded());
   ASSERT_TRUE(tree.start_journal());
   EXPECT_TRUE(tree.journaling());
+  const Bvh<Aabb> copy = tree;  // a copy (an undo image, a clone) keeps no journal
+  EXPECT_FALSE(copy.journaling());
+  Bvh<Aabb> assigned;
+  assigned = tree;
+  EXPECT_FALSE(assigned.journaling());
   EXPECT_THROW(tree.refit(s.p, s.r), Error);
   const IndexList parents = {s.def[0]};
   Points grown(s.p.rows() + 1, 3);

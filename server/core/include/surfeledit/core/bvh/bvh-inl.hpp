@@ -253,7 +253,7 @@ int Bvh<Box>::bottom_up_levels() const {
 template <class Box>
 template <class B, class>
 BvhCounters Bvh<Box>::refit(const Points& positions, const Values& radii) {
-  if (journal_on_) throw Error(ErrorCode::Internal, "journal", "refit() of a journaled tree (only bounded steps are)");
+  if (journal_.on) throw Error(ErrorCode::Internal, "journal", "refit() of a journaled tree (only bounded steps are)");
   BvhCounters c;
   positions_ = &positions;
   radii_ = &radii;

@@ -160,12 +160,13 @@ class Bvh {
   };
   // Starts noting changes (an earlier journal is dropped). False, and no journal, unless this is a bounded
   // AABB tree without dead slots (a leaf's compaction would move rows). build(), adopt(), on_removed(),
-  // on_inserted() and stop_journal() end it; refit() of a journaled tree throws Internal.
+  // on_inserted() and stop_journal() end it, a copy of the tree takes none; refit() of a journaled tree throws
+  // Internal.
   bool start_journal();
-  bool journaling() const { return journal_on_; }
+  bool journaling() const { return journal_.on; }
   void stop_journal() {
-    journal_on_ = false;
-    journal_.saved.clear();
+    journal_.on = false;
+    journal_.image.saved.clear();
   }
   // The changes since start_journal(): an image restore() takes while the tree is as it is now.
   StepImage journal() const;
@@ -208,7 +209,7 @@ class Bvh {
   void compact_leaf(std::int32_t leaf);
   // Before a journaled change of node k (box, stamp, since): keeps it at its first change in this step.
   void note(std::size_t k) {
-    if (journal_on_ && stamp_[k] != step_) journal_.saved.push_back({static_cast<std::int32_t>(k), stamp_[k], since_[k], nodes_[k].box});
+    if (journal_.on && stamp_[k] != step_) journal_.image.saved.push_back({static_cast<std::int32_t>(k), stamp_[k], since_[k], nodes_[k].box});
   }
   // The journal's nodes in reverse, then its start scalars (restore(), restore_journal()).
   void put_back(const StepImage& image);
@@ -250,9 +251,20 @@ class Bvh {
   // Marks of the tree/tree traversal.
   std::vector<std::uint32_t> marks_;
   std::uint32_t mark_ = 1;
-  // Step journal: the start scalars and the nodes noted since (step scratch: not in memory_bytes()).
-  bool journal_on_ = false;
-  StepImage journal_;
+  // Step journal: whether one runs, its start scalars and the nodes noted since (step scratch: not in
+  // memory_bytes()). A copy of the tree (an undo image, a clone) takes none.
+  struct Journal {
+    bool on = false;
+    StepImage image;
+    Journal() = default;
+    Journal(const Journal&) {}
+    Journal& operator=(const Journal&) {
+      on = false;
+      image.saved.clear();
+      return *this;
+    }
+  };
+  Journal journal_;
 };
 
 template <class Box>

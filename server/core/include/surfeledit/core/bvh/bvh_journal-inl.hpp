@@ -21,22 +21,23 @@ template <class Box>
 bool Bvh<Box>::start_journal() {
   stop_journal();
   if (!std::is_same_v<Box, Aabb> || !bounded() || dead_ != 0) return false;
-  journal_.step = step_;
-  journal_.shift = shift_;
-  journal_.reach = reach_;
-  journal_.refit_all = refit_all_;
-  journal_.refit_since_build = refit_since_build_;
-  journal_.positions = positions_;
-  journal_.previous = previous_;
-  journal_.radii = radii_;
-  journal_on_ = true;
+  StepImage& j = journal_.image;
+  j.step = step_;
+  j.shift = shift_;
+  j.reach = reach_;
+  j.refit_all = refit_all_;
+  j.refit_since_build = refit_since_build_;
+  j.positions = positions_;
+  j.previous = previous_;
+  j.radii = radii_;
+  journal_.on = true;
   return true;
 }
 
 template <class Box>
 typename Bvh<Box>::StepImage Bvh<Box>::journal() const {
-  if (!journal_on_) throw Error(ErrorCode::Internal, "journal", "the tree keeps no journal");
-  StepImage image = journal_;
+  if (!journal_.on) throw Error(ErrorCode::Internal, "journal", "the tree keeps no journal");
+  StepImage image = journal_.image;
   image.step_after = step_;
   image.node_count = nodes_.size();
   return image;
@@ -63,8 +64,8 @@ void Bvh<Box>::restore(const StepImage& image) {
 
 template <class Box>
 void Bvh<Box>::restore_journal() {
-  if (!journal_on_) throw Error(ErrorCode::Internal, "journal", "the tree keeps no journal");
-  put_back(journal_);
+  if (!journal_.on) throw Error(ErrorCode::Internal, "journal", "the tree keeps no journal");
+  put_back(journal_.image);
 }
 
 template <class Box>
