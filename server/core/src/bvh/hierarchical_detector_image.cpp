@@ -112,7 +112,8 @@ void HierarchicalDetector::drop_journal() {
 }
 
 void HierarchicalDetector::keep_journal_reach() {
-  if (journal_ && !journal_->reach && !journal_reach_) journal_reach_ = std::make_shared<const std::vector<double>>(prev_radius_);
+  if (journal_ && !journal_->reach && !journal_reach_)
+    journal_reach_ = std::make_shared<const std::vector<double>>(prev_radius_);
 }
 
 void HierarchicalDetector::keep_journal_tree() {

@@ -209,7 +209,8 @@ class Bvh {
   void compact_leaf(std::int32_t leaf);
   // Before a journaled change of node k (box, stamp, since): keeps it at its first change in this step.
   void note(std::size_t k) {
-    if (journal_.on && stamp_[k] != step_) journal_.image.saved.push_back({static_cast<std::int32_t>(k), stamp_[k], since_[k], nodes_[k].box});
+    if (journal_.on && stamp_[k] != step_)
+      journal_.image.saved.push_back({static_cast<std::int32_t>(k), stamp_[k], since_[k], nodes_[k].box});
   }
   // The journal's nodes in reverse, then its start scalars (restore(), restore_journal()).
   void put_back(const StepImage& image);
