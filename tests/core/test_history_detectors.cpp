@@ -46,16 +46,16 @@ std::vector<Named> configs() {
   };
 }
 
-using Op = std::variant<DeformParams, IdList>;  // a step, or a removal
+using DetectorOp = std::variant<DeformParams, IdList>;  // a step, or a removal
 
-struct Scene : SessionFixture {
-  explicit Scene(const Config& config) {
+struct DetectorScene : SessionFixture {
+  explicit DetectorScene(const Config& config) {
     session.set_regions({zero, {}}, {one, {}});
     session.configure(config);
   }
 };
 
-void apply(EditSession& s, const Op& op) {
+void apply_op(EditSession& s, const DetectorOp& op) {
   if (const auto* p = std::get_if<DeformParams>(&op)) s.deform(*p);
   else s.remove(std::get<IdList>(op));
 }
@@ -81,10 +81,10 @@ class HistoryDetectors : public ::testing::TestWithParam<Named> {};
 
 TEST_P(HistoryDetectors, UndoEqualsAFreshReplayOfTheKeptOps) {
   const Config& config = GetParam().config;
-  Scene a(config);
+  DetectorScene a(config);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0, 1);
-  std::vector<Op> applied, undone;
+  std::vector<DetectorOp> applied, undone;
   int checks = 0, colliding_checks = 0, probes = 0;
   for (int it = 0; it < 22; ++it) {
     const unsigned what = rng() % 10;
@@ -114,8 +114,8 @@ TEST_P(HistoryDetectors, UndoEqualsAFreshReplayOfTheKeptOps) {
     } else {
       continue;
     }
-    Scene b(config);
-    for (const Op& op : applied) apply(b.session, op);
+    DetectorScene b(config);
+    for (const DetectorOp& op : applied) apply_op(b.session, op);
     const std::string where = GetParam().name + " op " + std::to_string(it);
     expect_same(Snapshot(a.session), Snapshot(b.session), where);
     // Every other check (at random) also compares a probe step; it drops A's redo tail.

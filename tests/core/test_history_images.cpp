@@ -10,7 +10,7 @@
 namespace surfeledit {
 namespace {
 
-DeformParams down(double dz) {
+DeformParams down_turned(double dz) {
   DeformParams p;
   p.translation = Vec3(0, 0, -dz);
   p.angle = 0.05;
@@ -28,7 +28,7 @@ struct StepsRun {
 StepsRun steps(EditSession& s) {
   StepsRun r;
   for (int k = 0; k < 5; ++k) {
-    const StepResult out = s.deform(down(0.1));
+    const StepResult out = s.deform(down_turned(0.1));
     r.colliding.push_back(out.colliding);
     r.depths.push_back(out.depths);
   }
@@ -96,8 +96,8 @@ TEST(HistoryImages, RedoOfConfigureAfterUndoneStepsMatchesAReplay) {
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
   f.session.configure({{"algorithm", std::string("temporal")}});
-  f.session.deform(down(0.1));
-  f.session.deform(down(0.1));
+  f.session.deform(down_turned(0.1));
+  f.session.deform(down_turned(0.1));
   f.session.undo();
   f.session.undo();
   f.session.undo();  // configure: its after-image keeps the stepped-and-restored detector object
@@ -133,7 +133,7 @@ TEST(HistoryImages, AStepMakesTheDetectorNotDerivable) {
 
   SessionFixture f;
   f.session.set_regions({f.zero, {}}, {f.one, {}});
-  const StepResult first = f.session.deform(down(0.1));
+  const StepResult first = f.session.deform(down_turned(0.1));
   const std::size_t robust = structure(f.session.report(), "collision_robust");  // the object the image must keep
   f.session.configure({{"algorithm", std::string("simple")}});
   EXPECT_GT(kind(f.session.report(), "tool").bytes, robust);
@@ -142,7 +142,7 @@ TEST(HistoryImages, AStepMakesTheDetectorNotDerivable) {
   r.colliding.push_back(first.colliding);
   r.depths.push_back(first.depths);
   for (int k = 1; k < 5; ++k) {
-    const StepResult out = f.session.deform(down(0.1));
+    const StepResult out = f.session.deform(down_turned(0.1));
     r.colliding.push_back(out.colliding);
     r.depths.push_back(out.depths);
   }

@@ -85,16 +85,16 @@ std::size_t rows_bytes(const EditSession& s) {
   return 0;
 }
 
-struct Case {
+struct StepImageCase {
   std::size_t one;  // F1 rows of the cloud (at least 1; 150,000: all)
   double angle;
   bool tangents;
 };
 
-class StepImages : public ::testing::TestWithParam<Case> {};
+class StepImages : public ::testing::TestWithParam<StepImageCase> {};
 
 TEST_P(StepImages, UndoAfterDragStepsIsBitForBitAtOneAndTwoThreads) {
-  const Case c = GetParam();
+  const StepImageCase c = GetParam();
   constexpr int kSteps = 4;
   std::vector<State> after_steps;
   for (int threads : {1, 2}) {
@@ -132,8 +132,8 @@ TEST_P(StepImages, UndoAfterDragStepsIsBitForBitAtOneAndTwoThreads) {
 // Cloud: all F1 (no normal kept), half F1, one F1 row; without and with a rotation (every normal kept) and
 // tangents.
 INSTANTIATE_TEST_SUITE_P(Drag, StepImages,
-                         ::testing::Values(Case{150000, 0.0, false}, Case{75000, 0.0, false}, Case{75000, 0.0, true},
-                                           Case{1, 0.0, false}, Case{75000, 0.02, false}, Case{75000, 0.02, true}));
+                         ::testing::Values(StepImageCase{150000, 0.0, false}, StepImageCase{75000, 0.0, false}, StepImageCase{75000, 0.0, true},
+                                           StepImageCase{1, 0.0, false}, StepImageCase{75000, 0.02, false}, StepImageCase{75000, 0.02, true}));
 
 TEST(StepImages, ATranslationKeepsNoNormalOfF1Rows) {
   // Bytes of one step's image: all F1 without rotation keeps no normal; with a rotation, every normal.

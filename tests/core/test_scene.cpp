@@ -13,16 +13,15 @@
 namespace surfeledit {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
-Pose tilted(const Vec3& t) {
+Pose tilted_pose(const Vec3& t) {
   Pose p;
   p.rotation = Eigen::AngleAxisd(1.1, Vec3(-2, 1, 0.5).normalized()).toRotationMatrix();
   p.translation = t;
   return p;
 }
 
-struct Case {
+struct SolidCase {
   std::string name;
   std::function<std::unique_ptr<Solid>()> make;
   double scale;          // characteristic size, model units
@@ -30,22 +29,22 @@ struct Case {
   double exact_area;     // analytic area (0 = not checked against a formula)
 };
 
-std::vector<Case> cases() {
+std::vector<SolidCase> cases() {
   return {
-      {"sphere", [] { return make_sphere(0.8, tilted(Vec3(1, 2, 3))); }, 0.8, 0.03, 4 * kPi * 0.64},
-      {"box", [] { return make_box(Vec3(1.0, 0.4, 0.25), tilted(Vec3(-5, 0, 2))); }, 1.0, 0.03,
+      {"sphere", [] { return make_sphere(0.8, tilted_pose(Vec3(1, 2, 3))); }, 0.8, 0.03, 4 * EIGEN_PI * 0.64},
+      {"box", [] { return make_box(Vec3(1.0, 0.4, 0.25), tilted_pose(Vec3(-5, 0, 2))); }, 1.0, 0.03,
        8 * (0.4 + 0.1 + 0.25)},
-      {"cylinder", [] { return make_cylinder(0.5, 0.7, tilted(Vec3(0, 0, 0))); }, 0.7, 0.03,
-       2 * kPi * 0.5 * 1.4 + 2 * kPi * 0.25},
-      {"torus", [] { return make_torus(1.0, 0.25, tilted(Vec3(0, 7, 0))); }, 1.0, 0.03, 4 * kPi * kPi * 0.25},
-      {"capsule", [] { return make_capsule(0.4, 0.5, tilted(Vec3(2, 2, 2))); }, 0.9, 0.03,
-       4 * kPi * 0.16 + 4 * kPi * 0.4 * 0.5},
-      {"cup", [] { return make_cup(0.5, 1.0, 0.08, 0.25, 0.05, tilted(Vec3(0, -3, 1))); }, 1.0, 0.02, 0.0},
+      {"cylinder", [] { return make_cylinder(0.5, 0.7, tilted_pose(Vec3(0, 0, 0))); }, 0.7, 0.03,
+       2 * EIGEN_PI * 0.5 * 1.4 + 2 * EIGEN_PI * 0.25},
+      {"torus", [] { return make_torus(1.0, 0.25, tilted_pose(Vec3(0, 7, 0))); }, 1.0, 0.03, 4 * EIGEN_PI * EIGEN_PI * 0.25},
+      {"capsule", [] { return make_capsule(0.4, 0.5, tilted_pose(Vec3(2, 2, 2))); }, 0.9, 0.03,
+       4 * EIGEN_PI * 0.16 + 4 * EIGEN_PI * 0.4 * 0.5},
+      {"cup", [] { return make_cup(0.5, 1.0, 0.08, 0.25, 0.05, tilted_pose(Vec3(0, -3, 1))); }, 1.0, 0.02, 0.0},
   };
 }
 
 TEST(Scene, SamplesLieOnTheSurfaceWithExactUnitNormals) {
-  for (const Case& c : cases()) {
+  for (const SolidCase& c : cases()) {
     SCOPED_TRACE(c.name);
     const auto solid = c.make();
     SampleParams sp;
@@ -80,7 +79,7 @@ TEST(Scene, SamplesLieOnTheSurfaceWithExactUnitNormals) {
 }
 
 TEST(Scene, CountsFollowAreaOverSpacingSquared) {
-  for (const Case& c : cases()) {
+  for (const SolidCase& c : cases()) {
     SCOPED_TRACE(c.name);
     const auto solid = c.make();
     if (c.exact_area > 0) {
@@ -98,10 +97,10 @@ TEST(Scene, CountsFollowAreaOverSpacingSquared) {
   }
   // The cup's area (numerically integrated) lies between the body alone and body + full half tube.
   const double r = 0.5, h = 1.0, w = 0.08, ri = r - w;
-  const double body = kPi * r * r + 2 * kPi * r * h + kPi * (r * r - ri * ri) + 2 * kPi * ri * (h - w) + kPi * ri * ri;
+  const double body = EIGEN_PI * r * r + 2 * EIGEN_PI * r * h + EIGEN_PI * (r * r - ri * ri) + 2 * EIGEN_PI * ri * (h - w) + EIGEN_PI * ri * ri;
   const double cup = make_cup()->area();
   EXPECT_GT(cup, body);
-  EXPECT_LT(cup, body + 2 * kPi * kPi * 0.25 * 0.05);
+  EXPECT_LT(cup, body + 2 * EIGEN_PI * EIGEN_PI * 0.25 * 0.05);
 }
 
 TEST(Scene, NeighbourSpacingIsRoughlyUniform) {
@@ -127,7 +126,7 @@ TEST(Scene, NeighbourSpacingIsRoughlyUniform) {
 }
 
 TEST(Scene, SameSeedSameSamplesDifferentSeedDifferent) {
-  for (const Case& c : cases()) {
+  for (const SolidCase& c : cases()) {
     SCOPED_TRACE(c.name);
     const auto solid = c.make();
     SampleParams a;
@@ -150,7 +149,7 @@ TEST(Scene, SameSeedSameSamplesDifferentSeedDifferent) {
 }
 
 TEST(Scene, PoseIsRotationThenTranslation) {
-  const Pose pose = tilted(Vec3(10, -20, 30));
+  const Pose pose = tilted_pose(Vec3(10, -20, 30));
   const auto local = make_cylinder(0.3, 0.5);
   const auto placed = make_cylinder(0.3, 0.5, pose);
   SampleParams sp;
@@ -244,7 +243,7 @@ TEST(Scene, UnionDropsSamplesInsideOtherParts) {
     in1 += s.part[i] == 1;
   }
   // Each sphere loses the cap of height 0.2 inside the other: area 2 pi r h = 0.2 pi of pi.
-  const double each = (kPi - 2 * kPi * 0.5 * 0.2) / (sp.spacing * sp.spacing);
+  const double each = (EIGEN_PI - 2 * EIGEN_PI * 0.5 * 0.2) / (sp.spacing * sp.spacing);
   EXPECT_NEAR(in0 / each, 1.0, 0.08);
   EXPECT_NEAR(in1 / each, 1.0, 0.08);
   Points q(2, 3);

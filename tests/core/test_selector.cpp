@@ -12,7 +12,7 @@
 namespace surfeledit {
 namespace {
 
-Points random_cloud(int n, unsigned seed) {
+Points selector_cloud(int n, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   Points p(n, 3);
@@ -37,7 +37,7 @@ Selector box(const Vec3& c, const Vec3& half) {
 }
 
 TEST(Selector, SphereMatchesBruteForce) {
-  const Points p = random_cloud(5000, 1);
+  const Points p = selector_cloud(5000, 1);
   const Vec3 c(0.3, -0.2, 0.5);
   const double r = 1.1;
   IndexList truth;
@@ -50,7 +50,7 @@ TEST(Selector, SphereMatchesBruteForce) {
 }
 
 TEST(Selector, BoxMatchesBruteForce) {
-  const Points p = random_cloud(5000, 2);
+  const Points p = selector_cloud(5000, 2);
   const Vec3 c(-0.4, 0.1, 0.0), half(0.5, 1.0, 1.5);
   IndexList truth;
   for (Index i = 0; i < p.rows(); ++i) {

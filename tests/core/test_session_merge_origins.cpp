@@ -54,7 +54,7 @@ IdList expect_merge_as_direct(EditSession& s, const Origins& o, const std::strin
   return got.removed;
 }
 
-DeformParams down(double dz) {
+DeformParams sink(double dz) {
   DeformParams p;
   p.translation = Vec3(0, 0, -dz);
   return p;
@@ -67,7 +67,7 @@ struct PushedRobust : SessionFixture {
     session.configure({{"algorithm", std::string("robust")}, {"history_mb", history_mb}});
     session.set_regions({zero, {}}, {one, {}});
     origins = gather_origins(session.model(), one);
-    for (int k = 0; k < 5; ++k) session.deform(down(0.1));
+    for (int k = 0; k < 5; ++k) session.deform(sink(0.1));
   }
 };
 
@@ -93,7 +93,7 @@ TEST(MergeOrigins, SimpleKeepsItsOwnCopy) {
   for (const auto& s : f.session.report().structures)
     if (s.name == "merge_origins") bytes = s.bytes;
   EXPECT_EQ(bytes, static_cast<std::size_t>(o.positions.size() + o.normals.size()) * sizeof(double));
-  for (int k = 0; k < 5; ++k) f.session.deform(down(0.1));
+  for (int k = 0; k < 5; ++k) f.session.deform(sink(0.1));
   EXPECT_GT(expect_merge_as_direct(f.session, o, "").size(), 10u);
 }
 

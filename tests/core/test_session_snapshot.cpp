@@ -104,7 +104,7 @@ struct FutureCase {
   const char* response;
 };
 
-class SnapshotFuture : public testing::TestWithParam<FutureCase> {};
+class SnapshotFuture : public ::testing::TestWithParam<FutureCase> {};
 
 // N scripted ops by two authors (undo and redo among them), save, restore into a fresh session, then
 // the same M ops on both.
@@ -143,7 +143,7 @@ TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
     EXPECT_TRUE(x == y) << "op " << k << ": " << x.error << " / " << y.error;
     collided += !x.colliding.empty() || (x.response != "none" && !x.response.empty());
     expect_same_state(live, copy, "after op " + std::to_string(k));
-    if (testing::Test::HasFailure()) break;
+    if (::testing::Test::HasFailure()) break;
   }
   // Per-author undo to the bottom of each history, alternating authors.
   for (int k = 0; k < 30; ++k) {
@@ -159,11 +159,11 @@ TEST_P(SnapshotFuture, RestoredSessionHasTheSameFuture) {
 
 INSTANTIATE_TEST_SUITE_P(
     AlgorithmsAndResponses, SnapshotFuture,
-    testing::Values(FutureCase{"robust", "report"}, FutureCase{"robust", "cancel"}, FutureCase{"robust", "backoff"},
+    ::testing::Values(FutureCase{"robust", "report"}, FutureCase{"robust", "cancel"}, FutureCase{"robust", "backoff"},
                     FutureCase{"robust", "merge"}, FutureCase{"temporal", "report"}, FutureCase{"temporal", "cancel"},
                     FutureCase{"temporal", "backoff"}, FutureCase{"temporal", "merge"}, FutureCase{"simple", "report"},
                     FutureCase{"simple", "cancel"}, FutureCase{"simple", "backoff"}, FutureCase{"simple", "merge"}),
-    [](const testing::TestParamInfo<FutureCase>& info) {
+    [](const ::testing::TestParamInfo<FutureCase>& info) {
       return std::string(info.param.algorithm) + "_" + info.param.response;
     });
 

@@ -80,7 +80,7 @@ std::size_t first_difference(const std::string& x, const std::string& y) {
   return k;
 }
 
-class SnapshotView : public testing::TestWithParam<ViewCase> {};
+class SnapshotView : public ::testing::TestWithParam<ViewCase> {};
 
 // The view outlives the point by many ops (entries dropped and replaced, spares reused) and is encoded
 // on another thread while the session goes on; then the session is closed before a second encode.
@@ -118,7 +118,7 @@ TEST_P(SnapshotView, EncodesThePointWhileTheSessionGoesOn) {
     EXPECT_EQ(x, y) << "op " << k;
     dropped += live->history().size() <= before && ops[k].kind != 1 && ops[k].kind != 2;
     EXPECT_EQ(observe(*live), observe(twin)) << "op " << k;
-    if (testing::Test::HasFailure()) break;
+    if (::testing::Test::HasFailure()) break;
   }
   encoder.join();
   EXPECT_GT(dropped, 5u) << "the bound must drop entries after the point";
@@ -139,10 +139,10 @@ TEST_P(SnapshotView, EncodesThePointWhileTheSessionGoesOn) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AlgorithmsAndResponses, SnapshotView,
-                         testing::Values(ViewCase{"none", "report"}, ViewCase{"robust", "merge"},
+                         ::testing::Values(ViewCase{"none", "report"}, ViewCase{"robust", "merge"},
                                          ViewCase{"robust", "cancel"}, ViewCase{"temporal", "backoff"},
                                          ViewCase{"temporal", "merge"}, ViewCase{"simple", "report"}),
-                         [](const testing::TestParamInfo<ViewCase>& info) {
+                         [](const ::testing::TestParamInfo<ViewCase>& info) {
                            return std::string(info.param.algorithm) + "_" + info.param.response;
                          });
 

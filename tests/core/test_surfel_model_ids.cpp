@@ -51,7 +51,7 @@ TEST(SurfelModelIds, RandomRemovalsAndInsertionsAgreeWithAPlainMap) {
     std::map<SurfelId, Index> rows;
     for (std::size_t r = 0; r < order.size(); ++r) rows[order[r]] = static_cast<Index>(r);
     expect_maps(m, rows);
-    if (testing::Test::HasFailure()) return;
+    if (::testing::Test::HasFailure()) return;
   }
 }
 

@@ -16,10 +16,10 @@
 namespace surfeledit {
 namespace {
 
-constexpr double kSpacing = 0.02;
+constexpr double kRigidSpacing = 0.02;
 
 struct Swing {
-  TwoArms scene{SampleParams{kSpacing, 7, 0.25}};
+  TwoArms scene{SampleParams{kRigidSpacing, 7, 0.25}};
   EditSession session;
   Vec3 offset_a = Vec3::Zero(), offset_b = Vec3::Zero();  // where each tool moved its arm
 
@@ -62,7 +62,7 @@ std::size_t expect_exact(const Swing& s, const std::string& tool, const IdList& 
   const bool a = tool == "a";
   const auto other = a ? TwoArms::arm_b_solid(s.offset_b) : TwoArms::arm_a_solid(s.offset_a);
   const auto body = TwoArms::body_solid();
-  const double tol = 2.0 * kSpacing;
+  const double tol = 2.0 * kRigidSpacing;
   const SurfelModel& m = s.session.model();
   const std::set<SurfelId> found(colliding.begin(), colliding.end());
   std::size_t deep = 0;

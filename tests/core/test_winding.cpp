@@ -12,7 +12,6 @@
 namespace surfeledit {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 SampledSurfels sphere_surfels(double radius, double spacing, const Vec3& center = Vec3::Zero()) {
   Pose pose;
@@ -39,8 +38,8 @@ TEST(Winding, OneDipoleByHand) {
   Values a(1);
   a << 0.3;
   const WindingNumber w(p, n, a);
-  EXPECT_NEAR(w.at(Vec3(0, 0, -2.0)), 0.3 / (4 * kPi * 4.0), 1e-15);
-  EXPECT_NEAR(w.at(Vec3(0, 0, 2.0)), -0.3 / (4 * kPi * 4.0), 1e-15);
+  EXPECT_NEAR(w.at(Vec3(0, 0, -2.0)), 0.3 / (4 * EIGEN_PI * 4.0), 1e-15);
+  EXPECT_NEAR(w.at(Vec3(0, 0, 2.0)), -0.3 / (4 * EIGEN_PI * 4.0), 1e-15);
   EXPECT_EQ(w.at(Vec3(0, 0, 0)), 0.0);  // the surfel itself contributes nothing, never NaN
 }
 
@@ -48,7 +47,7 @@ TEST(Winding, SampledSphereInsideOutsideAndAreas) {
   const double r = 0.5, h = 0.02;
   const SampledSurfels s = sphere_surfels(r, h);
   const Values a = surfel_areas(s.positions);
-  EXPECT_NEAR(a.sum() / (4 * kPi * r * r), 1.0, 0.08);
+  EXPECT_NEAR(a.sum() / (4 * EIGEN_PI * r * r), 1.0, 0.08);
   const WindingNumber w(s.positions, s.normals, a);
   const Points q = random_points(4000, 1.0, 7);
   int tested = 0;

@@ -36,7 +36,7 @@ void expect_partition(const Clustering& c, const IndexList& rows, Index total) {
   EXPECT_EQ(seen, want);
 }
 
-SimplifyParams params_of(SimplifyMethod m, int size, double max_variation = 1.0) {
+SimplifyParams clustering_params(SimplifyMethod m, int size, double max_variation = 1.0) {
   SimplifyParams p;
   p.method = m;
   p.cluster_size = size;
@@ -50,7 +50,7 @@ TEST(Clustering, EverySurfelInExactlyOneCluster) {
   for (const IndexList& rows : {every_other(n), IndexList{}}) {
     for (auto m : {SimplifyMethod::None, SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical}) {
       for (int size : {1, 2, 18, 100}) {
-        const Clustering c = make_clusters(s.positions, rows, params_of(m, size));
+        const Clustering c = make_clusters(s.positions, rows, clustering_params(m, size));
         expect_partition(c, rows, n);
         if (m == SimplifyMethod::None || size == 1) EXPECT_EQ(c.size(), static_cast<Index>(rows.size()));
       }
@@ -64,7 +64,7 @@ TEST(Clustering, DuplicatePositions) {
   IndexList rows(60);
   for (Index i = 0; i < 60; ++i) rows[i] = i;
   for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical}) {
-    const Clustering c = make_clusters(p, rows, params_of(m, 7));
+    const Clustering c = make_clusters(p, rows, clustering_params(m, 7));
     expect_partition(c, rows, 60);
     if (m == SimplifyMethod::Hierarchical)
       for (Index k = 0; k < c.size(); ++k) EXPECT_LE(c.count(k), 7);
@@ -77,7 +77,7 @@ TEST(Clustering, HierarchicalRespectsTheBounds) {
   IndexList rows(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) rows[i] = i;
   for (int size : {1, 10, 18, 100}) {
-    const Clustering c = cluster_hierarchical(s.positions, rows, params_of(SimplifyMethod::Hierarchical, size));
+    const Clustering c = cluster_hierarchical(s.positions, rows, clustering_params(SimplifyMethod::Hierarchical, size));
     for (Index k = 0; k < c.size(); ++k) ASSERT_LE(c.count(k), size);
     EXPECT_GE(c.size(), n / size);
     // The split tree: leaves are the clusters, children cover their parent's range.
@@ -94,8 +94,8 @@ TEST(Clustering, HierarchicalRespectsTheBounds) {
     }
   }
   // With a variation bound: every cluster is flat enough, so a curved torus gets more clusters.
-  const Clustering loose = cluster_hierarchical(s.positions, rows, params_of(SimplifyMethod::Hierarchical, 100));
-  const Clustering flat = cluster_hierarchical(s.positions, rows, params_of(SimplifyMethod::Hierarchical, 100, 0.01));
+  const Clustering loose = cluster_hierarchical(s.positions, rows, clustering_params(SimplifyMethod::Hierarchical, 100));
+  const Clustering flat = cluster_hierarchical(s.positions, rows, clustering_params(SimplifyMethod::Hierarchical, 100, 0.01));
   for (Index k = 0; k < flat.size(); ++k) {
     ASSERT_LE(flat.count(k), 100);
     EXPECT_LE(surface_variation(s.positions, flat.rows(k), static_cast<std::size_t>(flat.count(k))), 0.01);
@@ -110,15 +110,15 @@ TEST(Clustering, RegionGrowingMakesAboutNOverKClusters) {
   IndexList rows(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) rows[i] = i;
   for (int size : {10, 18, 100}) {
-    const Clustering c = cluster_region_growing(s.positions, rows, params_of(SimplifyMethod::RegionGrowing, size));
+    const Clustering c = cluster_region_growing(s.positions, rows, clustering_params(SimplifyMethod::RegionGrowing, size));
     const double mean = static_cast<double>(n) / c.size();
     std::printf("[ region growing ] %d surfels, k = %d: %d clusters, mean %.1f\n", n, size, c.size(), mean);
     for (Index k = 0; k < c.size(); ++k) EXPECT_GE(c.count(k), size);  // k taken, strays only add
     EXPECT_LT(mean, 2.0 * size);
   }
   // A variation bound makes clusters smaller where the surface bends.
-  const Clustering bounded = cluster_region_growing(s.positions, rows, params_of(SimplifyMethod::RegionGrowing, 100, 0.005));
-  const Clustering free = cluster_region_growing(s.positions, rows, params_of(SimplifyMethod::RegionGrowing, 100));
+  const Clustering bounded = cluster_region_growing(s.positions, rows, clustering_params(SimplifyMethod::RegionGrowing, 100, 0.005));
+  const Clustering free = cluster_region_growing(s.positions, rows, clustering_params(SimplifyMethod::RegionGrowing, 100));
   EXPECT_GT(bounded.size(), free.size());
 }
 
@@ -128,7 +128,7 @@ TEST(Clustering, SimplifiedSurfelLiesInItsMembersBoundingBox) {
   IndexList rows(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) rows[i] = i;
   for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical}) {
-    const Clustering c = make_clusters(s.positions, rows, params_of(m, 18));
+    const Clustering c = make_clusters(s.positions, rows, clustering_params(m, 18));
     const std::vector<SimplifiedSurfel> simple = simplify(s.positions, s.normals, s.radii, c, 2);
     ASSERT_EQ(static_cast<Index>(simple.size()), c.size());
     for (Index k = 0; k < c.size(); ++k) {
@@ -153,7 +153,7 @@ TEST(ClusterMap, InsertionJoinsTheParentRemovalLeaves) {
   const SampledSurfels s = torus();
   const Index n = static_cast<Index>(s.positions.rows());
   const IndexList rows = every_other(n);  // odd rows are in no cluster (like zero surfels)
-  ClusterMap map(n, cluster_hierarchical(s.positions, rows, params_of(SimplifyMethod::Hierarchical, 18)));
+  ClusterMap map(n, cluster_hierarchical(s.positions, rows, clustering_params(SimplifyMethod::Hierarchical, 18)));
   map.check();
   EXPECT_EQ(map.cluster_of(1), -1);
   const IndexList parents{0, 2, 1, 0};

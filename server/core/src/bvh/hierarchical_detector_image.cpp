@@ -53,8 +53,12 @@ bool HierarchicalDetector::fits(const Image& image, bool tree) const {
 }
 
 void HierarchicalDetector::restore_but_narrow(const Image& image) {
-  if (image.def) *def_ = *image.def;
-  else if (image.def_steps) def_->restore(*image.def_steps);
+  if (image.def) {
+    *def_ = *image.def;  // with the journal it held when copied (one taken within this journal goes on)
+    if (!def_journal_) def_->stop_journal();
+  } else if (image.def_steps) {
+    def_->restore(*image.def_steps);
+  }
   // The filter is not in the image: its boxes are fit afresh at the next step (from that step's rows).
   if (filter_) filter_->refit_all_next_step();
   if (image.reach) {
@@ -132,7 +136,10 @@ std::unique_ptr<CollisionDetector> HierarchicalDetector::clone() const {
   if (extended_) out->extended_ = std::make_unique<bvh::ExtendedNarrow>(*extended_);
   out->extended_bytes_ = extended_bytes_;
   out->zero_ = zero_;
-  if (def_) out->def_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*def_);
+  if (def_) {
+    out->def_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*def_);
+    out->def_->stop_journal();  // the copy keeps no journal
+  }
   if (filter_) out->filter_ = std::make_unique<bvh::Bvh<bvh::Aabb>>(*filter_);
   out->zero_hull_ = zero_hull_;
   out->deformable_ = deformable_;

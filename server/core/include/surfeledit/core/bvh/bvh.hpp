@@ -160,8 +160,8 @@ class Bvh {
   };
   // Starts noting changes (an earlier journal is dropped). False, and no journal, unless this is a bounded
   // AABB tree without dead slots (a leaf's compaction would move rows). build(), adopt(), on_removed(),
-  // on_inserted() and stop_journal() end it, a copy of the tree takes none; refit() of a journaled tree throws
-  // Internal.
+  // on_inserted() and stop_journal() end it; a copy of the tree takes it along (see journal_ below); refit() of
+  // a journaled tree throws Internal.
   bool start_journal();
   bool journaling() const { return journal_.on; }
   void stop_journal() {
@@ -253,17 +253,11 @@ class Bvh {
   std::vector<std::uint32_t> marks_;
   std::uint32_t mark_ = 1;
   // Step journal: whether one runs, its start scalars and the nodes noted since (step scratch: not in
-  // memory_bytes()). A copy of the tree (an undo image, a clone) takes none.
+  // memory_bytes()). A copy of the tree takes it along, so a copy taken during a journal and assigned back
+  // within it leaves a journal that still leads back to the start (a back-off's image of a few rows).
   struct Journal {
     bool on = false;
     StepImage image;
-    Journal() = default;
-    Journal(const Journal&) {}
-    Journal& operator=(const Journal&) {
-      on = false;
-      image.saved.clear();
-      return *this;
-    }
   };
   Journal journal_;
 };
