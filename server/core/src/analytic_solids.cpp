@@ -124,9 +124,9 @@ class Sphere final : public AnalyticSolid {
   double r_;
 };
 
-class Box final : public AnalyticSolid {
+class BoxSolid final : public AnalyticSolid {
  public:
-  explicit Box(const Vec3& e) : e_(e) {}
+  explicit BoxSolid(const Vec3& e) : e_(e) {}
   std::string kind() const override { return "box"; }
   double area() const override { return 8.0 * (e_.x() * e_.y() + e_.y() * e_.z() + e_.z() * e_.x()); }
   double local_sdf(const Vec3& p) const override {
@@ -320,7 +320,7 @@ std::unique_ptr<Solid> make_box(const Vec3& half_extents, Pose pose) {
                   "component " + std::to_string(d) + " must be finite and > 0, got " + fmt(half_extents[d]));
     }
   }
-  return place<Box>(pose, half_extents);
+  return place<BoxSolid>(pose, half_extents);
 }
 
 std::unique_ptr<Solid> make_cylinder(double radius, double half_height, Pose pose) {

@@ -11,6 +11,7 @@
 #include "surfeledit/core/particles/engine.hpp"
 #include "surfeledit/core/util.hpp"
 #include "param_checks.hpp"
+#include "union_find.hpp"
 
 namespace surfeledit {
 
@@ -29,11 +30,6 @@ double largest_gap(std::vector<double>& angles) {
   double gap = angles.front() + 2.0 * M_PI - angles.back();
   for (std::size_t k = 1; k < angles.size(); ++k) gap = std::max(gap, angles[k] - angles[k - 1]);
   return gap;
-}
-
-int find_root(std::vector<Index>& parent, Index i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return static_cast<int>(i);
 }
 
 // z = c0 u^2 + c1 u v + c2 v^2 + c3 u + c4 v + c5 over the plane (centre, e1, e2, n).
@@ -137,11 +133,11 @@ std::vector<Hole> group_loops(const SurfelModel& model, const IndexList& boundar
   std::iota(parent.begin(), parent.end(), Index{0});
   for (Index k = 0; k < m; ++k)
     for (std::int64_t e = hits.offsets[k]; e < hits.offsets[k + 1]; ++e) {
-      const int a = find_root(parent, k), b = find_root(parent, hits.indices[e]);
+      const int a = union_find::find_root(parent, k), b = union_find::find_root(parent, hits.indices[e]);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
   std::vector<IndexList> groups(static_cast<std::size_t>(m));
-  for (Index k = 0; k < m; ++k) groups[find_root(parent, k)].push_back(k);
+  for (Index k = 0; k < m; ++k) groups[union_find::find_root(parent, k)].push_back(k);
   for (const IndexList& g : groups) {
     if (static_cast<int>(g.size()) < params.min_loop) continue;
     Hole h;

@@ -16,8 +16,8 @@ namespace surfeledit::service {
 
 namespace {
 
-constexpr std::uint32_t kMagic = 0x56524553;  // "SERV"
-constexpr std::uint32_t kFormat = 1;          // this layout
+constexpr std::uint32_t kServiceMagic = 0x56524553;  // "SERV"
+constexpr std::uint32_t kServiceFormat = 1;          // this layout
 
 using Clock = std::chrono::steady_clock;
 
@@ -135,8 +135,8 @@ Handler::Snapshot Handler::snapshot() const {
   const Clock::time_point now = Clock::now();
   Snapshot snap;
   SnapshotWriter w;
-  w.u32(kMagic);
-  w.u32(kFormat);
+  w.u32(kServiceMagic);
+  w.u32(kServiceFormat);
   w.u64(s.sessions.size());
   for (const auto& [name, entry] : s.sessions.all()) {
     save_entry(w, name, entry, now);
@@ -194,9 +194,9 @@ void Handler::save(std::vector<std::string>& parts) const { snapshot().encode(pa
 void Handler::restore(SnapshotReader& in) {
   HandlerState& s = *state_;
   const Clock::time_point now = Clock::now();
-  if (in.u32("service magic") != kMagic) in.fail("service magic", "not a service snapshot");
+  if (in.u32("service magic") != kServiceMagic) in.fail("service magic", "not a service snapshot");
   const std::uint32_t format = in.u32("service format");
-  if (format != kFormat) in.fail("service format", "unknown service snapshot format " + std::to_string(format));
+  if (format != kServiceFormat) in.fail("service format", "unknown service snapshot format " + std::to_string(format));
   // Everything is read into new objects first: a failure leaves the handler as it was.
   SessionRegistry sessions(SessionParams{s.config.threads});
   for (std::size_t n = in.count("sessions", 64); n > 0; --n) restore_entry(in, sessions, now);

@@ -20,8 +20,8 @@ namespace surfeledit::service {
 
 namespace {
 
-constexpr std::array<char, 8> kMagic = {'S', 'E', 'J', 'O', 'U', 'R', 'N', 'L'};
-constexpr std::uint32_t kFormat = 1;       // framing version in the header
+constexpr std::array<char, 8> kJournalMagic = {'S', 'E', 'J', 'O', 'U', 'R', 'N', 'L'};
+constexpr std::uint32_t kJournalFormat = 1;       // framing version in the header
 constexpr std::size_t kHeaderBytes = 16;   // magic, format, record format, reserved
 constexpr std::size_t kFrameBytes = 9;     // length, crc, kind
 
@@ -54,8 +54,8 @@ bool read_at(int fd, std::uint64_t offset, std::uint8_t* out, std::size_t size, 
 // The header of a new segment.
 std::array<std::uint8_t, kHeaderBytes> new_header() {
   std::array<std::uint8_t, kHeaderBytes> header{};
-  std::memcpy(header.data(), kMagic.data(), kMagic.size());
-  put_u32(header.data() + 8, kFormat);
+  std::memcpy(header.data(), kJournalMagic.data(), kJournalMagic.size());
+  put_u32(header.data() + 8, kJournalFormat);
   put_u32(header.data() + 12, kRecordFormat);
   return header;
 }
@@ -185,12 +185,12 @@ void JournalLog::scan(std::uint64_t segment, bool last) {
   }
   std::array<std::uint8_t, kHeaderBytes> header{};
   read_at(fd_.get(), 0, header.data(), header.size(), path_);
-  if (std::memcmp(header.data(), kMagic.data(), kMagic.size()) != 0) {
+  if (std::memcmp(header.data(), kJournalMagic.data(), kJournalMagic.size()) != 0) {
     throw JournalError("'" + path_ + "' is not a surfeledit journal (bad magic)");
   }
-  if (get_u32(header.data() + 8) != kFormat) {
+  if (get_u32(header.data() + 8) != kJournalFormat) {
     throw JournalError("journal '" + path_ + "' has format " + std::to_string(get_u32(header.data() + 8)) +
-                       "; this server reads format " + std::to_string(kFormat));
+                       "; this server reads format " + std::to_string(kJournalFormat));
   }
   const std::uint32_t records = get_u32(header.data() + 12);
   if (records < kOldestRecordFormat || records > kRecordFormat) {

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "surfeledit/core/kdtree.hpp"
+#include "../union_find.hpp"
 
 namespace surfeledit::detail {
 
@@ -22,11 +23,6 @@ constexpr double kHoleGap = kPi / 2;   // an angular gap wider than this marks a
 constexpr Index kHoleMinSurfels = 4;   // smaller loops are noise (a stray gap), not a hole
 constexpr Index kMaxTraceProbes = 4096;  // crossed(): bound on the probes of one segment
 constexpr double kWindingDoubt = 0.1;    // |w - 1/2| below this is re-evaluated more exactly
-
-Index find_root(IndexList& parent, Index i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 }  // namespace
 
@@ -96,11 +92,12 @@ void InsideModel::find_holes() {
   for (std::size_t b = 0; b < boundary.size(); ++b) {
     const Index i = boundary[b];
     btree.radius(positions_.row(i).transpose(), 3.0 * radii_[i], hits, d2);
-    for (Index h : hits) parent[find_root(parent, static_cast<Index>(b))] = find_root(parent, slot[h]);
+    for (Index h : hits)
+      parent[union_find::find_root(parent, static_cast<Index>(b))] = union_find::find_root(parent, slot[h]);
   }
   std::vector<IndexList> loops(boundary.size());
   for (std::size_t b = 0; b < boundary.size(); ++b)
-    loops[find_root(parent, static_cast<Index>(b))].push_back(boundary[b]);
+    loops[union_find::find_root(parent, static_cast<Index>(b))].push_back(boundary[b]);
   for (const IndexList& loop : loops) {
     if (static_cast<Index>(loop.size()) < kHoleMinSurfels) continue;
     Vec3 c = Vec3::Zero();
