@@ -89,12 +89,24 @@ struct JournalSheets {
   }
 };
 
-TEST(BvhJournal, RestoredStepsLeaveTheTreeAsACopyTakenBefore) {
+// The sheets, a tree after `steps` steps with a journal started, and (the truth) a copy of the tree and the
+// positions as they were at the start.
+struct Journaled {
   JournalSheets s;
-  Bvh<Aabb> tree = s.tree_after(3);
-  const Bvh<Aabb> copy = tree;
-  const Points p0 = s.p;
-  ASSERT_TRUE(tree.start_journal());
+  Bvh<Aabb> tree;
+  const Bvh<Aabb> start;
+  const Points p0;
+  explicit Journaled(int steps) : tree(s.tree_after(steps)), start(tree), p0(s.p) {
+    EXPECT_TRUE(tree.start_journal());
+  }
+};
+
+TEST(BvhJournal, RestoredStepsLeaveTheTreeAsACopyTakenBefore) {
+  Journaled j(3);
+  JournalSheets& s = j.s;
+  Bvh<Aabb>& tree = j.tree;
+  const Bvh<Aabb>& copy = j.start;
+  const Points& p0 = j.p0;
   IndexList last;
   for (int k = 3; k < 8; ++k) {
     if (k == 5) tree.refit_all_next_step();  // as after adopting a rebuilt tree: every node fit in one step
@@ -124,11 +136,10 @@ TEST(BvhJournal, RestoredStepsLeaveTheTreeAsACopyTakenBefore) {
 // One step's journal holds exactly the nodes the step fit or narrowed (those fitted in it), each once, with the
 // box it had before; for a step near first contact that is part of the tree.
 TEST(BvhJournal, AStepKeepsExactlyTheNodesItChanged) {
-  JournalSheets s;
-  Bvh<Aabb> tree = s.tree_after(2);
-  const Bvh<Aabb> copy = tree;
-  ASSERT_TRUE(tree.start_journal());
-  s.step(tree, 8);
+  Journaled j(2);
+  Bvh<Aabb>& tree = j.tree;
+  const Bvh<Aabb>& copy = j.start;
+  j.s.step(tree, 8);
   const Bvh<Aabb>::StepImage image = tree.journal();
   std::vector<int> seen(tree.nodes().size(), 0);
   for (const auto& e : image.saved) {
@@ -147,45 +158,38 @@ TEST(BvhJournal, AStepKeepsExactlyTheNodesItChanged) {
 // A back-off takes the step back within the journal (restore_journal) and steps again: the image then still
 // leads back to the start.
 TEST(BvhJournal, StepsTakenBackWithinTheJournalStillLeadBackToItsStart) {
-  JournalSheets s;
-  Bvh<Aabb> tree = s.tree_after(4);
-  const Bvh<Aabb> copy = tree;
-  const Points p0 = s.p;
-  ASSERT_TRUE(tree.start_journal());
-  s.step(tree, 4);
-  s.step(tree, 5);
-  tree.restore_journal();
-  EXPECT_TRUE(same_tree(tree, copy));
-  s.p = p0;
-  s.step(tree, 4);
-  const Bvh<Aabb>::StepImage image = tree.journal();
-  tree.restore(image);
-  EXPECT_TRUE(same_tree(tree, copy));
+  Journaled j(4);
+  j.s.step(j.tree, 4);
+  j.s.step(j.tree, 5);
+  j.tree.restore_journal();
+  EXPECT_TRUE(same_tree(j.tree, j.start));
+  j.s.p = j.p0;
+  j.s.step(j.tree, 4);
+  const Bvh<Aabb>::StepImage image = j.tree.journal();
+  j.tree.restore(image);
+  EXPECT_TRUE(same_tree(j.tree, j.start));
 }
 
 // A copy taken within the journal takes it along: assigned back after more steps (a back-off's image of a few
 // rows), the journal still leads back to its start.
 TEST(BvhJournal, ACopyTakenWithinTheJournalAssignedBackKeepsItsStart) {
-  JournalSheets s;
-  Bvh<Aabb> tree = s.tree_after(3);
-  const Bvh<Aabb> start = tree;
-  ASSERT_TRUE(tree.start_journal());
-  s.step(tree, 3);
-  const Bvh<Aabb> midway = tree;
+  Journaled j(3);
+  j.s.step(j.tree, 3);
+  const Bvh<Aabb> midway = j.tree;
   EXPECT_TRUE(midway.journaling());
-  s.step(tree, 4);
-  s.step(tree, 5);
-  tree = midway;
-  EXPECT_TRUE(same_tree(tree, midway));
-  tree.restore_journal();
-  EXPECT_TRUE(same_tree(tree, start));
+  j.s.step(j.tree, 4);
+  j.s.step(j.tree, 5);
+  j.tree = midway;
+  EXPECT_TRUE(same_tree(j.tree, midway));
+  j.tree.restore_journal();
+  EXPECT_TRUE(same_tree(j.tree, j.start));
 }
 
 // An image of another step, or of another tree, is refused and changes nothing.
 TEST(BvhJournal, AnImageThatDoesNotFitIsRefused) {
-  JournalSheets s;
-  Bvh<Aabb> tree = s.tree_after(4);
-  ASSERT_TRUE(tree.start_journal());
+  Journaled j(4);
+  JournalSheets& s = j.s;
+  Bvh<Aabb>& tree = j.tree;
   s.step(tree, 4);
   const Bvh<Aabb>::StepImage image = tree.journal();
   tree.stop_journal();
