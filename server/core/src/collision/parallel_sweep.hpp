@@ -74,24 +74,32 @@ struct ParallelSweep {
       } else {
         const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
         const std::size_t base = journal ? journal->begin_sweep(static_cast<std::size_t>(chunks)) : 0;
-        // An exception must not leave an OpenMP region (std::terminate): the lowest chunk's is kept and thrown
-        // after it, the same one whatever the threads (a checked build's Internal, below).
-        std::exception_ptr error;
-        Index error_chunk = chunks;
+        auto chunk = [&](Index c, Index& t, Index& m) {
+          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), t, m);
+        };
+        if constexpr (kChecked) {
+          // The check below throws, and an exception must not leave an OpenMP region (std::terminate): the lowest
+          // chunk's is kept and thrown after it, the same one whatever the threads. A release build's sweep throws
+          // nothing (its inputs are checked before), so its loop stays as it was.
+          std::exception_ptr error;
+          Index error_chunk = chunks;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
-        for (Index c = 0; c < chunks; ++c) {
-          try {
-            range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c),
-                  tested, queries);
-          } catch (...) {
+          for (Index c = 0; c < chunks; ++c) {
+            try {
+              chunk(c, tested, queries);
+            } catch (...) {
 #pragma omp critical(surfeledit_sweep_error)
-            if (c < error_chunk) {
-              error_chunk = c;
-              error = std::current_exception();
+              if (c < error_chunk) {
+                error_chunk = c;
+                error = std::current_exception();
+              }
             }
           }
+          if (error) std::rethrow_exception(error);
+        } else {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
+          for (Index c = 0; c < chunks; ++c) chunk(c, tested, queries);
         }
-        if (error) std::rethrow_exception(error);
       }
       return Tally{tested, queries};
     };
