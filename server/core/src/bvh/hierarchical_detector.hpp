@@ -96,6 +96,8 @@ class HierarchicalDetector final : public CollisionDetector {
     // Per deformable row (bounded: its radius); shared, so the journal's image hands it over without a copy.
     // Null in a journal image of bounded steps that changed no radius (the deformation step's bound says so).
     std::shared_ptr<const std::vector<double>> reach;
+    // A journal's image (start_journal / journal_image): the only kind whose bounded reach may be null.
+    bool journal = false;
     Index rows = 0;
     std::int64_t step = 0, evaluations = 0;
     Index inserted_nu = 0, rebuilds_adopted = 0;

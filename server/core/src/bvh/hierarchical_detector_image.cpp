@@ -46,7 +46,7 @@ void HierarchicalDetector::restore_image(const DetectorImage& image) {
 
 bool HierarchicalDetector::fits(const Image& image, bool tree) const {
   if (image.rows != rows_) return false;
-  if (image.reach ? image.reach->size() != deformable_.size() : !bounded_) return false;
+  if (image.reach ? image.reach->size() != deformable_.size() : !(bounded_ && image.journal)) return false;
   if (!tree) return !def_journal_ || def_->journaling();
   if (!def_) return !image.def && !image.def_steps;
   return image.def || (image.def_steps && def_->fits(*image.def_steps));
@@ -77,7 +77,9 @@ bool HierarchicalDetector::start_journal() {
   if (extended_ || !narrow_->start_journal()) return false;
   def_journal_ = def_ && def_->start_journal();
   // Bounded, with no tree or a journaled one: neither the tree nor the radii are copied now.
-  journal_ = image_but_narrow(!(bounded_ && (!def_ || def_journal_)));
+  auto start = image_but_narrow(!(bounded_ && (!def_ || def_journal_)));
+  start->journal = true;
+  journal_ = std::move(start);
   return true;
 }
 
