@@ -6,6 +6,7 @@
 
 #include "deformation_model.hpp"
 #include "surfeledit/core/deformation.hpp"
+#include "surfeledit/core/kdtree.hpp"
 
 namespace surfeledit {
 namespace {
@@ -132,6 +133,77 @@ TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
   Points bad = m.positions;
   bad(2, 2) = std::nan("");
   expect_invalid(bad, m.regions);
+}
+
+// A model tilted as a whole, so that compute_fields' trees search in a turned frame (KdTreeParams::align), and far
+// from its regions (the sphere's rows above the slab): lambda and its gradient against brute force, the gradient from
+// the analytic form with the brute-force nearest surfels wherever those are unique by a clear margin; and a surfel in
+// both regions is still reported.
+TEST(Deformation, FieldsOfATiltedModelMatchBruteForce) {
+  Model m = sphere_over_slab(3);
+  const Mat3 turn = Eigen::AngleAxisd(0.6, Vec3(1.0, 0.7, 0.3).normalized()).toRotationMatrix();
+  m.positions = (m.positions * turn.transpose()).eval();
+  m.normals = (m.normals * turn.transpose()).eval();
+  const Vec3 up = turn.col(2);  // the slab's normal after the turn
+  const Eigen::Index n = m.positions.rows();
+  IndexList slab;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (m.regions[static_cast<std::size_t>(i)] == Region::Zero) {
+      slab.push_back(static_cast<Index>(i));
+    } else if (m.positions.row(i).dot(up.transpose()) < 0.8) {  // the sphere's lower half blends
+      m.regions[static_cast<std::size_t>(i)] = Region::Blend;
+    }
+  }
+  // The slab's tree is turned (what this test is about), not kept in world axes.
+  KdTreeParams aligned;
+  aligned.align = true;
+  ASSERT_FALSE(KdTree(m.positions, slab, aligned).axes().isIdentity(1e-3));
+
+  const DeformationFields f = compute_fields(m.positions, m.regions, 2);
+  const Values lam = f.lambda();
+  const Points grad = f.grad_lambda();
+  int blend = 0, gradient_checked = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Region r = m.regions[static_cast<std::size_t>(i)];
+    if (r != Region::Blend) {
+      EXPECT_EQ(lam[i], r == Region::One ? 1.0 : 0.0);
+      continue;
+    }
+    ++blend;
+    const Vec3 p = m.positions.row(i).transpose();
+    Index a0 = -1, a1 = -1;
+    const double d0 = brute_distance(m, p, Region::Zero, &a0), d1 = brute_distance(m, p, Region::One, &a1);
+    EXPECT_NEAR(lam[i], d0 / (d0 + d1), 1e-14);
+    // The second nearest of each region more than 1e-9 farther: the nearest is unique and the gradient defined.
+    auto second = [&](Region region, Index first) {
+      double best = std::numeric_limits<double>::infinity();
+      for (Eigen::Index j = 0; j < n; ++j)
+        if (m.regions[static_cast<std::size_t>(j)] == region && j != first)
+          best = std::min(best, (m.positions.row(j).transpose() - p).norm());
+      return best;
+    };
+    if (second(Region::Zero, a0) - d0 <= 1e-9 || second(Region::One, a1) - d1 <= 1e-9) continue;
+    const Vec3 e0 = p - m.positions.row(a0).transpose(), e1 = p - m.positions.row(a1).transpose();
+    const Vec3 expected = ((d1 / d0) * e0 - (d0 / d1) * e1) / ((d0 + d1) * (d0 + d1));
+    ++gradient_checked;
+    EXPECT_LE((grad.row(i).transpose() - expected).norm(), 1e-12 * (1.0 + expected.norm())) << "row " << i;
+  }
+  EXPECT_GT(blend, 500);
+  EXPECT_GT(gradient_checked, blend / 2);
+
+  // A slab row repeated as an F1 row: both regions hold that position.
+  Points pos(n + 1, 3);
+  pos.topRows(n) = m.positions;
+  pos.row(n) = m.positions.row(slab[7]);
+  std::vector<Region> reg = m.regions;
+  reg.push_back(Region::One);
+  try {
+    compute_fields(pos, reg);
+    FAIL() << "overlapping regions accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+    EXPECT_NE(std::string(e.what()).find("row " + std::to_string(slab[7])), std::string::npos) << e.what();
+  }
 }
 }  // namespace
 }  // namespace surfeledit

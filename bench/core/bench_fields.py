@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""What selecting regions costs: the blend fields (`compute_fields`, the core of every `set_regions`) on the
+generated scenes, upright and turned as a whole (a model tilted against the axes), one thread, CPU seconds
+(median of --repeats), through the in-process `core.DeformationTool`.
+
+    .venv/bin/python bench/core/bench_fields.py [--scenes piercing,cup,concave,thinwall,bunny] [--repeats 3]
+        [--package <dir holding another build's surfeledit package, for an A/B>]
+
+Each line ends with the sha1 of the fields (lambda and its gradient, as float64 bytes), so two builds' runs can be
+checked for identical results. The bunny needs the shared test models (SURFELEDIT_MODELS or ../shared); it is
+left out with a note when they are absent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import benchlib  # noqa: E402
+
+# The turn of the "tilted" rows: about an axis that is along none of the world's, so that no flat part stays
+# axis-aligned.
+TILT_AXIS = (1.0, 0.7, 0.3)
+TILT_ANGLE = 0.6  # radians
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenes", default="piercing,cup,concave,thinwall,bunny", help="comma-separated")
+    ap.add_argument("--repeats", type=int, default=3, help="fields computed per scene and pose")
+    benchlib.add_package_arg(ap)
+    args = ap.parse_args()
+    surfeledit = benchlib.import_surfeledit(args.package)
+    from surfeledit import core, scenes
+
+    print(f"# surfeledit from {Path(surfeledit.__file__).parent}; {benchlib.machine_line()}", flush=True)
+    rows = []
+    for name in args.scenes.split(","):
+        try:
+            sc = getattr(scenes, name)()
+        except FileNotFoundError as e:
+            print(f"# {name}: left out ({e})", flush=True)
+            continue
+        turn = scenes.rotation_matrix(TILT_AXIS, TILT_ANGLE)
+        for pose, rot in (("upright", np.eye(3)), ("tilted", turn)):
+            positions = np.ascontiguousarray(sc.positions @ rot.T)
+            normals = np.ascontiguousarray(sc.normals @ rot.T)
+            seconds, digest = [], ""
+            for _ in range(args.repeats):
+                t = time.process_time()
+                tool = core.DeformationTool(positions, normals, zero=sc.zero, one=sc.one, threads=1)
+                seconds.append(time.process_time() - t)
+                h = hashlib.sha1(np.ascontiguousarray(tool.lam, dtype=np.float64).tobytes())
+                h.update(np.ascontiguousarray(tool.grad_lam, dtype=np.float64).tobytes())
+                digest = h.hexdigest()[:12]
+            blend = len(positions) - len(sc.zero) - len(sc.one)
+            rows.append((name, pose, f"{len(positions):,}", f"{blend:,}", f"{statistics.median(seconds):.3f}",
+                         " ".join(f"{s:.3f}" for s in seconds), digest))
+            print(f"{name} {pose}: {statistics.median(seconds):.3f} s; fields sha1 {digest}", flush=True)
+    print()
+    print(benchlib.table(("scene", "pose", "surfels", "blend rows", "median CPU s", "runs", "fields sha1"), rows))
+    print(f"\n{benchlib.machine_line()}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
