@@ -116,6 +116,16 @@ TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
     EXPECT_EQ(e.code(), ErrorCode::Conflict);
     EXPECT_NE(std::string(e.what()).find("row 5"), std::string::npos) << e.what();
   }
+  // The mirror: row 5 in F1, its copy (the last row) in F0; the F1 row's own check must report it.
+  reg[5] = Region::One;
+  reg.back() = Region::Zero;
+  try {
+    compute_fields(pos, reg);
+    FAIL() << "overlapping regions accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+    EXPECT_NE(std::string(e.what()).find("row 5"), std::string::npos) << e.what();
+  }
   auto expect_invalid = [](const Points& p, const std::vector<Region>& r) {
     try {
       compute_fields(p, r);

@@ -163,10 +163,10 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   if (f0.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region F0 is empty");
   if (f1.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the one region F1 is empty");
 
-  // Most queries below are far from the tree's points (a deformable row's nearest F0 surfel may be across the
-  // model), where leaves of 128 with an oriented box per node, in a frame turned along a tilted model's surfaces,
-  // visit a fraction of what leaves of 10 in world axes do (RESULTS §83: piercing 0.54 -> 0.03 s, tilted 1.8 -> 0.04
-  // s). Exact; an upright model keeps the world axes and their bits, a turned one's ties may go either way.
+  // The blend rows ask for their nearest surfel of each region, often far from it; leaves of 128 with an oriented
+  // box per node, in a frame turned along a tilted model's surfaces, visit a fraction of what leaves of 10 in world
+  // axes do there (RESULTS §83). Exact; an upright model keeps the world axes and their bits, a turned one's ties may
+  // go either way.
   KdTreeParams tp;
   tp.threads = nthreads;
   tp.leaf_size = kFieldLeafSize;
@@ -181,60 +181,61 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
                                    [&](Index i) { return regions[static_cast<std::size_t>(i)] == Region::One; });
   fields.blend.setZero(all_one ? 0 : nd, 4);
   Index conflict = std::numeric_limits<Index>::max();
-  // Every row is checked against the region it is not in (F0 rows against F1 too), so a surfel
-  // lying in both (d0 + d1 == 0) is reported whatever its label.
-  const Eigen::Index n0 = static_cast<Eigen::Index>(f0.size());
-  // Only an F0 surfel where its nearest F1 surfel is conflicts, so its search looks no further than distance 0:
-  // the same winner as nearest() (the tie rule), found in about one descent instead of a search as far as F1 is.
+  // Every row is checked against the region it is not in (F0 rows against F1 too), so a surfel lying in both
+  // (d0 + d1 == 0) is reported whatever its label. For a row of F0 or F1 that is all its distance is for, so its
+  // search looks no further than distance 0 (nearest_within: the same tie winner as nearest(), found in about one
+  // descent instead of a search as far away as the other region is).
+  const auto on_other = [&](const KdTree& other, Index i) {
+    const Vec3 p = positions.row(i).transpose();
+    const Index j = other.nearest_within(p, 0.0);
+    return j >= 0 && (p - positions.row(j).transpose()).norm() == 0.0;
+  };
+  const Eigen::Index n0 = static_cast<Eigen::Index>(f0.size()), n1 = static_cast<Eigen::Index>(f1.size());
 #pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
   for (Eigen::Index q = 0; q < n0; ++q) {
     const Index i = f0[static_cast<std::size_t>(q)];
-    const Vec3 p = positions.row(i).transpose();
-    const Index j = tree1.nearest_within(p, 0.0);
-    if (j >= 0 && (p - positions.row(j).transpose()).norm() == 0.0) conflict = std::min(conflict, i);
+    if (on_other(tree1, i)) conflict = std::min(conflict, i);
   }
-  // The deformable rows' nearest F0 surfels, and the blend rows' nearest F1 surfels, each as one batch (answered
-  // along a space-filling curve, each query bounded by the previous answer: the same rows as nearest(), the tie
-  // rule included, with a fraction of the far searches' work).
-  Points queries(nd, 3), blend_queries(nd, 3);
-  std::vector<Eigen::Index> blend_at(static_cast<std::size_t>(nd), -1);  // row of blend_queries, -1 for an F1 row
-  Eigen::Index nb = 0;
-  for (Eigen::Index k = 0; k < nd; ++k) {
-    const Index i = fields.deformable[static_cast<std::size_t>(k)];
-    queries.row(k) = positions.row(i);
-    if (regions[static_cast<std::size_t>(i)] != Region::One) {
-      blend_queries.row(nb) = positions.row(i);
-      blend_at[static_cast<std::size_t>(k)] = nb++;
-    }
-  }
-  blend_queries.conservativeResize(nb, 3);
-  const KnnResult near0 = tree0.knn(queries, 1, nthreads);
-  const KnnResult near1 = tree1.knn(blend_queries, 1, nthreads);
 #pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
-  for (Eigen::Index k = 0; k < nd; ++k) {
-    const Index i = fields.deformable[static_cast<std::size_t>(k)];
-    const Eigen::Index b = blend_at[static_cast<std::size_t>(k)];
-    const bool one = b < 0;
-    const Vec3 p = positions.row(i).transpose();
-    // Offsets to the nearest F0 / F1 surfel (model units) and their real (not squared) lengths.
-    const Vec3 e0 = p - positions.row(near0.indices(k, 0)).transpose();
-    Vec3 e1 = Vec3::Zero();
-    if (!one) e1 = p - positions.row(near1.indices(b, 0)).transpose();
-    const double d0 = e0.norm(), d1 = e1.norm();
-    if (d0 + d1 == 0.0) {
-      conflict = std::min(conflict, i);
-      continue;
+  for (Eigen::Index q = 0; q < n1; ++q) {
+    const Index i = f1[static_cast<std::size_t>(q)];
+    if (on_other(tree0, i)) conflict = std::min(conflict, i);
+  }
+  if (!all_one) {
+    // The blend rows' nearest F0 and F1 surfels, each region as one batch (answered along a space-filling curve,
+    // each query bounded by the previous answer: the same rows as nearest(), the tie rule included).
+    IndexList blend;  // positions in `deformable` of the blend rows
+    for (Eigen::Index k = 0; k < nd; ++k) {
+      if (regions[static_cast<std::size_t>(fields.deformable[static_cast<std::size_t>(k)])] == Region::One)
+        fields.blend(k, 0) = 1.0;  // lambda 1, gradient 0
+      else
+        blend.push_back(static_cast<Index>(k));
     }
-    if (one) {
-      if (!all_one) fields.blend(k, 0) = 1.0;  // lambda 1, gradient 0
-      continue;
-    }
-    const double sum = d0 + d1;
-    fields.blend(k, 0) = d0 / sum;
-    // grad lambda = (d1 grad d0 - d0 grad d1) / (d0 + d1)^2, grad d = offset / d (units 1 / model unit);
-    // left at zero where a distance vanishes (direction undefined; lambda is at an end there).
-    if (d0 > 0.0 && d1 > 0.0) {
-      fields.blend.block<1, 3>(k, 1) = ((d1 / d0) * e0 - (d0 / d1) * e1).transpose() / (sum * sum);
+    const Eigen::Index nb = static_cast<Eigen::Index>(blend.size());
+    Points queries(nb, 3);
+    for (Eigen::Index b = 0; b < nb; ++b)
+      queries.row(b) = positions.row(fields.deformable[static_cast<std::size_t>(blend[static_cast<std::size_t>(b)])]);
+    const KnnResult near0 = tree0.knn(queries, 1, nthreads), near1 = tree1.knn(queries, 1, nthreads);
+#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
+    for (Eigen::Index b = 0; b < nb; ++b) {
+      const Index k = blend[static_cast<std::size_t>(b)];
+      const Index i = fields.deformable[static_cast<std::size_t>(k)];
+      const Vec3 p = queries.row(b).transpose();
+      // Offsets to the nearest F0 / F1 surfel (model units) and their real (not squared) lengths.
+      const Vec3 e0 = p - positions.row(near0.indices(b, 0)).transpose();
+      const Vec3 e1 = p - positions.row(near1.indices(b, 0)).transpose();
+      const double d0 = e0.norm(), d1 = e1.norm();
+      if (d0 + d1 == 0.0) {
+        conflict = std::min(conflict, i);
+        continue;
+      }
+      const double sum = d0 + d1;
+      fields.blend(k, 0) = d0 / sum;
+      // grad lambda = (d1 grad d0 - d0 grad d1) / (d0 + d1)^2, grad d = offset / d (units 1 / model unit);
+      // left at zero where a distance vanishes (direction undefined; lambda is at an end there).
+      if (d0 > 0.0 && d1 > 0.0) {
+        fields.blend.block<1, 3>(k, 1) = ((d1 / d0) * e0 - (d0 / d1) * e1).transpose() / (sum * sum);
+      }
     }
   }
   if (conflict != std::numeric_limits<Index>::max()) {
