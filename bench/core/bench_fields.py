@@ -3,7 +3,7 @@
 generated scenes, upright and turned as a whole (a model tilted against the axes), one thread, CPU seconds
 (median of --repeats), through the in-process `core.DeformationTool`.
 
-    .venv/bin/python bench/core/bench_fields.py [--scenes piercing,cup,concave,thinwall,bunny] [--repeats 3]
+    .venv/bin/python bench/core/bench_fields.py [--scenes piercing,cup,concave,thinwall,two_arms,bunny] [--repeats 3]
         [--package <dir holding another build's surfeledit package, for an A/B>]
 
 Each line ends with the sha1 of the fields (lambda and its gradient, as float64 bytes), so two builds' runs can be
@@ -31,9 +31,26 @@ TILT_AXIS = (1.0, 0.7, 0.3)
 TILT_ANGLE = 0.6  # radians
 
 
+class TwoArms:
+    """The two-arm scene of server/core/include/surfeledit/core/two_arms.hpp at spacing 0.004 (~210k surfels): a box
+    body with two capsule arms standing on it; tool "a"'s regions (zero: the body and arm B, one: arm A, whose
+    surfels stand up to 0.67 away from their zero region)."""
+
+    def __init__(self, core) -> None:
+        arm_z = 0.2 + 0.25 + 0.1 - 0.03
+        scene = core.Scene()
+        scene.add(core.make_box(np.array([0.7, 0.2, 0.2])))
+        scene.add(core.make_capsule(0.1, 0.25, center=np.array([-0.4, 0.0, arm_z])))
+        scene.add(core.make_capsule(0.1, 0.25, center=np.array([0.4, 0.0, arm_z])))
+        s = scene.sample(spacing=0.004, seed=1, jitter=0.25)
+        part = np.asarray(s.part)
+        self.positions, self.normals = np.asarray(s.positions), np.asarray(s.normals)
+        self.zero, self.one = np.flatnonzero(part != 1), np.flatnonzero(part == 1)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scenes", default="piercing,cup,concave,thinwall,bunny", help="comma-separated")
+    ap.add_argument("--scenes", default="piercing,cup,concave,thinwall,two_arms,bunny", help="comma-separated")
     ap.add_argument("--repeats", type=int, default=3, help="fields computed per scene and pose")
     benchlib.add_package_arg(ap)
     args = ap.parse_args()
@@ -44,7 +61,7 @@ def main() -> int:
     rows = []
     for name in args.scenes.split(","):
         try:
-            sc = getattr(scenes, name)()
+            sc = TwoArms(core) if name == "two_arms" else getattr(scenes, name)()
         except FileNotFoundError as e:
             print(f"# {name}: left out ({e})", flush=True)
             continue
