@@ -59,6 +59,7 @@ pyb::dict stats_dict(const CollisionStats& s) {
   d["nv"] = s.nv;
   d["np"] = s.np;
   d["nu"] = s.nu;
+  d["asleep"] = s.asleep;
   return d;
 }
 

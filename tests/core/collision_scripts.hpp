@@ -6,7 +6,9 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "collision_oracle.hpp"
@@ -131,11 +133,25 @@ void play_script(TestScene& scene, const std::vector<ScriptStep>& script, bool e
   }
 }
 
+// A displacement bound as EditSession hands one over (CollisionScene::displacement_bound): twice the largest
+// |p - previous| of a deformable row, by brute force, on a step whose radii are those of the step before (`last`,
+// updated here); none otherwise (after a split or a removal).
+inline std::optional<double> brute_displacement_bound(const TestScene& scene, const Points& previous, Values& last) {
+  const bool same = last.size() == scene.radii.size() && last == scene.radii;
+  last = scene.radii;
+  if (!same) return std::nullopt;
+  double largest = 0.0;
+  for (Index r = 0; r < scene.rows(); ++r)
+    if (scene.regions[r] != Region::Zero) largest = std::max(largest, (scene.positions.row(r) - previous.row(r)).norm());
+  return 2.0 * largest;
+}
+
 // Runs `script` on `scene` with the detector and the oracle side by side and checks that they agree on
 // every step. With `edits`: at step 4 every 7th deformable row is split (child appended), at step 7
-// every 11th deformable row and every 40th zero row are removed.
+// every 11th deformable row and every 40th zero row are removed. With `bound`, the detector's input carries
+// brute_displacement_bound() (the oracle needs none).
 inline RunLog run_against_oracle(TestScene scene, const CollisionParams& params, const std::vector<ScriptStep>& script,
-                                 bool edits) {
+                                 bool edits, bool bound = false) {
   std::unique_ptr<CollisionDetector> det = CollisionDetector::create(params);
   Oracle oracle(params);
   det->reset(scene.view());
@@ -149,8 +165,11 @@ inline RunLog run_against_oracle(TestScene scene, const CollisionParams& params,
     det->on_removed(keep);
     oracle.on_removed(keep);
   };
+  Values last_radii = scene.radii;
   play_script(scene, script, edits, inserted, removed, [&](std::size_t k, const Points& previous) {
-    const CollisionResult got = det->detect(scene.view(), previous);
+    CollisionScene view = scene.view();
+    if (bound) view.displacement_bound = brute_displacement_bound(scene, previous, last_radii);
+    const CollisionResult got = det->detect(view, previous);
     std::vector<double> want_depths;
     const IndexList want = oracle.detect(scene, previous, &want_depths);
     EXPECT_EQ(got.colliding, want) << to_string(params.algorithm) << " step " << k;

@@ -103,14 +103,8 @@ TEST(CollisionBvh, EveryConfigurationEqualsNoHierarchyEveryStep) {
 // still gives the colliding set of the detector without a hierarchy on every step.
 TEST(CollisionBvh, HandedOverDisplacementBoundEqualsNoHierarchyEveryStep) {
   Values last_radii;
-  const BoundFn bound = [&](const TestScene& scene, const Points& previous) -> std::optional<double> {
-    const bool same_radii = last_radii.size() == scene.radii.size() && last_radii == scene.radii;
-    last_radii = scene.radii;
-    if (!same_radii) return std::nullopt;
-    double largest = 0.0;
-    for (Index r = 0; r < scene.rows(); ++r)
-      if (scene.regions[r] != Region::Zero) largest = std::max(largest, (scene.positions.row(r) - previous.row(r)).norm());
-    return 2.0 * largest;
+  const BoundFn bound = [&](const TestScene& scene, const Points& previous) {
+    return brute_displacement_bound(scene, previous, last_radii);
   };
   for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Robust}) {
     for (const HierarchyParams& h : every_configuration(false)) {

@@ -71,6 +71,11 @@
 //     // no before-image; false is always safe; a checked build compares the bytes: parallel_sweep.hpp, kChecked).
 //     bool keeps(const State& s) const;
 //     bool keeps_not_candidate(const State& s, const TestPoint& pt) const;
+//
+//     // Optional, for the row sweep's sleeping blocks (parallel_sweep.hpp, SleepingBlocks): a sphere such that while
+//     // the point stays strictly inside it, update() and not_candidate() change nothing of s and it does not
+//     // collide; nullptr when there is none (it collides, or its next update may change it wherever it is).
+//     static const Sphere* quiet_sphere(const State& s);
 //   };
 //
 // What a tested point asks about inside/outside beyond the thesis's nearest-surfel test (`inside` =

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <exception>
 #include <string>
 #include <type_traits>
@@ -18,6 +20,7 @@ namespace surfeledit::detail {
 struct Tally {
   Index tested = 0;   // points whose state was (re)evaluated (queries > 0)
   Index queries = 0;  // nearest-neighbour queries made
+  Index asleep = 0;   // points of sleeping blocks (SleepingBlocks): not read
 };
 
 // Whether a kernel has probes (kernel.hpp: Probe, probing(), probe(), update(s, pt, found)).
@@ -25,6 +28,55 @@ template <typename Kernel, typename = void>
 inline constexpr bool kProbes = false;
 template <typename Kernel>
 inline constexpr bool kProbes<Kernel, std::void_t<typename Kernel::Probe>> = true;
+// Whether a kernel names quiet spheres (kernel.hpp: quiet_sphere()).
+template <typename Kernel, typename = void>
+inline constexpr bool kQuiet = false;
+template <typename Kernel>
+inline constexpr bool kQuiet<Kernel, std::void_t<decltype(Kernel::quiet_sphere(
+                                         std::declval<const typename Kernel::State&>()))>> = true;
+
+// Sleeping blocks: most rows of a step stay inside their spheres, where their updates change nothing, and a step
+// with a displacement bound (CollisionScene::displacement_bound: no row moved farther since the last sweep) lets a
+// block of rows that all stay that far inside sleep without being read. After each sweep of a block its budget is a
+// lower bound on how far every row of it may move and stay strictly inside its quiet sphere (kernel.hpp); a
+// sleeping step takes the bound off it, and a block whose budget is not above the step's bound is swept. Results are
+// the sweep's, bit for bit: a sleeping row's update would have left its state as it is and it does not collide.
+// Valid only for a sweep of the detector's whole deformable list in order with the positions of its last sweep;
+// the detector clears the budgets whenever its states or rows change otherwise (RESULTS §84).
+struct SleepingBlocks {
+  static constexpr Index kBlock = 32;  // rows per block (consecutive rows of the deformable list)
+  std::vector<double> budget;          // per block, model units; 0: swept at the next step
+  // Every block swept at the next step.
+  void clear() { std::fill(budget.begin(), budget.end(), 0.0); }
+  // One budget of 0 per block of `rows` rows, at exactly that capacity.
+  void size_for(std::size_t rows) {
+    budget = std::vector<double>((rows + static_cast<std::size_t>(kBlock) - 1) / static_cast<std::size_t>(kBlock), 0.0);
+  }
+  std::size_t memory_bytes() const { return budget.capacity() * sizeof(double); }
+
+  // The budget of rows [0, n) (states `s`, their rows `row`): the least rho - |p - c| of their quiet spheres, less a
+  // guard for the rounding of these and of the next steps' tests (1e-12 of the coordinates' and the spheres' size); 0
+  // when a row has no quiet sphere or is not strictly inside it, or (without its square roots) when one has
+  // rho^2 - |p - c|^2 < cut^2, so rho - |p - c| < cut: a block that would not sleep through a step of `cut` anyway.
+  template <typename Kernel>
+  static double budget_of(const typename Kernel::State* s, const Index* row, const StepRows& at, Index n, double cut) {
+    double least = std::numeric_limits<double>::infinity(), size = 0.0;
+    const double cut2 = cut * cut;
+    for (Index i = 0; i < n; ++i) {
+      const Sphere* q = Kernel::quiet_sphere(s[i]);
+      if (!q) return 0.0;
+      const Vec3 p = at(row[i]).p;
+      const double d2 = (p - q->center).squaredNorm();
+      if (!(q->rho2 - d2 > cut2)) return 0.0;
+      const double rho = std::sqrt(q->rho2), slack = rho - std::sqrt(d2);
+      if (!(slack > 0.0)) return 0.0;
+      least = std::min(least, slack);
+      size = std::max(size, std::max(p.cwiseAbs().maxCoeff(), rho));
+    }
+    const double b = least - 1e-12 * size;
+    return b > 0.0 ? b : 0.0;
+  }
+};
 
 // The points of a step are independent: each row goes through update() (not_candidate() when the
 // broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
@@ -54,28 +106,74 @@ struct ParallelSweep {
   // `journal` (may be null): notes each row's state before its update. `by_slot`: `rows` are exactly the
   // rows with a state, in order (the deformable list), so rows[q]'s state is the q-th stored one and the
   // sweep walks the states in storage order without the row -> slot map (RESULTS §39).
+  // `sleep` (may be null; only with `by_slot` and a kernel with quiet spheres): the sleeping blocks, which a step with
+  // scene.displacement_bound lets sleep.
   template <typename Kernel>
   Tally run(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,
             const CollisionScene& scene, const Points& previous, const std::vector<std::uint8_t>* candidate,
             int threads, std::vector<std::uint8_t>& hit, bool by_slot,
-            Journal<typename Kernel::State>* journal = nullptr) {
+            Journal<typename Kernel::State>* journal = nullptr, SleepingBlocks* sleep = nullptr) {
     const Index n = static_cast<Index>(rows.size());
     if (by_slot && states.stored() != rows.size()) throw Error(ErrorCode::Internal, "rows", "not one per state");
+    constexpr Index kBlock = SleepingBlocks::kBlock;
+    static_assert(Kernel::kChunk % kBlock == 0, "a chunk holds whole sleeping blocks");
+    if constexpr (!kQuiet<Kernel>) sleep = nullptr;
+    if (!by_slot) sleep = nullptr;
+    const std::size_t blocks = static_cast<std::size_t>((n + kBlock - 1) / kBlock);
+    // The step's bound, or -1: every block swept (and its budget taken afresh).
+    if (sleep && sleep->budget.size() != blocks) sleep = nullptr;  // not sized for this list: no sleep
+    const double bound = sleep && scene.displacement_bound ? *scene.displacement_bound : -1.0;
     // One loop per combination of the three options, each compiled without their branches.
     auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
-      auto range = [&](Index begin, Index end, std::size_t part, Index& tested, Index& queries) {
+      auto awake = [&](Index begin, Index end, std::size_t part, Index& tested, Index& queries) {
         rows_range<decltype(by_slot_c)::value, decltype(journal_c)::value, decltype(candidate_c)::value>(
             kernel, rows, states, scene, previous, candidate, hit, journal, part, begin, end, tested, queries);
       };
-      Index tested = 0, queries = 0;
+      // Rows [begin, end) (whole blocks but at the list's end): each run of blocks that do not sleep swept at once,
+      // then their budgets taken.
+      auto range = [&](Index begin, Index end, std::size_t part, Index& tested, Index& queries, Index& asleep) {
+        if constexpr (kQuiet<Kernel>) {
+          if (sleep) {
+            const StepRows at(scene, previous);
+            const auto* stored = states.stored_data();
+            // Whether the block of row e sleeps this step.
+            auto sleeps = [&](Index e) { return bound >= 0.0 && bound < sleep->budget[static_cast<std::size_t>(e / kBlock)]; };
+            for (Index b = begin; b < end;) {
+              Index e = b;
+              for (; e < end && !sleeps(e); e += kBlock) {
+              }
+              e = std::min(e, end);
+              if (e > b) {
+                awake(b, e, part, tested, queries);
+                for (Index c = b; c < e; c += kBlock) {
+                  sleep->budget[static_cast<std::size_t>(c / kBlock)] = SleepingBlocks::budget_of<Kernel>(
+                      stored + c, rows.data() + c, at, std::min(kBlock, e - c), std::max(bound, 0.0));
+                }
+              }
+              for (; e < end && sleeps(e); e += kBlock) {
+                const Index f = std::min(end, e + kBlock);
+                if constexpr (kChecked) asleep_check(kernel, stored, rows, at, e, f);
+                sleep->budget[static_cast<std::size_t>(e / kBlock)] -= bound;
+                std::memset(hit.data() + e, 0, static_cast<std::size_t>(f - e));
+                asleep += f - e;
+              }
+              b = e;
+            }
+            return;
+          }
+        }
+        awake(begin, end, part, tested, queries);
+      };
+      Index tested = 0, queries = 0, asleep = 0;
       if (!parallel(n, threads)) {
         const std::size_t part = journal ? journal->begin_sweep(1) : 0;
-        range(0, n, part, tested, queries);
+        range(0, n, part, tested, queries, asleep);
       } else {
         const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
         const std::size_t base = journal ? journal->begin_sweep(static_cast<std::size_t>(chunks)) : 0;
-        auto chunk = [&](Index c, Index& t, Index& m) {
-          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), t, m);
+        auto chunk = [&](Index c, Index& t, Index& m, Index& a) {
+          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), t, m,
+                a);
         };
         if constexpr (kChecked) {
           // The check below throws, and an exception must not leave an OpenMP region (std::terminate): the lowest
@@ -83,10 +181,10 @@ struct ParallelSweep {
           // nothing (its inputs are checked before), so its loop stays as it was.
           std::exception_ptr error;
           Index error_chunk = chunks;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries, asleep)
           for (Index c = 0; c < chunks; ++c) {
             try {
-              chunk(c, tested, queries);
+              chunk(c, tested, queries, asleep);
             } catch (...) {
 #pragma omp critical(surfeledit_sweep_error)
               if (c < error_chunk) {
@@ -97,11 +195,11 @@ struct ParallelSweep {
           }
           if (error) std::rethrow_exception(error);
         } else {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries)
-          for (Index c = 0; c < chunks; ++c) chunk(c, tested, queries);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries, asleep)
+          for (Index c = 0; c < chunks; ++c) chunk(c, tested, queries, asleep);
         }
       }
-      return Tally{tested, queries};
+      return Tally{tested, queries, asleep};
     };
     auto with_candidate = [&](auto by_slot_c, auto journal_c) {
       return candidate ? pick(by_slot_c, journal_c, std::true_type{}) : pick(by_slot_c, journal_c, std::false_type{});
@@ -115,6 +213,18 @@ struct ParallelSweep {
   }
 
  private:
+  // A checked build (kChecked) checks that the rows of a sleeping block stay strictly inside their quiet spheres, so
+  // that their updates would have changed nothing.
+  template <typename Kernel>
+  static void asleep_check(const Kernel&, const typename Kernel::State* stored, const IndexList& rows,
+                           const StepRows& at, Index begin, Index end) {
+    for (Index q = begin; q < end; ++q) {
+      const Sphere* s = Kernel::quiet_sphere(stored[q]);
+      if (!s || !s->contains(at(rows[static_cast<std::size_t>(q)]).p))
+        throw Error(ErrorCode::Internal, "SleepingBlocks",
+                    "row " + std::to_string(rows[static_cast<std::size_t>(q)]) + " left its quiet sphere while asleep");
+    }
+  }
   // Rows rows[begin..end) of a sweep (run()), the options fixed at compile time.
   template <bool kBySlot, bool kJournal, bool kCandidate, typename Kernel>
   static void rows_range(const Kernel& kernel, const IndexList& rows, RowStates<typename Kernel::State>& states,

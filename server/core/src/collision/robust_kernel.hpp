@@ -120,6 +120,11 @@ class RobustKernelT : public RobustFlags {
     if ((s.flags & kCrossed) || !keeps(s)) return false;
     return (s.flags & kColliding) || ((s.flags & kFirstUpdate) && s.sphere.rho2 == 0.0) || !leaves(s, pt);
   }
+  // The sleeping blocks' sphere (kernel.hpp): inside it update() and not_candidate() only call finish(), which keeps
+  // the bytes of a state without a held old position; a colliding or crossed point has none.
+  [[gnu::always_inline]] static const Sphere* quiet_sphere(const State& s) {
+    return (s.flags & (kColliding | kCrossed | kOldHeld)) ? nullptr : &s.sphere;
+  }
   // Whether the point at pt left its sphere (is tested this step).
   [[gnu::always_inline]] static bool leaves(const State& s, const TestPoint& pt) {
     return (pt.p - s.sphere.center).squaredNorm() >= s.sphere.rho2;

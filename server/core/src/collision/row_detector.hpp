@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -44,6 +45,7 @@ class RowDetector final : public NarrowDetector {
     rows.kernel.seed(scene, rows.deformable, zero_rows, threads, rows.states);
     rows_ = std::move(rows);
     sweep_.reset();
+    size_sleep();
     journal_.on = false;
     preprocess_ms_ = ms_since(start);
   }
@@ -52,12 +54,17 @@ class RowDetector final : public NarrowDetector {
                                     const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
+    if (scene.displacement_bound && !(*scene.displacement_bound >= 0.0 && std::isfinite(*scene.displacement_bound))) {
+      throw Error(ErrorCode::InvalidArgument, "displacement_bound",
+                  "must be finite and >= 0, got " + std::to_string(*scene.displacement_bound));
+    }
     rows_.kernel.bind(scene);
     hit_.resize(rows_.deformable.size());
     const Tally tally = sweep(rows_.deformable, scene, previous, candidate);
     CollisionResult result;
     result.stats.tested = tally.tested;
     result.stats.queries = tally.queries;
+    result.stats.asleep = tally.asleep;
     collect_hits(
         result, rows_.deformable, hit_,
         [&](std::size_t q, Index r) { return rows_.kernel.depth(rows_.states.stored_data()[q], row3(scene.positions, r)); },
@@ -69,10 +76,12 @@ class RowDetector final : public NarrowDetector {
   void on_removed(const std::vector<bool>& keep) override {
     journal_.on = false;
     rows_.on_removed(keep);
+    size_sleep();
   }
   void on_inserted(const CollisionScene& scene, const IndexList& parents) override {
     journal_.on = false;
     rows_.on_inserted(scene, parents);
+    size_sleep();
   }
   // Rigid rows moved (another tool's op): the kernel updates its references and the states that
   // depended on them. Rows that are not Zero, or a scene of another row count: false, nothing changed.
@@ -84,11 +93,12 @@ class RowDetector final : public NarrowDetector {
     const auto size = static_cast<Eigen::Index>(rows.size());
     if (before.positions.rows() != size || before.normals.rows() != size || before.radii.size() != size) return false;
     journal_.on = false;
+    sleep_.clear();
     return rows_.kernel.on_rigid_moved(scene, rows, before, rows_.deformable, rows_.states,
                                        resolve_threads(params_.threads));
   }
   std::size_t memory_bytes() const override {
-    return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity();
+    return rows_.memory_bytes() + hit_.capacity() + journal_.saved.capacity() + sleep_.memory_bytes();
   }
   ResetRows reset_rows() const override { return kernel_reset_rows(rows_.kernel, 0); }
 
@@ -120,6 +130,7 @@ class RowDetector final : public NarrowDetector {
     }
     for (std::size_t q = 0; q < mine->states.size(); ++q) rows_.states[(*saved)[q]] = mine->states[q];
     sweep_ = mine->sweep;
+    sleep_.clear();
   }
   CollisionResult detect_only(const CollisionScene& scene, const Points& previous,
                               const std::vector<std::uint8_t>& candidate) override {
@@ -129,6 +140,7 @@ class RowDetector final : public NarrowDetector {
     IndexList rows;
     for (Index r : rows_.deformable)
       if (candidate[static_cast<std::size_t>(r)]) rows.push_back(r);
+    sleep_.clear();  // the budgets are of the whole list's last sweep
     hit_.resize(rows.size());
     const Tally tally = sweep(rows, scene, previous, nullptr);
     CollisionResult result;
@@ -143,6 +155,7 @@ class RowDetector final : public NarrowDetector {
     auto out = std::make_unique<RowDetector>(params_);
     out->rows_ = rows_;
     out->sweep_ = sweep_;
+    out->size_sleep();
     out->preprocess_ms_ = preprocess_ms_;
     return out;
   }
@@ -179,6 +192,7 @@ class RowDetector final : public NarrowDetector {
     if (!journal_.on || !journal_.save) throw Error(ErrorCode::Internal, "history", "no journal to restore");
     journal_.for_each([&](const auto& e) { rows_.states[e.row] = e.state; });
     sweep_ = journal_sweep_;
+    sleep_.clear();
   }
   bool journal_tested(std::vector<std::uint8_t>& flags) const override {
     if (!journal_.on || flags.size() != journal_.tested.size()) return false;
@@ -229,6 +243,7 @@ class RowDetector final : public NarrowDetector {
     const std::size_t saved_cap = in.capacity("journal capacity", 0, 1);
     rows_ = std::move(rows);
     sweep_.reset();
+    size_sleep();
     preprocess_ms_ = preprocess;
     dense_skip_ = static_cast<int>(skip);
     journal_ = Journal<typename Kernel::State>();
@@ -261,7 +276,7 @@ class RowDetector final : public NarrowDetector {
       const bool by_slot = &rows == &rows_.deformable;
       const bool journal = journal_.on && journal_.tested.size() == rows_.states.size();
       return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_, by_slot,
-                        journal ? &journal_ : nullptr);
+                        journal ? &journal_ : nullptr, by_slot ? &sleep_ : nullptr);
     } else {
       return sweep_.run(rows_.kernel, rows, rows_.states, scene, previous, candidate, threads, hit_);
     }
@@ -269,6 +284,14 @@ class RowDetector final : public NarrowDetector {
 
   KernelRows<Kernel> rows_;
   Sweep sweep_;
+  // The sweep's sleeping blocks (parallel_sweep.hpp): not in images nor clones nor snapshots, cleared whenever the
+  // states or rows change but by a sweep of the whole list (the next step then sweeps every block).
+  SleepingBlocks sleep_;
+  // sleep_ with one budget of 0 per block of the deformable rows (none when the sweep cannot use them), at exactly
+  // that capacity (memory_bytes() is the same after a snapshot's load).
+  void size_sleep() {
+    if constexpr (std::is_same_v<Sweep, ParallelSweep> && kQuiet<Kernel>) sleep_.size_for(rows_.deformable.size());
+  }
   std::vector<std::uint8_t> hit_;  // #deformable: colliding after the last step (filled by the sweep)
   double preprocess_ms_ = 0.0;  // the last reset
   Journal<typename Kernel::State> journal_;  // states before the first change since start_journal()

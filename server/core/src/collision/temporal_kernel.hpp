@@ -95,6 +95,10 @@ class TemporalKernel : public ZeroSetKernel {
     s.leaf = found->leaf;
     return retest(s, pt, found->near);
   }
+  // The sleeping blocks' sphere (kernel.hpp): inside it only a colliding point's depth changes (stay()).
+  [[gnu::always_inline]] static const Sphere* quiet_sphere(const State& s) {
+    return s.colliding() ? nullptr : &s.sphere;
+  }
   // Unprobed, only a colliding point's depth changes (stay()).
   [[gnu::always_inline]] static bool keeps(const State& s) { return !s.colliding(); }
   static bool keeps_not_candidate(const State&, const TestPoint&) { return false; }  // it may be tested

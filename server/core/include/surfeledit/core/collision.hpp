@@ -85,6 +85,8 @@ struct CollisionStats {
   Index nv = 0;              // hierarchies: bounding-volume overlap tests this step (Eq. 8.11); 0 without
   Index np = 0;              // hierarchies: candidates handed to the narrow phase this step; 0 without
   Index nu = 0;              // hierarchies: boxes updated this step (refit, insertion); 0 without
+  Index asleep = 0;          // deformable surfels of sleeping blocks this step: not read, their states provably
+                             // unchanged (a step with a displacement bound; Robust and Temporal rows; RESULTS §84)
 };
 
 struct CollisionResult {
@@ -102,8 +104,10 @@ struct CollisionScene {
   // For detect() only: an upper bound on |position - previous| of every deformable row (model units, finite,
   // >= 0) together with the promise that no deformable radius changed since this detector's last detect()
   // or reset(); the deformation step knows it (displacement_bound(DeformParams)). Empty: the detector
-  // measures both itself (a pass over the deformable rows). Only the hierarchies read it; a debug build
-  // checks it against the measured value.
+  // measures both itself (a pass over the deformable rows). The hierarchies read it (a debug build checks it
+  // against the measured value), and so do the Robust and Temporal row sweeps: rows that stay that far inside
+  // their spheres are not read (sleeping blocks; a checked build checks each of them). Refused
+  // (InvalidArgument) when negative or not finite.
   std::optional<double> displacement_bound{};
 };
 
