@@ -54,7 +54,7 @@ def main() -> int:
           f"{args.algorithm} knn_eps {args.knn_eps}", flush=True)
     params = sc.step_params()
     for threads in (int(t) for t in args.threads.split(",")):
-        total, apply, detect, history, cpu = [], [], [], [], []
+        total, apply, detect, history, cpu, asleep = [], [], [], [], [], []
         digest = hashlib.sha1()
         for _ in range(args.rounds):
             backend = S.LocalBackend(threads)
@@ -70,6 +70,8 @@ def main() -> int:
                     apply.append(float(o.deform_ms))
                     detect.append(float(o.stats["detect_ms"]) if o.detected else float("nan"))
                     history.append(float(o.history_ms))
+                    if o.detected and o.stats["deformable"]:
+                        asleep.append(100.0 * o.stats.get("asleep", 0) / o.stats["deformable"])
                     digest.update(np.asarray(o.colliding, np.uint64).tobytes())
                     digest.update(np.asarray(o.depths, np.float64).tobytes())
                     continue
@@ -85,6 +87,8 @@ def main() -> int:
         if history:
             rest = [t - a - d - h for t, a, d, h in zip(total, apply, detect, history)]
             extra = f", history {statistics.median(history):.2f} ms, rest {statistics.median(rest):.2f} ms"
+        if asleep:
+            extra += f"; rows asleep {statistics.median(asleep):.0f} %"
         print(f"threads {threads}: step median {statistics.median(total):.2f} ms "
               f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms{extra}), "
               f"calling thread's CPU {statistics.median(cpu):.2f} ms, {len(total)} steps; results sha1 {digest.hexdigest()[:12]}; {benchlib.load_average()}", flush=True)
