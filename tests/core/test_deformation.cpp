@@ -99,6 +99,17 @@ TEST(Deformation, FieldsMatchBruteForce) {
   EXPECT_LT(f.memory_bytes(), static_cast<std::size_t>(n) * 2 + deformable * 2 * (sizeof(Index) + 4 * sizeof(double)));
 }
 
+// compute_fields(positions, regions) refuses the selection (Conflict), naming `row` as lying in both regions.
+void expect_conflict(const Points& positions, const std::vector<Region>& regions, Index row) {
+  try {
+    compute_fields(positions, regions);
+    ADD_FAILURE() << "overlapping regions accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::Conflict);
+    EXPECT_NE(std::string(e.what()).find("row " + std::to_string(row) + " "), std::string::npos) << e.what();
+  }
+}
+
 TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
   Model m = make_model(0.08);
   // Row 5 (a blend/zero/one row, whatever it is) duplicated: one copy F0, the other F1.
@@ -109,23 +120,11 @@ TEST(Deformation, FieldsRejectOverlapAndEmptyRegions) {
   std::vector<Region> reg = m.regions;
   reg[5] = Region::Zero;
   reg.push_back(Region::One);
-  try {
-    compute_fields(pos, reg);
-    FAIL() << "overlapping regions accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::Conflict);
-    EXPECT_NE(std::string(e.what()).find("row 5"), std::string::npos) << e.what();
-  }
+  expect_conflict(pos, reg, 5);
   // The mirror: row 5 in F1, its copy (the last row) in F0; the F1 row's own check must report it.
   reg[5] = Region::One;
   reg.back() = Region::Zero;
-  try {
-    compute_fields(pos, reg);
-    FAIL() << "overlapping regions accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::Conflict);
-    EXPECT_NE(std::string(e.what()).find("row 5"), std::string::npos) << e.what();
-  }
+  expect_conflict(pos, reg, 5);
   auto expect_invalid = [](const Points& p, const std::vector<Region>& r) {
     try {
       compute_fields(p, r);
@@ -207,13 +206,7 @@ TEST(Deformation, FieldsOfATiltedModelMatchBruteForce) {
   pos.row(n) = m.positions.row(slab[7]);
   std::vector<Region> reg = m.regions;
   reg.push_back(Region::One);
-  try {
-    compute_fields(pos, reg);
-    FAIL() << "overlapping regions accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::Conflict);
-    EXPECT_NE(std::string(e.what()).find("row " + std::to_string(slab[7])), std::string::npos) << e.what();
-  }
+  expect_conflict(pos, reg, slab[7]);
 }
 }  // namespace
 }  // namespace surfeledit
