@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <exception>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -120,8 +120,8 @@ struct ParallelSweep {
     if constexpr (!kQuiet<Kernel>) sleep = nullptr;
     if (!by_slot) sleep = nullptr;
     const std::size_t blocks = static_cast<std::size_t>((n + kBlock - 1) / kBlock);
-    // The step's bound, or -1: every block swept (and its budget taken afresh).
     if (sleep && sleep->budget.size() != blocks) sleep = nullptr;  // not sized for this list: no sleep
+    // The step's bound, or -1: every block swept (and its budget taken afresh).
     const double bound = sleep && scene.displacement_bound ? *scene.displacement_bound : -1.0;
     // One loop per combination of the three options, each compiled without their branches.
     auto pick = [&](auto by_slot_c, auto journal_c, auto candidate_c) {
