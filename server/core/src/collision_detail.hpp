@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "surfeledit/core/collision.hpp"
@@ -175,6 +177,16 @@ void collect_hits(CollisionResult& result, const IndexList& deformable, const st
     }
   }
   finish_result(result, deformable, preprocess_ms, start);
+}
+
+// scene.displacement_bound (CollisionScene) when the step carries one: refused before anything changes when it is
+// negative or not finite (InvalidArgument naming it). The row sweeps and the hierarchies read it alike.
+inline std::optional<double> checked_displacement_bound(const CollisionScene& scene) {
+  if (scene.displacement_bound && !(*scene.displacement_bound >= 0.0 && std::isfinite(*scene.displacement_bound))) {
+    throw Error(ErrorCode::InvalidArgument, "displacement_bound",
+                "must be finite and >= 0, got " + std::to_string(*scene.displacement_bound));
+  }
+  return scene.displacement_bound;
 }
 
 // Squared radius of a temporal-coherence sphere around a point at squared distance `dist2` from its

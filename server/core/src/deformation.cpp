@@ -185,22 +185,18 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   // (d0 + d1 == 0) is reported whatever its label. For a row of F0 or F1 that is all its distance is for, so its
   // search looks no further than distance 0 (nearest_within: the same tie winner as nearest(), found in about one
   // descent instead of a search as far away as the other region is).
-  const auto on_other = [&](const KdTree& other, Index i) {
-    const Vec3 p = positions.row(i).transpose();
-    const Index j = other.nearest_within(p, 0.0);
-    return j >= 0 && (p - positions.row(j).transpose()).norm() == 0.0;
+  const auto check = [&](const IndexList& own, const KdTree& other) {
+    const Eigen::Index n = static_cast<Eigen::Index>(own.size());
+#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
+    for (Eigen::Index q = 0; q < n; ++q) {
+      const Index i = own[static_cast<std::size_t>(q)];
+      const Vec3 p = positions.row(i).transpose();
+      const Index j = other.nearest_within(p, 0.0);
+      if (j >= 0 && (p - positions.row(j).transpose()).norm() == 0.0) conflict = std::min(conflict, i);
+    }
   };
-  const Eigen::Index n0 = static_cast<Eigen::Index>(f0.size()), n1 = static_cast<Eigen::Index>(f1.size());
-#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
-  for (Eigen::Index q = 0; q < n0; ++q) {
-    const Index i = f0[static_cast<std::size_t>(q)];
-    if (on_other(tree1, i)) conflict = std::min(conflict, i);
-  }
-#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(min : conflict)
-  for (Eigen::Index q = 0; q < n1; ++q) {
-    const Index i = f1[static_cast<std::size_t>(q)];
-    if (on_other(tree0, i)) conflict = std::min(conflict, i);
-  }
+  check(f0, tree1);
+  check(f1, tree0);
   if (!all_one) {
     // The blend rows' nearest F0 and F1 surfels, each region as one batch (answered along a space-filling curve,
     // each query bounded by the previous answer: the same rows as nearest(), the tie rule included).

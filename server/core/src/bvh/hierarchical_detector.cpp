@@ -197,11 +197,7 @@ StepShift HierarchicalDetector::shift_of(const CollisionScene& scene, const Poin
     keep_journal_reach();  // step_shift() takes the new radii
     return step_shift(scene, previous, deformable_, prev_radius_);
   }
-  const double bound = *scene.displacement_bound;
-  if (!(bound >= 0.0 && std::isfinite(bound))) {
-    throw Error(ErrorCode::InvalidArgument, "displacement_bound",
-                "must be finite and >= 0, got " + std::to_string(bound));
-  }
+  const double bound = *checked_displacement_bound(scene);
 #ifndef NDEBUG
   // The measured values (the pass the bound spares) must not exceed it: displacement and radius growth.
   const StepShift measured = step_shift(scene, previous, deformable_, prev_radius_);

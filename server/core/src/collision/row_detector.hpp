@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -54,10 +53,7 @@ class RowDetector final : public NarrowDetector {
                                     const std::vector<std::uint8_t>* candidate) override {
     const auto start = std::chrono::steady_clock::now();
     rows_.require_step(scene, previous);
-    if (scene.displacement_bound && !(*scene.displacement_bound >= 0.0 && std::isfinite(*scene.displacement_bound))) {
-      throw Error(ErrorCode::InvalidArgument, "displacement_bound",
-                  "must be finite and >= 0, got " + std::to_string(*scene.displacement_bound));
-    }
+    checked_displacement_bound(scene);  // the sweep's sleeping blocks read it
     rows_.kernel.bind(scene);
     hit_.resize(rows_.deformable.size());
     const Tally tally = sweep(rows_.deformable, scene, previous, candidate);
