@@ -36,6 +36,8 @@ class CollisionStats:
         detect_ms: this step's detection time. preprocess_ms: the detector's last (re)initialisation.
         nv, np, nu: the bounding-volume hierarchies' node visits, node-pair tests and node updates of
             this step (0 without a hierarchy).
+        asleep: deformable surfels not read this step: a step with a displacement bound (a translation)
+            skips blocks of rows that provably stayed inside their quiet spheres (Robust and Temporal).
 
     Fields can also be read by name, ``stats["detect_ms"]``, as the in-process dict was.
     """
@@ -49,6 +51,7 @@ class CollisionStats:
     nv: int = 0
     np: int = 0
     nu: int = 0
+    asleep: int = 0
 
     def __getitem__(self, name: str) -> Union[int, float]:
         if name not in _STATS_FIELDS:

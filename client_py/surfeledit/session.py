@@ -78,7 +78,8 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
     st = step.stats
     stats = CollisionStats(deformable=int(st.deformable), tested=int(st.tested), queries=int(st.queries),
                            colliding=int(st.colliding), detect_ms=float(st.detect_ms),
-                           preprocess_ms=float(st.preprocess_ms), nv=int(st.nv), np=int(st.np), nu=int(st.nu))
+                           preprocess_ms=float(st.preprocess_ms), nv=int(st.nv), np=int(st.np), nu=int(st.nu),
+                           asleep=int(st.asleep))
     return StepResult(seq=int(step.seq), version=int(reply.version), moved=int(step.moved),
                       center=np.array([step.center.x, step.center.y, step.center.z]),
                       timings={t.name: float(t.ms) for t in reply.timings}, round_trip_ms=round_trip_ms,

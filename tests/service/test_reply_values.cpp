@@ -28,6 +28,7 @@ TEST(ReplyValues, StepResultsCarryEveryCollisionStat) {
   core.stats.nv = 7;
   core.stats.np = 8;
   core.stats.nu = 9;
+  core.stats.asleep = 10;
   Reply r;
   r.step = to_reply(core, 5);
   const service::StepResult& st = *r.step;
@@ -47,6 +48,7 @@ TEST(ReplyValues, StepResultsCarryEveryCollisionStat) {
   EXPECT_EQ(ps.nv, 7u);
   EXPECT_EQ(ps.np, 8u);
   EXPECT_EQ(ps.nu, 9u);
+  EXPECT_EQ(ps.asleep, 10u);
   // Depths must match the colliding ids.
   core.depths.pop_back();
   EXPECT_THROW(to_reply(core, 6), std::logic_error);

@@ -35,6 +35,7 @@ CollisionStatsInfo to_reply(const CollisionStats& cs) {
   out.nv = static_cast<std::uint64_t>(cs.nv);
   out.np = static_cast<std::uint64_t>(cs.np);
   out.nu = static_cast<std::uint64_t>(cs.nu);
+  out.asleep = static_cast<std::uint64_t>(cs.asleep);
   return out;
 }
 

@@ -137,7 +137,7 @@ ReplyView::ReplyView(const Reply& reply) {
     const CollisionStatsInfo& cs = reply.step->stats;
     step_.stats = surfeledit_proto_CollisionStats{cs.deformable, cs.tested,        cs.queries, cs.colliding,
                                                   cs.detect_ms,  cs.preprocess_ms, cs.nv,      cs.np,
-                                                  cs.nu};
+                                                  cs.nu,         cs.asleep};
     step_.inserted = borrow<dds_sequence_unsigned_long_long>(reply.step->inserted);
     step_.response = cstr(reply.step->response);
     step_.backoff_iterations = reply.step->backoff_iterations;

@@ -198,6 +198,8 @@ def test_scripted_scenario_matches_in_process(client: surfeledit.Client, algorit
                 assert r.stats.colliding == r.colliding.size
                 assert r.stats.deformable == int(want.stats["deformable"])
                 assert r.stats.queries == int(want.stats["queries"])
+                assert r.stats.asleep == int(want.stats["asleep"])
+                assert r.stats.tested + r.stats.asleep <= r.stats.deformable
                 assert np.all(np.diff(r.colliding.astype(np.int64)) > 0)
                 assert r.inserted.size == 0
                 remote_steps.append(r)
@@ -217,6 +219,27 @@ def test_scripted_scenario_matches_in_process(client: surfeledit.Client, algorit
                 assert ev.detected
                 np.testing.assert_array_equal(ev.colliding, r.colliding)
                 assert ev.ids.size == r.moved
+
+
+@pytest.mark.parametrize("algorithm", ["temporal", "robust"])
+def test_an_idle_step_reports_its_sleeping_rows(client: surfeledit.Client, algorithm: str) -> None:
+    """A tiny translation far from contact: the sphere's rows stay inside their quiet spheres, so most of them are
+    not read (stats.asleep), the result is the in-process session's, and nothing collides."""
+    s = default_scene()
+    local = in_process_session(s)
+    local.configure(algorithm=algorithm)
+    nudge = (0.0, 0.0, -1e-6)
+    with client.open_session(f"idle-{algorithm}") as sess:
+        load(sess, s)
+        sess.configure(algorithm=algorithm)
+        for i in range(3):  # the first step reads every row; the next ones may sleep
+            r = sess.deform(translation=nudge)
+            want = local.deform(translation=nudge)
+            assert r.stats.asleep == int(want.stats["asleep"]), f"step {i + 1}"
+            assert r.stats.tested == int(want.stats["tested"]), f"step {i + 1}"
+            assert r.colliding.size == 0 == len(want.colliding)
+        assert r.stats.asleep > r.stats.deformable // 2, f"{algorithm}: {r.stats}"
+        assert r.stats.tested + r.stats.asleep <= r.stats.deformable
 
 
 def test_inserted_surfels_reach_the_reply_and_the_update(client: surfeledit.Client) -> None:

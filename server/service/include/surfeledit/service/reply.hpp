@@ -86,6 +86,7 @@ struct CollisionStatsInfo {
   std::uint64_t nv = 0;          // hierarchies: bounding-volume overlap tests this step; 0 without
   std::uint64_t np = 0;          // hierarchies: candidates handed to the narrow phase this step; 0 without
   std::uint64_t nu = 0;          // hierarchies: boxes updated this step (refit, insertion); 0 without
+  std::uint64_t asleep = 0;      // deformable surfels of sleeping blocks: not read this step
 };
 
 // What one deformation step did (proto StepResult; the core's is surfeledit::StepResult).
