@@ -10,10 +10,6 @@ BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 JOBS="${SURFELEDIT_JOBS:-$(nproc)}"
 VENV="$ROOT/.venv"
 log() { printf '[setup %s s] %s\n' "$SECONDS" "$*"; }
-# ccache keys on paths relative to the checkout, so another clone of the same sources hits the cache.
-export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
-# The precompiled test headers (SURFELEDIT_PCH) hit the cache only with these relaxations of its checks.
-export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"
 
 # 1. Debian packages.
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev

@@ -6,8 +6,6 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # stage NAME: a section header with the seconds since the start (setup included), so a slow CI run shows where.
 stage() { echo "== $* (at ${SECONDS} s)"; }
 "$ROOT/scripts/setup.sh"
-export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
-export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"  # as in setup.sh
 BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
