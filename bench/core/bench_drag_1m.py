@@ -14,7 +14,10 @@ two builds' runs can be checked for identical results.
 
 --breakdown calls the core session directly (no Python result objects) and adds the history's share (the
 before-image and the entry, StepResult::history_ms) and the rest (whole call - apply - detect - history: the
-step's bookkeeping, the response, the binding).
+step's bookkeeping, the response, the binding). It also splits the steps by the history's phase: while it grows
+(each step's image is new memory, whose pages the kernel maps and zeroes on first touch: ~0.5 ms per MB here) and
+once it is at its bound (setting history_mb; the oldest entry's buffers are reused), with the minor page faults per
+step of each (RESULTS §85).
 
 With --package, that directory goes first on sys.path, so an older build's package (e.g. a copy of main's
 client_py in /tmp) runs the same script; interleave the two in one period for a fair comparison.
@@ -24,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import resource
 import statistics
 import sys
 import time
@@ -55,6 +59,7 @@ def main() -> int:
     params = sc.step_params()
     for threads in (int(t) for t in args.threads.split(",")):
         total, apply, detect, history, cpu, asleep = [], [], [], [], [], []
+        phase: dict = {"growing": ([], []), "bounded": ([], [])}  # per phase: step ms, minor page faults
         digest = hashlib.sha1()
         for _ in range(args.rounds):
             backend = S.LocalBackend(threads)
@@ -63,9 +68,15 @@ def main() -> int:
             for _ in range(sc.steps):
                 c0 = time.thread_time()
                 if args.breakdown:
+                    entries = backend.session.core.report()["history_kinds"]["rows"]["entries"]
+                    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
                     t0 = time.perf_counter()
                     o = backend.session.core.deform(**params)
                     total.append((time.perf_counter() - t0) * 1e3)
+                    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+                    grew = backend.session.core.report()["history_kinds"]["rows"]["entries"] > entries
+                    phase["growing" if grew else "bounded"][0].append(total[-1])
+                    phase["growing" if grew else "bounded"][1].append(faults)
                     cpu.append((time.thread_time() - c0) * 1e3)
                     apply.append(float(o.deform_ms))
                     detect.append(float(o.stats["detect_ms"]) if o.detected else float("nan"))
@@ -89,6 +100,10 @@ def main() -> int:
             extra = f", history {statistics.median(history):.2f} ms, rest {statistics.median(rest):.2f} ms"
         if asleep:
             extra += f"; rows asleep {statistics.median(asleep):.0f} %"
+        for name, (ms, faults) in phase.items() if history else ():
+            if ms:
+                extra += (f"; history {name}: {len(ms)} steps, median {statistics.median(ms):.2f} ms, "
+                          f"{statistics.median(faults):.0f} page faults")
         print(f"threads {threads}: step median {statistics.median(total):.2f} ms "
               f"(deformation {statistics.median(apply):.2f} ms, detect {statistics.median(detect):.2f} ms{extra}), "
               f"calling thread's CPU {statistics.median(cpu):.2f} ms, {len(total)} steps; results sha1 {digest.hexdigest()[:12]}; {benchlib.load_average()}", flush=True)

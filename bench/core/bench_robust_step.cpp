@@ -15,6 +15,8 @@
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
 // BM_Preprocess/<tilted>: one iteration = configure(algorithm robust), i.e. one detector reset; tilted 1: the scene
 //   turned as BM_DetectRunTilted's. BM_PreprocessTemporal/<tilted>: the same with algorithm temporal.
+//   BM_PreprocessThreads/<tilted>: BM_Preprocess with the session's threads at 2 (wall time: the reset's original
+//   tree and its seed at once, KernelRows::build_seeded).
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
 //   session, no history; the detect input carries the translation's displacement bound, as EditSession's).
@@ -190,12 +192,12 @@ void BM_IdleDrag(benchmark::State& state) {
   state.counters["history_kb_per_step"] = (history_bytes() - h0) / 16.0 / 1024.0;
 }
 
-void preprocess(benchmark::State& state, const char* algorithm) {
+void preprocess(benchmark::State& state, const char* algorithm, std::int64_t threads = 1) {
   const Piercing& scene = Piercing::get(state.range(0) != 0);
   auto session = scene.session(true, false);
   double preprocess = 0.0;
   for (auto _ : state) {
-    session->configure({{"algorithm", std::string(algorithm)}});
+    session->configure({{"algorithm", std::string(algorithm)}, {"threads", threads}});
     state.PauseTiming();
     preprocess = session->deform(DeformParams{}).stats.preprocess_ms;  // reports the reset's time
     state.ResumeTiming();
@@ -204,6 +206,7 @@ void preprocess(benchmark::State& state, const char* algorithm) {
 }
 void BM_Preprocess(benchmark::State& state) { preprocess(state, "robust"); }
 void BM_PreprocessTemporal(benchmark::State& state) { preprocess(state, "temporal"); }
+void BM_PreprocessThreads(benchmark::State& state) { preprocess(state, "robust", 2); }
 
 // A detector configuration of BM_DetectRun / BM_DetectIdle: the algorithm and its hierarchy.
 struct Config {
@@ -339,6 +342,7 @@ BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMilli
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Preprocess)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PreprocessTemporal)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PreprocessThreads)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

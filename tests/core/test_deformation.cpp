@@ -208,5 +208,25 @@ TEST(Deformation, FieldsOfATiltedModelMatchBruteForce) {
   reg.push_back(Region::One);
   expect_conflict(pos, reg, slab[7]);
 }
+
+TEST(Deformation, FieldsOfALargeModelOnTwoThreadsEqualOneThread) {
+  // Large enough for the two trees to be built at once (server/core/src/at_once.hpp: kAtOnceMinPoints rows): the
+  // same fields bit for bit as one thread's, and lambda on a sample of the blend rows against brute force.
+  const Model m = make_model(0.012);
+  ASSERT_GE(m.positions.rows(), 16384);
+  const DeformationFields one = compute_fields(m.positions, m.regions, 1);
+  const DeformationFields two = compute_fields(m.positions, m.regions, 2);
+  EXPECT_EQ(one.deformable, two.deformable);
+  ASSERT_EQ(one.blend.rows(), two.blend.rows());
+  EXPECT_TRUE(one.blend.cwiseEqual(two.blend).all());
+  const Values lam = two.lambda();
+  int checked = 0;
+  for (Eigen::Index i = 0; i < m.positions.rows(); i += 97) {
+    if (m.regions[static_cast<std::size_t>(i)] != Region::Blend) continue;
+    EXPECT_NEAR(lam[i], brute_lambda(m, m.positions.row(i).transpose()), 1e-14);
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+}
 }  // namespace
 }  // namespace surfeledit

@@ -10,8 +10,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <type_traits>
 
+#include "at_once.hpp"
 #include "deformation_checks.hpp"
 #include "surfeledit/core/kdtree.hpp"
 #include "surfeledit/core/util.hpp"
@@ -172,8 +174,11 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   tp.leaf_size = kFieldLeafSize;
   tp.frames = true;
   tp.align = true;
-  const KdTree tree0(positions, f0, tp);
-  const KdTree tree1(positions, f1, tp);
+  std::optional<KdTree> t0, t1;  // built at once on two threads for a large model (at_once.hpp)
+  detail::at_once(
+      nthreads > 1 && f0.size() + f1.size() >= static_cast<std::size_t>(detail::kAtOnceMinPoints),
+      [&] { t0.emplace(positions, f0, tp); }, [&] { t1.emplace(positions, f1, tp); });
+  const KdTree &tree0 = *t0, &tree1 = *t1;
 
   const Eigen::Index nd = static_cast<Eigen::Index>(fields.deformable.size());
   // Every deformable row in F1 (a rigid tool): all blend rows are kF1Blend, none is stored.

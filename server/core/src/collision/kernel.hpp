@@ -25,6 +25,10 @@
 //     // Row detector: the initial states of the deformable rows (`states` has #P entries).
 //     void seed(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
 //               int threads, RowStates<State>& states) const;
+//     // Optional: true when seed() reads nothing reset() writes (it builds its own references from the scene and
+//     // reads only the kernel's settings), so that a row driver with threads > 1 may run the two at once
+//     // (KernelRows::build_seeded; Robust: the original model's tree beside the seed's tree and queries).
+//     static constexpr bool kSeedApart;
 //     // The state right after reset of a point at p whose nearest zero surfel is `zero`.
 //     State init(const Vec3& p, const NearestZero& zero) const;
 //     // One step for a tested point. Returns the nearest-neighbour queries made (> 0: it was tested).

@@ -60,6 +60,7 @@ class RobustKernelT : public RobustFlags {
  public:
   using State = std::conditional_t<kHeld, RobustHeldState, RobustState>;
   static constexpr bool kSeeded = true;
+  static constexpr bool kSeedApart = true;  // seed() builds its own tree over the zero rows and reads params_ only
   static constexpr int kChunk = 512;
 
   explicit RobustKernelT(const CollisionParams& params) : params_(params) {}

@@ -39,10 +39,7 @@ class RowDetector final : public NarrowDetector {
   void reset(const CollisionScene& scene) override {
     const auto start = std::chrono::steady_clock::now();
     const int threads = resolve_threads(params_.threads);
-    IndexList zero_rows;
-    KernelRows<Kernel> rows = KernelRows<Kernel>::build(params_, scene, threads, zero_rows);
-    rows.kernel.seed(scene, rows.deformable, zero_rows, threads, rows.states);
-    rows_ = std::move(rows);
+    rows_ = KernelRows<Kernel>::build_seeded(params_, scene, threads);
     sweep_.reset();
     size_sleep();
     journal_.on = false;
