@@ -15,8 +15,8 @@
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
 // BM_Preprocess/<tilted>: one iteration = configure(algorithm robust), i.e. one detector reset; tilted 1: the scene
 //   turned as BM_DetectRunTilted's. BM_PreprocessTemporal/<tilted>: the same with algorithm temporal.
-//   BM_PreprocessThreads/<tilted>: BM_Preprocess with the session's threads at 2 (wall time: the reset's original
-//   tree and its seed at once, KernelRows::build_seeded).
+//   BM_PreprocessThreads/<tilted>, BM_PreprocessTemporalThreads/<tilted>: the same with the session's threads at 2
+//   (wall time: the reset's parts that share nothing at once, at_once.hpp).
 // BM_DetectRun/<config>, BM_DetectIdle/<config>: the detector alone (make_detector, reset, detect), the
 //   same 50 steps / the same idle step with the positions moved untimed (the ball's rows translated; no
 //   session, no history; the detect input carries the translation's displacement bound, as EditSession's).
@@ -207,6 +207,7 @@ void preprocess(benchmark::State& state, const char* algorithm, std::int64_t thr
 void BM_Preprocess(benchmark::State& state) { preprocess(state, "robust"); }
 void BM_PreprocessTemporal(benchmark::State& state) { preprocess(state, "temporal"); }
 void BM_PreprocessThreads(benchmark::State& state) { preprocess(state, "robust", 2); }
+void BM_PreprocessTemporalThreads(benchmark::State& state) { preprocess(state, "temporal", 2); }
 
 // A detector configuration of BM_DetectRun / BM_DetectIdle: the algorithm and its hierarchy.
 struct Config {
@@ -343,6 +344,7 @@ BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Preprocess)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PreprocessTemporal)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PreprocessThreads)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PreprocessTemporalThreads)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -240,8 +240,8 @@ IndexList ZeroSet::rows_near_zero(const CollisionScene& scene, const IndexList& 
   return out;
 }
 
-void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads,
-                            KnnResult* nearest) {
+void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole, int n,
+                            int i, int threads, KnnResult* nearest) {
   std::fill(marked.begin(), marked.end(), 0);
   if (deformable.empty()) {
     if (nearest) *nearest = KnnResult();
@@ -250,9 +250,6 @@ void ZeroSet::mark_boundary(const CollisionScene& scene, const IndexList& deform
   // Row -> index into the zero copies (-1 for deformable rows).
   IndexList zero_of_row(scene.regions.size(), -1);
   for (std::size_t k = 0; k < rows.size(); ++k) zero_of_row[rows[k]] = static_cast<Index>(k);
-  KdTreeParams tp = nearest_tree_params(0.0);
-  tp.threads = threads;
-  const KdTree whole(scene.positions, tp);
   // Only a row with a zero surfel among its n + 1 nearest can mark one. A row with n + 1 points strictly closer than
   // its nearest zero surfel has none there, whatever the order of ties, and makes no knn query: most deformable rows
   // lie far from the zero region, where such points are found in a leaf (RESULTS §75).

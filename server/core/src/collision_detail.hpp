@@ -107,13 +107,19 @@ struct ZeroSet {
     p.frames = p.cells;
     return p;
   }
+  // The parameters of the whole model's tree the boundary marks search (mark_boundary's `whole`).
+  static KdTreeParams whole_tree_params(int threads) {
+    KdTreeParams p = nearest_tree_params(0.0);
+    p.threads = threads;
+    return p;
+  }
   // Boundary marks from the model as it is now: for each deformable row its `n` nearest other
-  // surfels of the whole model; the `i` nearest zero surfels among them are marked. Returns the
-  // number of nearest-neighbour queries made.
+  // surfels of the whole model (`whole`: its tree over scene.positions, whole_tree_params); the `i` nearest zero
+  // surfels among them are marked.
   // `nearest` (optional): gets each deformable row's nearest zero surfel, as tree->knn(their positions, 1) answers
   // (#deformable by 1, indices into the copies), which the marks ask for anyway (a seeded kernel's seed needs it too).
-  void mark_boundary(const CollisionScene& scene, const IndexList& deformable, int n, int i, int threads,
-                     KnnResult* nearest = nullptr);
+  void mark_boundary(const CollisionScene& scene, const IndexList& deformable, const KdTree& whole, int n, int i,
+                     int threads, KnnResult* nearest = nullptr);
   // The rows of `deformable` (ascending) that may have a zero surfel among their k nearest points of `whole` (the
   // whole model's tree): all but those with k points strictly closer than their nearest zero surfel. `nearest`
   // (optional) gets those nearest zero surfels (tree->knn(the rows' positions, 1)).

@@ -2,7 +2,9 @@
 // reference of the Simple and Temporal kernels, and Improved's spatial-coherence sweep.
 #include <cmath>
 #include <memory>
+#include <optional>
 
+#include "at_once.hpp"
 #include "collision/improved_sweep.hpp"
 
 namespace surfeledit::detail {
@@ -10,10 +12,19 @@ namespace surfeledit::detail {
 void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformable, const IndexList& zero_rows,
                           int threads) {
   ZeroSet zero;
-  zero.build(scene, zero_rows, params_.knn_eps, zero_cells_);
+  // The boundary marks search a tree over the whole model, which does not depend on the zero set's: with threads > 1
+  // on a large model the two are built at once (at_once.hpp; the same trees as one after the other).
+  const bool marks = params_.boundary && !deformable.empty();
+  std::optional<KdTree> whole;
+  at_once(
+      marks && threads > 1 && scene.positions.rows() >= kAtOnceMinPoints,
+      [&] { zero.build(scene, zero_rows, params_.knn_eps, zero_cells_); },
+      [&] {
+        if (marks) whole.emplace(scene.positions, ZeroSet::whole_tree_params(threads));
+      });
   reset_nearest_ = KnnResult();
-  if (params_.boundary) {
-    zero.mark_boundary(scene, deformable, params_.boundary_n, params_.boundary_i, threads,
+  if (marks) {  // (no deformable row: nothing marked, build() left every mark 0)
+    zero.mark_boundary(scene, deformable, *whole, params_.boundary_n, params_.boundary_i, threads,
                        keep_reset_nearest_ ? &reset_nearest_ : nullptr);
   }
   zero_ = std::move(zero);
