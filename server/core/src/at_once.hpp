@@ -1,5 +1,6 @@
-// Two independent parts of one job run at once on two threads (internal header): a detector's reset beside its seed
-// (collision/kernel_rows.hpp), the deformation fields' two trees (deformation.cpp).
+// Two independent parts of one job run at once on two threads (internal header): Robust's reset beside its seed
+// (collision/kernel_rows.hpp), the zero set's tree beside the boundary marks' whole-model tree (collision_simple.cpp),
+// the deformation fields' two trees (deformation.cpp).
 #pragma once
 
 #include <exception>
