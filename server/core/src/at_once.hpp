@@ -1,6 +1,7 @@
 // Two independent parts of one job run at once on two threads (internal header): Robust's reset beside its seed
 // (collision/kernel_rows.hpp), the zero set's tree beside the boundary marks' whole-model tree (collision_simple.cpp),
-// the deformation fields' two trees (deformation.cpp).
+// the hierarchical detector's narrow phase beside its trees (bvh/hierarchical_detector.cpp), the deformation fields'
+// two trees (deformation.cpp).
 #pragma once
 
 #include <exception>

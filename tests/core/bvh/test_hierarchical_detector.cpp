@@ -1,7 +1,7 @@
 // Collision detection behind bounding volume hierarchies (issue 4): every configuration gives the
 // colliding set of the same algorithm without a hierarchy, on every step of the scripted scene (with
-// insertions and removals mid-scenario); the extended variant equals Robust; a background rebuild
-// while steps arrive.
+// insertions and removals mid-scenario); the extended variant equals Robust; a reset on two threads; a background
+// rebuild while steps arrive.
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
@@ -31,10 +31,11 @@ std::string describe(const CollisionParams& c, const HierarchyParams& h) {
 // side, with the splits (step 4) and removals (step 7) of run_against_oracle; returns the number of
 // steps whose colliding sets differ and checks the counters.
 // `bound`, when given, is the displacement bound det's detect input carries at each step (none when empty).
+// `spacing`: of the scene's samples (slab_and_sphere).
 using BoundFn = std::function<std::optional<double>(const TestScene&, const Points& previous)>;
 int run_pair(const CollisionParams& params, const HierarchyParams& hierarchy, const CollisionParams& reference,
-             Index* candidates_seen = nullptr, const BoundFn& bound = nullptr) {
-  TestScene scene = slab_and_sphere();
+             Index* candidates_seen = nullptr, const BoundFn& bound = nullptr, double spacing = 0.08) {
+  TestScene scene = slab_and_sphere(spacing);
   const std::vector<ScriptStep> script = slab_script();
   auto ref = CollisionDetector::create(reference);
   auto det = CollisionDetector::create(params, hierarchy);
@@ -209,6 +210,24 @@ TEST(CollisionBvh, ExtendedEqualsRobustEveryStep) {
   for (const HierarchyParams& h : every_configuration(true)) {
     EXPECT_EQ(run_pair(params_of(CollisionAlgorithm::Robust), h, params_of(CollisionAlgorithm::Robust)), 0)
         << describe(params_of(CollisionAlgorithm::Robust), h);
+  }
+}
+
+// A reset on two threads, on a model large enough for the narrow phase to be built beside the broad phase's trees
+// (at_once.hpp: at least 16384 rows), equals Robust without a hierarchy on one thread, every step.
+TEST(CollisionBvh, ResetOnTwoThreadsEqualsOneThreadWithoutAHierarchy) {
+  ASSERT_GE(slab_and_sphere(0.03).rows(), 16384);
+  for (auto zero : {ZeroHierarchy::Aabb, ZeroHierarchy::Obb}) {
+    for (bool extended : {false, true}) {
+      HierarchyParams h;
+      h.zero = zero;
+      h.deformable = DeformableHierarchy::Aabb;
+      h.extended = extended;
+      EXPECT_EQ(run_pair(params_of(CollisionAlgorithm::Robust, 2), h, params_of(CollisionAlgorithm::Robust), nullptr,
+                         nullptr, 0.03),
+                0)
+          << describe(params_of(CollisionAlgorithm::Robust, 2), h);
+    }
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <variant>
 
+#include "../at_once.hpp"
 #include "surfeledit/core/bvh/traversal.hpp"
 #include "surfeledit/core/inside_outside.hpp"
 
@@ -18,32 +19,40 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
   split_rows(scene, deformable, zero_rows);
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
   const Index rows = static_cast<Index>(scene.regions.size());
-  // Narrow phase first (it validates the scene too).
+  // The narrow phase (first: it validates the scene too) and the broad phase's trees share nothing: with threads > 1
+  // on a large model they are built at once (at_once.hpp; the narrow phase's own parts then run one after the other
+  // on its thread), the same detector as one after the other.
   std::unique_ptr<bvh::ExtendedNarrow> extended;
   std::size_t extended_bytes = 0;
-  if (h_.extended) {
-    std::vector<std::uint8_t> is_zero(static_cast<std::size_t>(rows));
-    for (Index r = 0; r < rows; ++r) is_zero[r] = scene.regions[r] == Region::Zero;
-    KdTreeParams tp;
-    tp.threads = resolve_threads(params_.threads);
-    tp.eps = params_.knn_eps;
-    auto original = std::make_shared<const InsideOutside>(scene.positions, scene.normals, tp);
-    // Positions and normals copied by InsideOutside, its k-d tree, zero flags, cache and state per row.
-    extended_bytes = original->tree().memory_bytes() + static_cast<std::size_t>(rows) * (6 * sizeof(double) + 18);
-    extended = std::make_unique<bvh::ExtendedNarrow>(std::move(original), std::move(is_zero), rows, params_.threshold);
-  } else {
-    narrow_->reset(scene);
-  }
-  const auto t_zero = std::chrono::steady_clock::now();
-  ZeroTree zero = build_zero_tree(scene, zero_rows, h_);
-  zero_build_ms_ = ms_since(t_zero);
+  auto narrow = [&] {
+    if (h_.extended) {
+      std::vector<std::uint8_t> is_zero(static_cast<std::size_t>(rows));
+      for (Index r = 0; r < rows; ++r) is_zero[r] = scene.regions[r] == Region::Zero;
+      KdTreeParams tp;
+      tp.threads = resolve_threads(params_.threads);
+      tp.eps = params_.knn_eps;
+      auto original = std::make_shared<const InsideOutside>(scene.positions, scene.normals, tp);
+      // Positions and normals copied by InsideOutside, its k-d tree, zero flags, cache and state per row.
+      extended_bytes = original->tree().memory_bytes() + static_cast<std::size_t>(rows) * (6 * sizeof(double) + 18);
+      extended = std::make_unique<bvh::ExtendedNarrow>(std::move(original), std::move(is_zero), rows, params_.threshold);
+    } else {
+      narrow_->reset(scene);
+    }
+  };
+  ZeroTree zero;
   std::unique_ptr<bvh::Bvh<bvh::Aabb>> def;
-  def_build_ms_ = 0.0;
-  if (h_.deformable == DeformableHierarchy::Aabb) {
-    const auto t_def = std::chrono::steady_clock::now();
-    def = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, h_.tree);
-    def_build_ms_ = ms_since(t_def);
-  }
+  auto broad = [&] {
+    const auto t_zero = std::chrono::steady_clock::now();
+    zero = build_zero_tree(scene, zero_rows, h_);
+    zero_build_ms_ = ms_since(t_zero);
+    def_build_ms_ = 0.0;
+    if (h_.deformable == DeformableHierarchy::Aabb) {
+      const auto t_def = std::chrono::steady_clock::now();
+      def = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, h_.tree);
+      def_build_ms_ = ms_since(t_def);
+    }
+  };
+  at_once(resolve_threads(params_.threads) > 1 && rows >= kAtOnceMinPoints, narrow, broad);
   // Surfel/tree behind a broad phase: the filter tree and the zero hull (not for Temporal, which has none).
   std::unique_ptr<bvh::Bvh<bvh::Aabb>> filter;
   bvh::Aabb hull;
