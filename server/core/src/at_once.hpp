@@ -4,6 +4,7 @@
 // two trees (deformation.cpp).
 #pragma once
 
+#include <cstddef>
 #include <exception>
 
 #include "surfeledit/core/types.hpp"
@@ -13,6 +14,11 @@ namespace surfeledit::detail {
 // Points below which a tree's build is not worth a second thread (~1.5 ms of one thread's build): a small model's
 // reset would wait longer on a descheduled worker than it saves.
 inline constexpr Index kAtOnceMinPoints = 16384;
+
+// Whether a job over `points` points with `threads` threads runs its two parts at once (at_once's `parallel`).
+inline bool at_once_pays(int threads, std::size_t points) {
+  return threads > 1 && points >= static_cast<std::size_t>(kAtOnceMinPoints);
+}
 
 // Runs first() and second(), which share nothing they write: at once on two threads (OpenMP sections) when
 // `parallel`, else one after the other. Each part runs on one thread (a parallel region inside one runs serially).

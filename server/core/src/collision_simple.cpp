@@ -17,7 +17,7 @@ void ZeroSetKernel::reset(const CollisionScene& scene, const IndexList& deformab
   const bool marks = params_.boundary && !deformable.empty();
   std::optional<KdTree> whole;
   at_once(
-      marks && threads > 1 && scene.positions.rows() >= kAtOnceMinPoints,
+      marks && at_once_pays(threads, scene.regions.size()),
       [&] { zero.build(scene, zero_rows, params_.knn_eps, zero_cells_); },
       [&] {
         if (marks) whole.emplace(scene.positions, ZeroSet::whole_tree_params(threads));

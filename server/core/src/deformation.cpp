@@ -176,7 +176,7 @@ DeformationFields compute_fields(const Points& positions, const std::vector<Regi
   tp.align = true;
   std::optional<KdTree> t0, t1;  // built at once on two threads for a large model (at_once.hpp)
   detail::at_once(
-      nthreads > 1 && f0.size() + f1.size() >= static_cast<std::size_t>(detail::kAtOnceMinPoints),
+      detail::at_once_pays(nthreads, f0.size() + f1.size()),
       [&] { t0.emplace(positions, f0, tp); }, [&] { t1.emplace(positions, f1, tp); });
   const KdTree &tree0 = *t0, &tree1 = *t1;
 

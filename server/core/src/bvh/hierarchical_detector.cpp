@@ -19,6 +19,7 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
   split_rows(scene, deformable, zero_rows);
   if (zero_rows.empty()) throw Error(ErrorCode::InvalidArgument, "regions", "the zero region is empty");
   const Index rows = static_cast<Index>(scene.regions.size());
+  const int threads = resolve_threads(params_.threads);
   // The narrow phase (first: it validates the scene too) and the broad phase's trees share nothing: with threads > 1
   // on a large model they are built at once (at_once.hpp; the narrow phase's own parts then run one after the other
   // on its thread), the same detector as one after the other.
@@ -29,7 +30,7 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
       std::vector<std::uint8_t> is_zero(static_cast<std::size_t>(rows));
       for (Index r = 0; r < rows; ++r) is_zero[r] = scene.regions[r] == Region::Zero;
       KdTreeParams tp;
-      tp.threads = resolve_threads(params_.threads);
+      tp.threads = threads;
       tp.eps = params_.knn_eps;
       auto original = std::make_shared<const InsideOutside>(scene.positions, scene.normals, tp);
       // Positions and normals copied by InsideOutside, its k-d tree, zero flags, cache and state per row.
@@ -52,7 +53,7 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
       def_build_ms_ = ms_since(t_def);
     }
   };
-  at_once(resolve_threads(params_.threads) > 1 && rows >= kAtOnceMinPoints, narrow, broad);
+  at_once(at_once_pays(threads, scene.regions.size()), narrow, broad);
   // Surfel/tree behind a broad phase: the filter tree and the zero hull (not for Temporal, which has none).
   std::unique_ptr<bvh::Bvh<bvh::Aabb>> filter;
   bvh::Aabb hull;

@@ -38,26 +38,19 @@ struct KernelRows {
   }
 
   // build() and the states seeded (Kernel::seed). A kernel whose seed reads nothing its reset writes
-  // (Kernel::kSeedApart) has the two run at once with threads > 1 on a model large enough (at_once.hpp), each on one
-  // thread: the same references and states as one after the other (each is deterministic), in less time.
+  // (Kernel::kSeedApart) has the two run at once when that pays (at_once.hpp), each on one thread: the same references
+  // and states as one after the other (each is deterministic), in less time.
   static KernelRows build_seeded(const CollisionParams& params, const CollisionScene& scene, int threads) {
+    KernelRows out(params);
     IndexList zero_rows;
-    if constexpr (kSeedApart<Kernel>) {
-      if (threads > 1 && scene.positions.rows() >= kAtOnceMinPoints) {
-        KernelRows out(params);
-        split_rows(scene, out.deformable, zero_rows);
-        if (!zero_rows.empty()) {  // else reset() throws, as one after the other
-          out.states.assign(static_cast<Index>(scene.regions.size()), out.deformable);
-          at_once(
-              true, [&] { out.kernel.reset(scene, out.deformable, zero_rows, 1); },
-              [&] { out.kernel.seed(scene, out.deformable, zero_rows, 1, out.states); });
-          return out;
-        }
-        zero_rows.clear();
-      }
-    }
-    KernelRows out = build(params, scene, threads, zero_rows);
-    out.kernel.seed(scene, out.deformable, zero_rows, threads, out.states);
+    split_rows(scene, out.deformable, zero_rows);
+    out.states.assign(static_cast<Index>(scene.regions.size()), out.deformable);
+    // Without zero rows reset() throws, and the seed does not run.
+    const bool apart = kSeedApart<Kernel> && !zero_rows.empty() && at_once_pays(threads, scene.regions.size());
+    const int each = apart ? 1 : threads;
+    at_once(
+        apart, [&] { out.kernel.reset(scene, out.deformable, zero_rows, each); },
+        [&] { out.kernel.seed(scene, out.deformable, zero_rows, each, out.states); });
     return out;
   }
 
