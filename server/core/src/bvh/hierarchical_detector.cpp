@@ -42,18 +42,20 @@ void HierarchicalDetector::reset(const CollisionScene& scene) {
   };
   ZeroTree zero;
   std::unique_ptr<bvh::Bvh<bvh::Aabb>> def;
+  double zero_ms = 0.0, def_ms = 0.0;  // the members take them once the reset succeeded
   auto broad = [&] {
     const auto t_zero = std::chrono::steady_clock::now();
     zero = build_zero_tree(scene, zero_rows, h_);
-    zero_build_ms_ = ms_since(t_zero);
-    def_build_ms_ = 0.0;
+    zero_ms = ms_since(t_zero);
     if (h_.deformable == DeformableHierarchy::Aabb) {
       const auto t_def = std::chrono::steady_clock::now();
       def = std::make_unique<bvh::Bvh<bvh::Aabb>>(scene.positions, scene.radii, deformable, h_.tree);
-      def_build_ms_ = ms_since(t_def);
+      def_ms = ms_since(t_def);
     }
   };
   at_once(at_once_pays(threads, scene.regions.size()), narrow, broad);
+  zero_build_ms_ = zero_ms;
+  def_build_ms_ = def_ms;
   // Surfel/tree behind a broad phase: the filter tree and the zero hull (not for Temporal, which has none).
   std::unique_ptr<bvh::Bvh<bvh::Aabb>> filter;
   bvh::Aabb hull;
