@@ -60,7 +60,8 @@ class LocalSession(StateArrays):
 
     Args:
         name: the session's name (reports and logs only).
-        threads: collision-detection threads (0 = all cores); also the ``threads`` setting.
+        threads: worker threads for batch work (0 = all cores, at most 256), and every tool's starting
+            ``threads`` setting (detection; at most the hardware threads).
 
     Attributes:
         core: the wrapped ``surfeledit.core.EditSession``, for in-process-only extras.

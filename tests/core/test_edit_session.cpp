@@ -1,8 +1,14 @@
 // EditSession: versions, change tracking, lazily built structures, atomic failures.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+#include <string>
+#include <thread>
+
 #include "surfeledit/core/edit_session.hpp"
 #include "surfeledit/core/scene.hpp"
+#include "expect_error.hpp"
 #include "session_fixture.hpp"
 
 namespace surfeledit {
@@ -168,6 +174,32 @@ TEST(EditSessionCollision, RemoveKeepsIdsAndDetection) {
   EXPECT_TRUE(o.detected);
   EXPECT_EQ(o.stats.deformable, static_cast<Index>(f.one.size() - 2));
   for (SurfelId id : o.colliding) EXPECT_GE(f.session.model().row_of(id), 0);
+}
+
+// A session made with N threads starts every tool's detection threads at N (capped at the hardware threads,
+// the setting's range), so one knob keeps a session on one core; a tool's configure() still overrides it.
+TEST(EditSession, NewToolsDetectOnTheSessionsThreads) {
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int threads : {0, 1, 2, hardware, hardware + 3}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    EditSession s("t", SessionParams{threads});
+    const int expected = std::min(threads, hardware);
+    EXPECT_EQ(s.settings().collision.threads, expected);
+    EXPECT_EQ(s.settings("another author").collision.threads, expected);  // no tool yet
+    s.configure({{"threshold", 0.0}}, "another author");                 // its tool now exists
+    EXPECT_EQ(s.settings("another author").collision.threads, expected);
+    s.configure({{"threads", std::int64_t{0}}});
+    EXPECT_EQ(s.settings().collision.threads, 0);
+  }
+}
+
+TEST(EditSession, ThreadsOutsideTheirBoundAreRefused) {
+  for (int threads : {-1, kMaxSessionThreads + 1, std::numeric_limits<int>::max()}) {
+    const std::string message = testing_util::expect_error([&] { EditSession s("t", SessionParams{threads}); },
+                                                           ErrorCode::InvalidArgument, "threads");
+    EXPECT_NE(message.find(std::to_string(threads)), std::string::npos) << message;
+  }
+  EXPECT_NO_THROW(EditSession("t", SessionParams{kMaxSessionThreads}));
 }
 
 }  // namespace

@@ -11,6 +11,9 @@ namespace surfeledit {
 
 EditSession::EditSession(std::string name, SessionParams params)
     : name_(std::move(name)), params_(params) {
+  if (params_.threads < 0 || params_.threads > kMaxSessionThreads)
+    throw Error(ErrorCode::InvalidArgument, "threads",
+                "must be in 0.." + std::to_string(kMaxSessionThreads) + ", got " + std::to_string(params_.threads));
   use("");
 }
 

@@ -11,7 +11,7 @@ namespace surfeledit {
 
 Tool& EditSession::use(const std::string& author) {
   auto [it, created] = tools_.try_emplace(author);
-  if (created) it->second.settings.history = history_params_;
+  if (created) it->second.settings = new_settings();
   tool_ = &it->second;
   tool_id_ = author;
   return *tool_;
@@ -24,8 +24,15 @@ const Tool* EditSession::find_tool(const std::string& author) const {
 
 SessionSettings EditSession::settings_of(const std::string& author) const {
   const Tool* t = find_tool(author);
-  SessionSettings s = t ? t->settings : SessionSettings();
+  SessionSettings s = t ? t->settings : new_settings();
   s.history = history_params_;
+  return s;
+}
+
+SessionSettings EditSession::new_settings() const {
+  SessionSettings s;
+  s.history = history_params_;
+  s.collision.threads = std::min(params_.threads, hardware_threads());
   return s;
 }
 

@@ -7,9 +7,10 @@
 #include <cstdlib>
 #include <limits>
 #include <sstream>
-#include <thread>
 #include <type_traits>
 #include <utility>
+
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
 
@@ -35,9 +36,7 @@ constexpr double kMaxFactor = 1e6;              // dimensionless multipliers (ma
 constexpr double kMaxHistoryMb = 1 << 20;       // 1 TiB: beyond any machine, far below overflow
 constexpr double kMaxBackoffIterations = 1000;  // back-off re-tests per step
 constexpr double kMaxBlendNeighbourFactor = 16;  // blend neighbourhood radius in mean radii (~800 neighbours)
-
-// threads: 0 (all) up to the hardware threads (more only oversubscribes; 2^31 made libgomp abort).
-double hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+// threads: 0 (all) up to hardware_threads() (more only oversubscribes; 2^31 made libgomp abort).
 
 // The member of SessionSettings reached through the data-member pointers `Path`.
 template <auto... Path>
@@ -104,7 +103,8 @@ std::vector<SettingSpec> make_table() {
       row<&S::collision, &C::step_bound>("step_bound", "per-surfel step bound (simple/improved/temporal)"),
       row<&S::collision, &C::sphere_margin>("sphere_margin", "temporal/robust spheres shrink by this many radii "
                                                              "of the nearest surfel", within(0, kMaxFactor)),
-      row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all, at most the hardware threads)",
+      row<&S::collision, &C::threads>("threads", "worker threads for detection (0 = all, at most the hardware threads; "
+                                                   "a new tool starts with its session's)",
                                       within(0, hardware_threads())),
       row<&S::collision, &C::parallel_min_ms>("parallel_min_ms", "a detection step runs on several threads only "
                                               "when its estimated one-thread work is at least this, ms (0 = always)",

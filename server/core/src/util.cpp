@@ -2,9 +2,14 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <thread>
+
 namespace surfeledit {
 
 int resolve_threads(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
+
+int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 void compact(Points& a, const std::vector<bool>& keep) {
   Eigen::Index j = 0;

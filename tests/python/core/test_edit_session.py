@@ -65,3 +65,20 @@ def test_failed_calls_change_nothing(scene) -> None:
     with pytest.raises(InvalidArgumentError):
         es.load_points(s.positions, np.zeros_like(s.normals))  # zero normals
     assert (es.state_hash, es.version) == (h, v)
+
+
+def test_a_sessions_threads_start_its_detection_threads() -> None:
+    # One knob keeps an in-process session on one core: its threads are every tool's starting `threads`
+    # setting (capped at the hardware threads, the setting's range); bounds are refused with the field named.
+    import os
+
+    from surfeledit.local import LocalSession
+
+    hardware = os.cpu_count() or 1
+    for threads in (0, 1, hardware + 2):
+        with LocalSession("t", threads=threads) as session:
+            assert session.settings()["threads"] == min(threads, hardware)
+    for threads in (-1, 257):
+        with pytest.raises(InvalidArgumentError) as err:
+            core.EditSession("t", threads=threads)
+        assert err.value.field == "threads" and str(threads) in str(err.value)

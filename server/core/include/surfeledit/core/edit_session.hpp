@@ -29,8 +29,12 @@
 
 namespace surfeledit {
 
+// SessionParams::threads' bound: tests oversubscribe a few cores; 2^31 made libgomp abort (docs/hardening.md).
+constexpr int kMaxSessionThreads = 256;
+
 struct SessionParams {
-  int threads = 0;  // worker threads for batch work; 0 = all hardware threads
+  int threads = 0;  // worker threads for batch work, and the `threads` setting a new tool starts with (at most
+                    // the hardware threads); 0 = all hardware threads; at most kMaxSessionThreads
   bool incremental_rigid = true;  // a stale tool's detector follows moved rigid rows (on_rigid_moved);
                                   // false: it is always re-initialised (the reference, for tests and bench)
 };
@@ -273,12 +277,15 @@ class EditSession {
 
  private:
   void touch_rows(const IndexList& rows);
-  // Tools (tool.hpp). use(): the author's tool becomes the acting one (tool_), created with the default
-  // settings (and the session's history bound) when it has none. find_tool(): nullptr when none.
+  // Tools (tool.hpp). use(): the author's tool becomes the acting one (tool_), created with new_settings()
+  // when it has none. find_tool(): nullptr when none.
   Tool& use(const std::string& author);
   const Tool* find_tool(const std::string& author) const;
-  // The author's tool's settings (defaults when it has none), with the session's history bound.
+  // The author's tool's settings (new_settings() when it has none), with the session's history bound.
   SessionSettings settings_of(const std::string& author) const;
+  // A new tool's settings: the defaults, with the session's history bound, and its threads (at most the
+  // hardware threads, the setting's range) as the detection threads.
+  SessionSettings new_settings() const;
   // Every tool but the acting one treats rows the acting op changed as rigid: stale (Tool::mark_stale;
   // `moved`: the op only moved those rows, nullptr: anything may have changed). sync_tool(): when the
   // acting tool is stale, its detector follows the moved rows (on_rigid_moved, on a clone when a history

@@ -16,6 +16,9 @@ inline double ms_since(std::chrono::steady_clock::time_point start) {
 // Worker threads for a `threads` setting: the value itself when > 0, else all OpenMP threads.
 int resolve_threads(int threads);
 
+// The hardware threads (std::thread::hardware_concurrency, at least 1): the `threads` setting's upper bound.
+int hardware_threads();
+
 // Keeps the entries (rows) whose flag in `keep` is set, in order; `keep` has one flag per entry.
 template <typename T>
 void compact(std::vector<T>& v, const std::vector<bool>& keep) {
