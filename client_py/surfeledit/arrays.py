@@ -16,7 +16,7 @@ from . import errors
 from ._protocol import proto
 from .compact import compact_surfels, is_compact
 
-__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
+__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "as_vec3", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
            "join_clips", "readonly", "NO_IDS"]
 
 ArrayLike = Union[np.ndarray, Sequence[Any]]
@@ -29,11 +29,20 @@ NO_IDS = np.zeros(0, np.uint64)
 NO_IDS.setflags(write=False)
 
 
-def vec3(v: Vec3Like, name: str) -> "proto.Vec3":
-    """A (3,) vector as the wire's ``Vec3``; InvalidArgumentError naming ``name`` for another shape."""
-    a = np.asarray(v, dtype=np.float64)
+def as_vec3(v: Vec3Like, name: str) -> np.ndarray:
+    """A (3,) float64 vector; InvalidArgumentError naming ``name`` when not numeric or of another shape."""
+    try:
+        a = np.asarray(v, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise errors.InvalidArgumentError(f"{name} must be a numeric (3,) vector: {e}", name) from None
     if a.shape != (3,):
         raise errors.InvalidArgumentError(f"{name} must have shape (3,), got {a.shape}", name)
+    return a
+
+
+def vec3(v: Vec3Like, name: str) -> "proto.Vec3":
+    """A (3,) vector as the wire's ``Vec3``; InvalidArgumentError naming ``name`` as :func:`as_vec3`."""
+    a = as_vec3(v, name)
     return proto.Vec3(float(a[0]), float(a[1]), float(a[2]))
 
 

@@ -3,7 +3,8 @@ C++ session the server holds per session) and returns the result types of :mod:`
 so it satisfies :class:`surfeledit.session_api.EditingSession` like the remote :class:`surfeledit.Session`.
 
 Needs the compiled module ``surfeledit.core`` (built by CMake with ``SURFELEDIT_BUILD_PYTHON``).
-Inputs are validated by the core, which raises the typed errors of :mod:`surfeledit.errors`.
+Array shapes and dtypes are checked as the remote session checks them (:mod:`surfeledit.arrays`), values by the
+core; both raise the typed errors of :mod:`surfeledit.errors`.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 
-from .arrays import ArrayLike, Vec3Like, as_ids, as_points, as_radii, readonly
+from .arrays import ArrayLike, Vec3Like, as_ids, as_points, as_radii, as_vec3, readonly
 from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, HistoryEntry, MergeResult,
                       SettingValue, State, StepResult, blend_result, clips_or_none, fill_result)
 from .session_api import StateArrays, settings_doc
@@ -43,6 +44,12 @@ def _step_result(o: Any, version: int, call_ms: float) -> StepResult:
                       center=np.asarray(o.center, np.float64).reshape(3), timings=timings, round_trip_ms=call_ms,
                       detected=bool(o.detected), colliding=colliding, depths=depths, stats=stats, inserted=inserted,
                       response=str(o.response), backoff=Backoff(**o.backoff), features=features)
+
+
+def _ids(a: Optional[ArrayLike], name: str) -> np.ndarray:
+    """(K,) uint64 ids for the core, checked as the remote session checks them (:func:`surfeledit.arrays.as_ids`:
+    InvalidArgumentError naming ``name`` for another shape, a non-integer dtype or a negative id)."""
+    return np.asarray(as_ids(a, name), np.uint64)
 
 
 def _curves(raw: Any) -> List[Curve]:
@@ -100,7 +107,7 @@ class LocalSession(StateArrays):
     def set_regions(self, zero: Optional[ArrayLike] = None, one: Optional[ArrayLike] = None, author: str = "") -> None:
         """Sets the zero and the one region by (K,) integer ids, of the tool of ``author`` (a client id; the
         default tool ``""`` when a single user edits: several authors replay what several clients did)."""
-        self.core.set_regions(zero=zero, one=one, author=author)
+        self.core.set_regions(zero=_ids(zero, "zero"), one=_ids(one, "one"), author=author)
 
     def deform(self, translation: Vec3Like = (0.0, 0.0, 0.0), axis: Vec3Like = (0.0, 0.0, 1.0),
                angle: float = 0.0, center: Optional[Vec3Like] = None, blend: str = "smooth",
@@ -108,8 +115,9 @@ class LocalSession(StateArrays):
         """One deformation step of the tool of ``author`` (see :meth:`surfeledit.session_api.EditingSession.deform`);
         ``round_trip_ms`` and ``timings["total"]`` are the whole call."""
         t0 = time.perf_counter()
-        o = self.core.deform(translation=translation, axis=axis, angle=angle, center=center, blend=blend,
-                             author=author)
+        o = self.core.deform(translation=as_vec3(translation, "translation"), axis=as_vec3(axis, "axis"),
+                             angle=float(angle), center=None if center is None else as_vec3(center, "center"),
+                             blend=blend, author=author)
         call_ms = (time.perf_counter() - t0) * 1e3
         return _step_result(o, self.version, call_ms)
 
@@ -123,7 +131,7 @@ class LocalSession(StateArrays):
 
     def remove(self, ids: ArrayLike) -> None:
         """Removes surfels by (K,) integer id."""
-        self.core.remove(ids)
+        self.core.remove(_ids(ids, "ids"))
 
     def release(self, author: str = "") -> bool:
         """Frees the tool of ``author``: its regions, detector and lock (one history entry, a new version);
@@ -161,7 +169,7 @@ class LocalSession(StateArrays):
               neighbourhood: str = "cached", features: Optional[ArrayLike] = None,
               projection: str = "mls") -> BlendResult:
         """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
-        f = None if features is None else np.asarray(as_ids(features, "features"), np.int64)
+        f = None if features is None else _ids(features, "features")
         raw = self.core.blend(iterations=int(iterations), range_factor=float(range_factor), dt=float(dt),
                               repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
                               adaptive=bool(adaptive), neighbourhood=str(neighbourhood), features=f,
@@ -178,7 +186,7 @@ class LocalSession(StateArrays):
     def fill_holes(self, max_diameter: float, iterations: int = 10,
                    boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
-        b = None if boundary is None else np.asarray(as_ids(boundary, "boundary"), np.int64)
+        b = None if boundary is None else _ids(boundary, "boundary")
         raw = self.core.fill_holes(float(max_diameter), iterations=int(iterations), boundary=b,
                                    projection=str(projection))
         return fill_result(raw, self.version)

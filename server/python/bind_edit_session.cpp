@@ -7,10 +7,20 @@
 namespace surfeledit::py {
 namespace {
 
+// A (K,) array of surfel ids: integers (a float id would be truncated to another surfel's), signed ones >= 0.
 IdList to_ids(const pyb::handle& h, const char* field) {
   if (h.is_none()) return {};
-  auto a = pyb::array_t<std::int64_t, pyb::array::c_style | pyb::array::forcecast>::ensure(h);
-  if (!a || a.ndim() != 1) throw Error(ErrorCode::InvalidArgument, field, "expected a 1-D array of surfel ids");
+  const pyb::array raw = pyb::array::ensure(h);
+  if (!raw || raw.ndim() != 1) throw Error(ErrorCode::InvalidArgument, field, "expected a 1-D array of surfel ids");
+  const char kind = raw.dtype().kind();
+  if (raw.size() > 0 && kind != 'i' && kind != 'u')
+    throw Error(ErrorCode::InvalidArgument, field,
+                "expected integer surfel ids, got dtype " + pyb::str(raw.dtype()).cast<std::string>());
+  if (kind == 'u') {
+    const auto u = pyb::array_t<std::uint64_t, pyb::array::c_style | pyb::array::forcecast>::ensure(raw);
+    return IdList(u.data(), u.data() + u.shape(0));
+  }
+  auto a = pyb::array_t<std::int64_t, pyb::array::c_style | pyb::array::forcecast>::ensure(raw);
   IdList ids(a.shape(0));
   for (pyb::ssize_t i = 0; i < a.shape(0); ++i) {
     if (a.data()[i] < 0) throw Error(ErrorCode::NotFound, field, "unknown surfel id " + std::to_string(a.data()[i]));

@@ -82,3 +82,19 @@ def test_a_sessions_threads_start_its_detection_threads() -> None:
         with pytest.raises(InvalidArgumentError) as err:
             core.EditSession("t", threads=threads)
         assert err.value.field == "threads" and str(threads) in str(err.value)
+
+
+def test_ids_must_be_integers(scene) -> None:
+    # A float id would be truncated to another surfel's id; integer arrays of any width (uint64 too) are ids.
+    s, es = scene
+    zero, one = np.flatnonzero(s.part == 0), np.flatnonzero(s.part == 1)
+    v = es.version
+    for bad in (zero + 0.5, zero.astype(np.float64), np.ones(zero.size, bool)):
+        with pytest.raises(InvalidArgumentError) as err:
+            es.set_regions(zero=bad, one=one)
+        assert err.value.field == "zero" and "integer" in str(err.value)
+    with pytest.raises(InvalidArgumentError):
+        es.remove(np.array([1.0]))
+    assert es.version == v
+    es.set_regions(zero=zero.astype(np.uint64), one=list(one.astype(np.uint32)))
+    assert es.version == v + 1

@@ -114,3 +114,30 @@ def test_remote_and_in_process_sessions_satisfy_one_protocol() -> None:
     step = local.deform(translation=(0.0, 0.0, 0.1))
     assert isinstance(step, surfeledit.StepResult) and step.version == local.version
     assert isinstance(local.state(), State) and local.changes_since(local.version).ids.size == 0
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda s: s.set_regions(zero=[0.5], one=[2]), "zero"),
+    (lambda s: s.set_regions(zero=[0], one=[True]), "one"),
+    (lambda s: s.set_regions(zero=[-1], one=[2]), "zero"),
+    (lambda s: s.set_regions(zero=[[0]], one=[2]), "zero"),
+    (lambda s: s.deform(translation=(0.0, 0.0)), "translation"),
+    (lambda s: s.deform(axis=(0.0, 1.0, 0.0, 0.0), angle=0.1), "axis"),
+    (lambda s: s.deform(center="abc", angle=0.1), "center"),
+    (lambda s: s.remove([1.0]), "ids"),
+])
+def test_in_process_session_checks_arguments_as_the_remote_one(call: Any, field: str) -> None:
+    # One script, two backends (surfeledit.scenario): the same bad argument is the same typed error naming the same
+    # field, before anything reaches the core or the wire (a float id would otherwise be truncated to another id).
+    try:
+        from surfeledit.local import LocalSession
+    except ImportError:
+        pytest.skip("surfeledit.core (the in-process session) is not built")
+    local = LocalSession("checks", threads=1)
+    local.load_points(np.eye(3) + 1.0, np.eye(3))
+    before = local.version
+    for session in (make_session(), local):
+        with pytest.raises(errors.InvalidArgumentError) as info:
+            call(session)
+        assert info.value.field == field, (type(session).__name__, info.value)
+    assert local.version == before
