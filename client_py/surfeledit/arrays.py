@@ -16,7 +16,7 @@ from . import errors
 from ._protocol import proto
 from .compact import compact_surfels, is_compact
 
-__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "as_vec3", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
+__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "as_int", "as_float", "VERSIONS", "INT32", "as_vec3", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
            "join_clips", "readonly", "NO_IDS"]
 
 ArrayLike = Union[np.ndarray, Sequence[Any]]
@@ -27,6 +27,35 @@ SelectorLike = Tuple[Vec3Like, Any]
 #: An empty, read-only (0,) uint64 id array (the default of result fields).
 NO_IDS = np.zeros(0, np.uint64)
 NO_IDS.setflags(write=False)
+
+
+def as_int(value: Any, name: str, lo: int, hi: int) -> int:
+    """``value`` as an integer in [lo, hi); InvalidArgumentError naming ``name`` when it is not integral or outside
+    (the wire's integer fields have fixed widths: a wider value would fail to encode)."""
+    try:
+        v = int(value)
+        integral = v == value if isinstance(value, (float, np.floating)) else True
+    except (TypeError, ValueError, OverflowError) as e:
+        raise errors.InvalidArgumentError(f"{name} must be an integer: {e}", name) from None
+    if not integral:
+        raise errors.InvalidArgumentError(f"{name} = {value}: not an integer", name)
+    if not lo <= v < hi:
+        raise errors.InvalidArgumentError(f"{name} = {v}: outside [{lo}, {hi})", name)
+    return v
+
+
+def as_float(value: Any, name: str) -> float:
+    """``value`` as a float; InvalidArgumentError naming ``name`` when it is not a number (finiteness and ranges
+    are the server's or the core's checks)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError) as e:
+        raise errors.InvalidArgumentError(f"{name} must be a number: {e}", name) from None
+
+
+#: The range of a version (the wire's uint64) and of a count such as iterations (the wire's 32-bit ``long``).
+VERSIONS = (0, 2**64)
+INT32 = (-2**31, 2**31)
 
 
 def as_vec3(v: Vec3Like, name: str) -> np.ndarray:

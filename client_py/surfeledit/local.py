@@ -15,7 +15,7 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 
-from .arrays import ArrayLike, Vec3Like, as_ids, as_points, as_radii, as_vec3, readonly
+from .arrays import INT32, VERSIONS, ArrayLike, Vec3Like, as_float, as_ids, as_int, as_points, as_radii, as_vec3, readonly
 from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, HistoryEntry, MergeResult,
                       SettingValue, State, StepResult, blend_result, clips_or_none, fill_result)
 from .session_api import StateArrays, settings_doc
@@ -116,7 +116,7 @@ class LocalSession(StateArrays):
         ``round_trip_ms`` and ``timings["total"]`` are the whole call."""
         t0 = time.perf_counter()
         o = self.core.deform(translation=as_vec3(translation, "translation"), axis=as_vec3(axis, "axis"),
-                             angle=float(angle), center=None if center is None else as_vec3(center, "center"),
+                             angle=as_float(angle, "angle"), center=None if center is None else as_vec3(center, "center"),
                              blend=blend, author=author)
         call_ms = (time.perf_counter() - t0) * 1e3
         return _step_result(o, self.version, call_ms)
@@ -170,7 +170,8 @@ class LocalSession(StateArrays):
               projection: str = "mls") -> BlendResult:
         """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
         f = None if features is None else _ids(features, "features")
-        raw = self.core.blend(iterations=int(iterations), range_factor=float(range_factor), dt=float(dt),
+        raw = self.core.blend(iterations=as_int(iterations, "iterations", *INT32),
+                              range_factor=as_float(range_factor, "range_factor"), dt=as_float(dt, "dt"),
                               repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
                               adaptive=bool(adaptive), neighbourhood=str(neighbourhood), features=f,
                               projection=str(projection))
@@ -187,13 +188,14 @@ class LocalSession(StateArrays):
                    boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
         b = None if boundary is None else _ids(boundary, "boundary")
-        raw = self.core.fill_holes(float(max_diameter), iterations=int(iterations), boundary=b,
+        raw = self.core.fill_holes(as_float(max_diameter, "max_diameter"),
+                                   iterations=as_int(iterations, "iterations", *INT32), boundary=b,
                                    projection=str(projection))
         return fill_result(raw, self.version)
 
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
         """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""
-        return _curves(self.core.intersection_curves(refine_angle=float(refine_angle)))
+        return _curves(self.core.intersection_curves(refine_angle=as_float(refine_angle, "refine_angle")))
 
     def report(self) -> Dict[str, Any]:
         """``surfels``, ``structures`` {name: bytes}, ``total_bytes``, ``bytes_per_surfel`` and
@@ -220,7 +222,7 @@ class LocalSession(StateArrays):
         """Nothing when ``version`` is the current one; otherwise the whole model (``full``: the
         in-process session keeps no change log)."""
         st = self.state()
-        if int(version) == st.version:
+        if as_int(version, "version", *VERSIONS) == st.version:
             none = np.zeros((0, 3))
             return Changes(st.version, False, st.ids[:0], none, none, st.radii[:0], st.ids[:0])
         return Changes(st.version, True, st.ids, st.positions, st.normals, st.radii, st.ids[:0], st.clips)

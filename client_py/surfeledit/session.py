@@ -16,7 +16,8 @@ import numpy as np
 
 from . import errors, wire_arrays
 from ._protocol import proto
-from .arrays import ArrayLike, SelectorLike, Vec3Like, as_ids, as_points, as_radii, readonly, vec3
+from .arrays import (VERSIONS, ArrayLike, SelectorLike, Vec3Like, as_float, as_ids, as_int, as_points, as_radii,
+                     readonly, vec3)
 from .results import Backoff, CollisionStats, Curve, HistoryEntry, MergeResult, SettingValue, State, StepResult
 from .session_blend import BlendOps
 from .session_presence import PresenceOps
@@ -150,10 +151,7 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
         """One request on this session (``expect_version``: the version the session must be at);
         keeps :attr:`version` and the last session info up to date."""
         if expect_version is not None:
-            v = int(expect_version)
-            if not 0 <= v < 2**64:
-                raise errors.InvalidArgumentError(f"expect_version = {v}: not a version", "expect_version")
-            args["expect_version"] = [v]
+            args["expect_version"] = [as_int(expect_version, "expect_version", *VERSIONS)]
         return self._absorb(self.client.request(op, self.name, **args))
 
     def _absorb(self, reply: "proto.Reply") -> "proto.Reply":
@@ -285,7 +283,7 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
             expect_version: run only if the session is at this version (ConflictError otherwise).
         """
         arg = proto.Deform(translation=vec3(translation, "translation"), axis=vec3(axis, "axis"),
-                           angle=float(angle), has_center=center is not None,
+                           angle=as_float(angle, "angle"), has_center=center is not None,
                            center=vec3(center, "center") if center is not None else proto.Vec3(),
                            blend=str(blend))
         t0 = time.perf_counter()
@@ -366,7 +364,7 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
 
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
         """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""
-        reply = self._request(proto.Op.OP_CURVES, curves=proto.Curves(refine_angle=float(refine_angle)))
+        reply = self._request(proto.Op.OP_CURVES, curves=proto.Curves(refine_angle=as_float(refine_angle, "refine_angle")))
         return _curves(reply.curves)
 
     # -- updates -----------------------------------------------------------------------------

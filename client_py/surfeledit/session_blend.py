@@ -10,7 +10,7 @@ from typing import Any, Optional
 
 from . import errors
 from ._protocol import proto
-from .arrays import ArrayLike, as_ids
+from .arrays import INT32, ArrayLike, as_float, as_ids, as_int
 from .results import BlendResult, FillResult, MergeResult, blend_result, fill_result
 
 
@@ -38,7 +38,8 @@ class BlendOps:
               projection: str = "mls") -> BlendResult:
         """Blend tool (see :meth:`surfeledit.session_api.EditingSession.blend`)."""
         ids = as_ids(features, "features") if features is not None else []
-        args = proto.Blend(iterations=_int(iterations, "iterations"), range_factor=float(range_factor), dt=float(dt),
+        args = proto.Blend(iterations=as_int(iterations, "iterations", *INT32),
+                           range_factor=as_float(range_factor, "range_factor"), dt=as_float(dt, "dt"),
                            repulsion=str(repulsion), weight=str(weight), only_grow=bool(only_grow),
                            adaptive=bool(adaptive), neighbourhood=str(neighbourhood),
                            has_features=features is not None, features=ids, projection=str(projection))
@@ -59,17 +60,9 @@ class BlendOps:
                    boundary: Optional[ArrayLike] = None, projection: str = "mls") -> FillResult:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
         ids = as_ids(boundary, "boundary") if boundary is not None else []
-        args = proto.FillHoles(max_diameter=float(max_diameter), iterations=_int(iterations, "iterations"),
-                               has_boundary=boundary is not None, boundary=ids, projection=str(projection))
+        args = proto.FillHoles(max_diameter=as_float(max_diameter, "max_diameter"),
+                               iterations=as_int(iterations, "iterations", *INT32), has_boundary=boundary is not None, boundary=ids, projection=str(projection))
         reply = self._request(proto.Op.OP_FILL_HOLES, fill_holes=args)
         if not reply.fill:
             raise errors.InternalServerError("FILL_HOLES reply without a fill result", "fill_holes")
         return fill_result(reply.fill[0], int(reply.version))
-
-
-def _int(value: Any, name: str) -> int:
-    """``value`` as a 32-bit signed integer (the wire's ``long``); InvalidArgumentError naming ``name`` otherwise."""
-    v = int(value)
-    if not -2**31 <= v < 2**31:
-        raise errors.InvalidArgumentError(f"{name} = {v}: out of the 32-bit range", name)
-    return v

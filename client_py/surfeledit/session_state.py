@@ -11,7 +11,7 @@ import numpy as np
 
 from . import errors
 from ._protocol import proto
-from .arrays import join_clips, join_surfels, readonly
+from .arrays import VERSIONS, as_int, join_clips, join_surfels, readonly
 from .results import Changes, State, clips_or_none, merge
 
 __all__ = ["StateOps"]
@@ -69,7 +69,7 @@ class StateOps:
 
     def changes_since(self, version: int) -> Changes:
         """Surfels changed or inserted since ``version`` plus removed ids (whole model if replaced)."""
-        return self._fetch(True, int(version))
+        return self._fetch(True, as_int(version, "version", *VERSIONS))
 
     def state(self) -> State:
         """The whole model at the current version (arrays read-only).

@@ -125,10 +125,19 @@ def test_remote_and_in_process_sessions_satisfy_one_protocol() -> None:
     (lambda s: s.deform(axis=(0.0, 1.0, 0.0, 0.0), angle=0.1), "axis"),
     (lambda s: s.deform(center="abc", angle=0.1), "center"),
     (lambda s: s.remove([1.0]), "ids"),
+    (lambda s: s.deform(angle="abc"), "angle"),
+    (lambda s: s.changes_since(-1), "version"),
+    (lambda s: s.changes_since(2**70), "version"),
+    (lambda s: s.blend(iterations=1.5), "iterations"),
+    (lambda s: s.blend(iterations=2**40), "iterations"),
+    (lambda s: s.blend(dt="x"), "dt"),
+    (lambda s: s.fill_holes("x"), "max_diameter"),
+    (lambda s: s.intersection_curves("x"), "refine_angle"),
 ])
 def test_in_process_session_checks_arguments_as_the_remote_one(call: Any, field: str) -> None:
     # One script, two backends (surfeledit.scenario): the same bad argument is the same typed error naming the same
-    # field, before anything reaches the core or the wire (a float id would otherwise be truncated to another id).
+    # field, before anything reaches the core or the wire (a float id would otherwise be truncated to another id, a
+    # negative version fail to encode).
     try:
         from surfeledit.local import LocalSession
     except ImportError:
