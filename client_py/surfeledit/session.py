@@ -91,6 +91,15 @@ def _step_result(reply: "proto.Reply", round_trip_ms: float) -> StepResult:
                       features=features)
 
 
+def _pair(selector: Any, name: str, form: str) -> Any:
+    """A selector's two parts; InvalidArgumentError naming ``name`` when it is not a pair ``form``."""
+    try:
+        first, second = selector
+    except (TypeError, ValueError):
+        raise errors.InvalidArgumentError(f"{name} must be a pair {form}, got {selector!r}", name) from None
+    return first, second
+
+
 def _curves(wire: Any) -> List[Curve]:
     """:class:`Curve` objects of wire ``Curve`` samples (points read-only)."""
     out = []
@@ -253,12 +262,12 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
                  name: str) -> "proto.RegionSpec":
             selectors = []
             if sphere is not None:
-                center, radius = sphere
+                center, radius = _pair(sphere, f"{name}_sphere", "(center (3,), radius)")
                 selectors.append(proto.Selector(kind=proto.SelectorKind.SELECTOR_SPHERE,
                                                 center=vec3(center, f"{name}_sphere.center"),
-                                                radius=float(radius)))
+                                                radius=as_float(radius, f"{name}_sphere.radius")))
             if box is not None:
-                center, half = box
+                center, half = _pair(box, f"{name}_box", "(center (3,), half_extents (3,))")
                 selectors.append(proto.Selector(kind=proto.SelectorKind.SELECTOR_BOX,
                                                 center=vec3(center, f"{name}_box.center"),
                                                 half_extents=vec3(half, f"{name}_box.half_extents")))

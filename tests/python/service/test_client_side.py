@@ -71,6 +71,12 @@ def test_selector_and_deform_checks() -> None:
         s.set_regions(zero=[-1], one=[2])
     with pytest.raises(errors.InvalidArgumentError):
         s.deform(axis=(0.0, 1.0, 0.0, 0.0))
+    for selector, field in [(dict(one_sphere=((0.0, 0.0, 1.0), "x")), "one_sphere.radius"),
+                            (dict(one_sphere=(0.0, 0.0, 1.0)), "one_sphere"),  # not a (center, radius) pair
+                            (dict(zero_box=(0.0, 0.0, 1.0)), "zero_box")]:
+        with pytest.raises(errors.InvalidArgumentError) as info:
+            s.set_regions(zero=[1], **selector)
+        assert info.value.field == field
 
 
 def test_merge_changes_into_cache() -> None:
