@@ -16,7 +16,8 @@ from . import errors
 from ._protocol import proto
 from .compact import compact_surfels, is_compact
 
-__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "as_int", "as_float", "VERSIONS", "INT32", "as_vec3", "vec3", "as_points", "as_radii", "as_ids", "concat", "join_surfels",
+__all__ = ["ArrayLike", "Vec3Like", "SelectorLike", "as_int", "as_float", "VERSIONS", "INT32", "as_vec3", "vec3",
+           "as_points", "as_radii", "as_ids", "concat", "join_surfels",
            "join_clips", "readonly", "NO_IDS"]
 
 ArrayLike = Union[np.ndarray, Sequence[Any]]

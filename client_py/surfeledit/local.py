@@ -15,7 +15,8 @@ from typing import Any, Dict, List, Optional
 
 import numpy as np
 
-from .arrays import INT32, VERSIONS, ArrayLike, Vec3Like, as_float, as_ids, as_int, as_points, as_radii, as_vec3, readonly
+from .arrays import (INT32, VERSIONS, ArrayLike, Vec3Like, as_float, as_ids, as_int, as_points, as_radii, as_vec3,
+                     readonly)
 from .results import (Backoff, BlendResult, Changes, CollisionStats, Curve, FillResult, HistoryEntry, MergeResult,
                       SettingValue, State, StepResult, blend_result, clips_or_none, fill_result)
 from .session_api import StateArrays, settings_doc
@@ -116,7 +117,8 @@ class LocalSession(StateArrays):
         ``round_trip_ms`` and ``timings["total"]`` are the whole call."""
         t0 = time.perf_counter()
         o = self.core.deform(translation=as_vec3(translation, "translation"), axis=as_vec3(axis, "axis"),
-                             angle=as_float(angle, "angle"), center=None if center is None else as_vec3(center, "center"),
+                             angle=as_float(angle, "angle"),
+                             center=None if center is None else as_vec3(center, "center"),
                              blend=blend, author=author)
         call_ms = (time.perf_counter() - t0) * 1e3
         return _step_result(o, self.version, call_ms)

@@ -373,7 +373,8 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
 
     def intersection_curves(self, refine_angle: float = 0.5) -> List[Curve]:
         """Curves through the last merge's crease (see :meth:`surfeledit.session_api.EditingSession.intersection_curves`)."""
-        reply = self._request(proto.Op.OP_CURVES, curves=proto.Curves(refine_angle=as_float(refine_angle, "refine_angle")))
+        refine = as_float(refine_angle, "refine_angle")
+        reply = self._request(proto.Op.OP_CURVES, curves=proto.Curves(refine_angle=refine))
         return _curves(reply.curves)
 
     # -- updates -----------------------------------------------------------------------------

@@ -61,7 +61,8 @@ class BlendOps:
         """Hole filling (see :meth:`surfeledit.session_api.EditingSession.fill_holes`)."""
         ids = as_ids(boundary, "boundary") if boundary is not None else []
         args = proto.FillHoles(max_diameter=as_float(max_diameter, "max_diameter"),
-                               iterations=as_int(iterations, "iterations", *INT32), has_boundary=boundary is not None, boundary=ids, projection=str(projection))
+                               iterations=as_int(iterations, "iterations", *INT32),
+                               has_boundary=boundary is not None, boundary=ids, projection=str(projection))
         reply = self._request(proto.Op.OP_FILL_HOLES, fill_holes=args)
         if not reply.fill:
             raise errors.InternalServerError("FILL_HOLES reply without a fill result", "fill_holes")

@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(INT32_MAX)));
   const int hardware_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  app.add_option("--threads", config.threads, "Worker threads per session for batch work, and every tool's starting threads setting (0: all cores)")
+  app.add_option("--threads", config.threads,
+                 "Worker threads per session for batch work, and every tool's starting threads setting (0: all cores)")
       ->capture_default_str()
       ->check(CLI::Range(0, hardware_threads));
   app.add_option("--data-root", config.data_root,
