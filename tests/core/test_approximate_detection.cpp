@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
 
 #include "collision_oracle.hpp"
 #include "collision_scripts.hpp"
@@ -104,6 +105,47 @@ TEST(ApproximateDetection, ClusterSizeOneEqualsExactEveryStep) {
           EXPECT_EQ(g.fp + g.fn, 0u) << to_string(a);
         }
       }
+    }
+  }
+}
+
+// On a model of at least 16384 rows (at_once.hpp's kAtOnceMinPoints, an internal header) a reset on two threads makes
+// the clusters beside the kernel's reset and seed: the same clusters, and the same results and counts at every step
+// of the script (insertions and removals included) as the one-thread detector.
+TEST(ApproximateDetection, ResetOnTwoThreadsEqualsOneThread) {
+  constexpr Index kAtOnce = 16384;
+  for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Temporal, CollisionAlgorithm::Robust}) {
+    for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical}) {
+      SCOPED_TRACE(std::string(to_string(a)) + (m == SimplifyMethod::RegionGrowing ? " region growing" : " hierarchical"));
+      TestScene scene = slab_and_sphere(0.03);
+      ASSERT_GE(scene.rows(), kAtOnce);
+      auto one = make_approximate_detector(testing::params_of(a, 1), simplify_params(m, 18));
+      auto two = make_approximate_detector(testing::params_of(a, 2), simplify_params(m, 18));
+      one->reset(scene.view());
+      two->reset(scene.view());
+      ASSERT_EQ(two->clusters().cluster_count(), one->clusters().cluster_count());
+      for (Index r = 0; r < scene.rows(); ++r) ASSERT_EQ(two->clusters().cluster_of(r), one->clusters().cluster_of(r));
+      std::size_t colliding = 0;
+      testing::play_script(
+          scene, slab_script(), true,
+          [&](const IndexList& parents) {
+            one->on_inserted(scene.view(), parents);
+            two->on_inserted(scene.view(), parents);
+          },
+          [&](const std::vector<bool>& keep) {
+            one->on_removed(keep);
+            two->on_removed(keep);
+          },
+          [&](std::size_t k, const Points& previous) {
+            const CollisionResult want = one->detect(scene.view(), previous);
+            const CollisionResult got = two->detect(scene.view(), previous);
+            EXPECT_EQ(got.colliding, want.colliding) << "step " << k;
+            EXPECT_EQ(got.depths, want.depths) << "step " << k;
+            EXPECT_EQ(got.stats.tested, want.stats.tested) << "step " << k;
+            EXPECT_EQ(got.stats.queries, want.stats.queries) << "step " << k;
+            colliding += want.colliding.size();
+          });
+      EXPECT_GT(colliding, 0u);  // the scene does collide
     }
   }
 }

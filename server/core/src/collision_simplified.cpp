@@ -4,7 +4,9 @@
 // either an original deformable surfel or a cluster's simplified surfel, each with its own state.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "at_once.hpp"
 #include "collision/kernel_rows.hpp"
 #include "collision/robust_kernel.hpp"
 #include "collision/temporal_kernel.hpp"
@@ -33,25 +35,46 @@ class SimplifiedDetector final : public ApproximateDetector {
     const auto start = std::chrono::steady_clock::now();
     const Index rows = static_cast<Index>(scene.regions.size());
     const int threads = resolve_threads(params_.threads);
-    IndexList zero_rows;
-    KernelRows<Kernel> kr = KernelRows<Kernel>::build(params_, scene, threads, zero_rows);
-    const Kernel& kernel = kr.kernel;
+    // The kernel's reset and seed, and the clusters of the deformable rows (which read only their positions): with
+    // threads > 1 on a large model the two run at once, each on one thread (at_once.hpp), the same detector.
+    IndexList deformable, zero_rows;
+    split_rows(scene, deformable, zero_rows);
+    const bool apart = !zero_rows.empty() && at_once_pays(threads, scene.regions.size());
+    const int each = apart ? 1 : threads;
+    std::optional<KernelRows<Kernel>> built;
     ZeroSet own_zero;  // the zero region for proximity and initial spheres when the kernel has none
-    if (!kernel.zero_set()) own_zero.build(scene, zero_rows, params_.knn_eps);
+    auto kernel_part = [&] {
+      IndexList zero;
+      built.emplace(KernelRows<Kernel>::build(params_, scene, each, zero));
+      KernelRows<Kernel>& kr = *built;
+      if (!kr.kernel.zero_set()) own_zero.build(scene, zero, params_.knn_eps);
+      // Per-row states: spheres start with the distance to the nearest zero surfel.
+      if (!Kernel::kSeeded) return;
+      if (kr.kernel.zero_set()) {
+        kr.kernel.seed(scene, kr.deformable, zero, each, kr.states);  // from that zero set
+      } else {
+        seed_states(kr.kernel, scene.positions, kr.deformable, each, *own_zero.tree, own_zero.positions, own_zero.radii,
+                    kr.states);
+      }
+    };
+    Clustering clustering;
+    double simplify_ms = 0.0;
+    auto cluster_part = [&] {
+      const auto cluster_start = std::chrono::steady_clock::now();
+      SimplifyParams sp = simplify_;
+      sp.threads = each;
+      clustering = make_clusters(scene.positions, deformable, sp);
+      simplify_ms = ms_since(cluster_start);
+    };
+    at_once(apart, kernel_part, cluster_part);
+    KernelRows<Kernel>& kr = *built;
+    const Kernel& kernel = kr.kernel;
     const ZeroSet& zero = kernel.zero_set() ? *kernel.zero_set() : own_zero;
     auto nearest = [&](const Vec3& p) { return nearest_zero(zero, p); };
-    // Per-row states: spheres start with the distance to the nearest zero surfel.
-    if (Kernel::kSeeded) {
-      if (kernel.zero_set()) kernel.seed(scene, kr.deformable, zero_rows, threads, kr.states);  // from that zero set
-      else seed_states(kernel, scene.positions, kr.deformable, threads, *zero.tree, zero.positions, zero.radii, kr.states);
-    }
-    // Clusters of the deformable rows and their simplified surfels' states.
-    const auto cluster_start = std::chrono::steady_clock::now();
-    SimplifyParams sp = simplify_;
-    sp.threads = params_.threads;
-    ClusterMap map(rows, make_clusters(scene.positions, kr.deformable, sp));
+    // The simplified surfels' states.
+    ClusterMap map(rows, clustering);
     approx_ = ApproximateStats{};
-    approx_.simplify_ms = ms_since(cluster_start);
+    approx_.simplify_ms = simplify_ms;
     const Index nc = map.cluster_count();
     std::vector<State> cstate(static_cast<std::size_t>(nc));
     std::vector<ProximityState> prox(static_cast<std::size_t>(nc));
