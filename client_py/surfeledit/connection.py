@@ -27,6 +27,7 @@ from cyclonedds.topic import Topic
 from . import errors
 from ._protocol import (COMPACT_UPDATE_PARTITION, TOPIC_REPLY, TOPIC_REQUEST, TOPIC_UPDATE, proto, reply_partition,
                         reply_reader_qos, request_partition, request_writer_qos, update_qos)
+from .arrays import as_int
 from .dds_status import alive_writers, publication_matched
 from .inbox import Inbox, _delete, _matched, wait_matched
 from .reconnect import await_reply_across_restart
@@ -65,7 +66,8 @@ class Client:
     def __init__(self, domain: int, timeout: float = 10.0, _server: Optional[subprocess.Popen] = None,
                  reconnect: float = 0.0, client_id: Optional[str] = None,
                  security: Optional[Union[str, "os.PathLike[str]", SecurityConfig]] = None) -> None:
-        self.domain = int(domain)
+        # The server's --domain range (Cyclone's port mapping; -1 would mean "the configured default" to DDS).
+        self.domain = as_int(domain, "domain", 0, 233)
         self.timeout = float(timeout)
         # > 0: a request whose server is gone is re-sent (same id) for this many seconds (reconnect.py)
         self.reconnect = float(reconnect)
@@ -356,7 +358,7 @@ def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout:
         AccessDeniedError: DDS Security refused this identity the participant or a surfeledit endpoint.
     """
     if domain is None:
-        domain = int(os.environ.get("SURFELEDIT_DOMAIN", "0"))
+        domain = os.environ.get("SURFELEDIT_DOMAIN", "0")
     client = Client(domain, timeout, reconnect=reconnect, client_id=client_id, security=security)
     if spawn is None:
         spawn = client.security is None

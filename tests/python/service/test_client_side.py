@@ -156,3 +156,11 @@ def test_in_process_session_checks_arguments_as_the_remote_one(call: Any, field:
             call(session)
         assert info.value.field == field, (type(session).__name__, info.value)
     assert local.version == before
+
+
+@pytest.mark.parametrize("domain", [-1, 233, "x", 2**40])
+def test_a_domain_outside_the_servers_range_is_refused_before_dds(domain: Any) -> None:
+    # -1 would be Cyclone's "configured default" domain and > 232 has no port mapping (a bare DDSException).
+    with pytest.raises(errors.InvalidArgumentError) as info:
+        surfeledit.connect(domain=domain, spawn=False, timeout=0.1)
+    assert info.value.field == "domain"
