@@ -6,14 +6,15 @@ median over --repeats sessions per case. With --set-regions also the time of set
 fields and the default Robust reset).
 
     .venv/bin/python bench/core/reset_times.py [--scale 1.0] [--algorithms simple,improved,temporal,robust]
-        [--hierarchies none,aabb/none,obb/none,aabb/aabb] [--threads 1] [--set-regions] [--repeats 3]
-        [--package <dir holding another build's surfeledit package, for an A/B>]
+        [--hierarchies none,aabb/none,obb/none,aabb/aabb] [--simplify none] [--threads 1] [--set-regions]
+        [--repeats 3] [--package <dir holding another build's surfeledit package, for an A/B>]
 
 --hierarchies: zero/deformable hierarchy pairs (settings zero_hierarchy, deformable_hierarchy), each timed with
-every algorithm. --threads: the session's threads (0 = all); a reset's independent parts run at once when it is
-above one (server/core/src/at_once.hpp). bench_robust_step's BM_Preprocess / BM_PreprocessTemporal (and their
-*Threads variants) time Robust's and Temporal's resets alone in C++; this covers every algorithm and hierarchy.
-Interleave two builds' runs (--package) for an A/B.
+every algorithm. --simplify: the approximate detectors' clustering (setting simplify: region_growing or hierarchical,
+clusters of the default cluster_size). --threads: the session's threads (0 = all); a reset's independent parts run at
+once when it is above one (server/core/src/at_once.hpp). bench_robust_step's BM_Preprocess / BM_PreprocessTemporal
+(and their *Threads variants) time Robust's and Temporal's resets alone in C++; this covers every algorithm and
+hierarchy. Interleave two builds' runs (--package) for an A/B.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ def main() -> int:
     ap.add_argument("--algorithms", default="simple,improved,temporal,robust", help="comma-separated")
     ap.add_argument("--hierarchies", default="none/none",
                     help="comma-separated zero/deformable hierarchy pairs, e.g. none/none,obb/none,aabb/aabb")
+    ap.add_argument("--simplify", default="none", help="none, region_growing or hierarchical (setting simplify)")
     ap.add_argument("--threads", type=int, default=1, help="the session's threads (0 = all)")
     ap.add_argument("--set-regions", action="store_true", help="also time set_regions (fields + Robust reset)")
     ap.add_argument("--repeats", type=int, default=3, help="fresh sessions per case")
@@ -81,7 +83,7 @@ def main() -> int:
     for zero, deformable in pairs:
         for algorithm in args.algorithms.split(","):
             ms = sessions(set_regions, lambda session: session.configure(
-                algorithm=algorithm, zero_hierarchy=zero, deformable_hierarchy=deformable))
+                algorithm=algorithm, zero_hierarchy=zero, deformable_hierarchy=deformable, simplify=args.simplify))
             print(median_line(f"{algorithm} {zero}/{deformable}: configure", ms), flush=True)
     return 0
 
