@@ -36,10 +36,14 @@ class SimplifiedDetector final : public ApproximateDetector {
     const Index rows = static_cast<Index>(scene.regions.size());
     const int threads = resolve_threads(params_.threads);
     // The kernel's reset and seed, and the clusters of the deformable rows (which read only their positions): with
-    // threads > 1 on a large model the two run at once, each on one thread (at_once.hpp), the same detector.
+    // threads > 1 on a large model the two run at once, each on one thread (at_once.hpp), the same detector. Only for
+    // region growing, which costs about as much as the kernel's part (piercing scene, one thread: ~50 ms against
+    // 35-70); hierarchical clustering takes a few ms, and the kernel's part then loses more than that to running on
+    // one thread (RESULTS §86.4).
     IndexList deformable, zero_rows;
     split_rows(scene, deformable, zero_rows);
-    const bool apart = !zero_rows.empty() && at_once_pays(threads, scene.regions.size());
+    const bool apart = simplify_.method == SimplifyMethod::RegionGrowing && !zero_rows.empty() &&
+                       at_once_pays(threads, scene.regions.size());
     const int each = apart ? 1 : threads;
     std::optional<KernelRows<Kernel>> built;
     ZeroSet own_zero;  // the zero region for proximity and initial spheres when the kernel has none
