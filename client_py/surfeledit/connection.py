@@ -332,7 +332,7 @@ def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout:
     """Connects to the surfeledit server on a DDS domain.
 
     Args:
-        domain: DDS domain id; None -> env ``SURFELEDIT_DOMAIN`` or 0.
+        domain: DDS domain id, 0..232 (the server's ``--domain`` range); None -> env ``SURFELEDIT_DOMAIN`` or 0.
         spawn: when no server answers ``OP_INFO`` within a short probe, start
             ``surfeledit-server --domain D`` (see :func:`~surfeledit.server_process.find_server_executable`),
             wait until it answers, and stop it when the client closes. None: True without
@@ -353,6 +353,7 @@ def connect(domain: Optional[int] = None, spawn: Optional[bool] = None, timeout:
             starts with ``"<user>."``. Needs a binding with the security plugins (``.venv-secure``).
 
     Raises:
+        InvalidArgumentError: ``domain`` is not an integer in 0..232.
         ServerStartError: no server answered (spawn=False), or one could not be found/started.
         SecurityConfigError: ``security`` cannot be used (bad file, no plugins in this binding).
         AccessDeniedError: DDS Security refused this identity the participant or a surfeledit endpoint.
