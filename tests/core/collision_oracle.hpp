@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -340,5 +341,20 @@ class Oracle {
   std::vector<bool> orig_zero_, orig_alive_;
   std::vector<Index> orig_of_row_;
 };
+
+// Two detectors' results of one step are the same: colliding rows, depths, and the work counted (tested, queries and,
+// with `tree_counts`, the hierarchies' nv, np, nu: not when one tree was refit for a step taken back and the
+// other's not).
+inline void expect_same_detection(const CollisionResult& a, const CollisionResult& b, const std::string& where,
+                                  bool tree_counts = true) {
+  EXPECT_EQ(a.colliding, b.colliding) << where;
+  EXPECT_EQ(a.depths, b.depths) << where;
+  EXPECT_EQ(a.stats.tested, b.stats.tested) << where;
+  EXPECT_EQ(a.stats.queries, b.stats.queries) << where;
+  if (!tree_counts) return;
+  EXPECT_EQ(a.stats.nv, b.stats.nv) << where;
+  EXPECT_EQ(a.stats.np, b.stats.np) << where;
+  EXPECT_EQ(a.stats.nu, b.stats.nu) << where;
+}
 
 }  // namespace surfeledit::testing

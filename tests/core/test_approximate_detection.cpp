@@ -116,7 +116,8 @@ TEST(ApproximateDetection, ResetOnTwoThreadsEqualsOneThread) {
   constexpr Index kAtOnce = 16384;
   for (auto a : {CollisionAlgorithm::Simple, CollisionAlgorithm::Temporal, CollisionAlgorithm::Robust}) {
     for (auto m : {SimplifyMethod::RegionGrowing, SimplifyMethod::Hierarchical}) {
-      SCOPED_TRACE(std::string(to_string(a)) + (m == SimplifyMethod::RegionGrowing ? " region growing" : " hierarchical"));
+      SCOPED_TRACE(std::string(to_string(a)) +
+                   (m == SimplifyMethod::RegionGrowing ? " region growing" : " hierarchical"));
       TestScene scene = slab_and_sphere(0.03);
       ASSERT_GE(scene.rows(), kAtOnce);
       auto one = make_approximate_detector(testing::params_of(a, 1), simplify_params(m, 18));
@@ -138,11 +139,7 @@ TEST(ApproximateDetection, ResetOnTwoThreadsEqualsOneThread) {
           },
           [&](std::size_t k, const Points& previous) {
             const CollisionResult want = one->detect(scene.view(), previous);
-            const CollisionResult got = two->detect(scene.view(), previous);
-            EXPECT_EQ(got.colliding, want.colliding) << "step " << k;
-            EXPECT_EQ(got.depths, want.depths) << "step " << k;
-            EXPECT_EQ(got.stats.tested, want.stats.tested) << "step " << k;
-            EXPECT_EQ(got.stats.queries, want.stats.queries) << "step " << k;
+            testing::expect_same_detection(two->detect(scene.view(), previous), want, "step " + std::to_string(k));
             colliding += want.colliding.size();
           });
       EXPECT_GT(colliding, 0u);  // the scene does collide

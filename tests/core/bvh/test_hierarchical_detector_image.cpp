@@ -40,16 +40,6 @@ CollisionResult image_step(CollisionDetector& det, TestScene& scene, const Vec3&
   return det.detect(view, previous);
 }
 
-void expect_same_detection(const CollisionResult& a, const CollisionResult& b, const std::string& where) {
-  EXPECT_EQ(a.colliding, b.colliding) << where;
-  EXPECT_EQ(a.depths, b.depths) << where;
-  EXPECT_EQ(a.stats.tested, b.stats.tested) << where;
-  EXPECT_EQ(a.stats.queries, b.stats.queries) << where;
-  EXPECT_EQ(a.stats.nv, b.stats.nv) << where;
-  EXPECT_EQ(a.stats.np, b.stats.np) << where;
-  EXPECT_EQ(a.stats.nu, b.stats.nu) << where;
-}
-
 TEST(HierarchicalImage, JournalImageOfABoundedTreeRestoresWhatACloneHolds) {
   for (JournalCase c : {JournalCase::Steps, JournalCase::BackOff, JournalCase::Rebuild, JournalCase::Radii}) {
     SCOPED_TRACE(case_name(c));
