@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
 from surfeledit import core
 from surfeledit.errors import ConflictError, InvalidArgumentError, NotFoundError
+from surfeledit.local import LocalSession
 
 
 @pytest.fixture()
@@ -70,10 +73,6 @@ def test_failed_calls_change_nothing(scene) -> None:
 def test_a_sessions_threads_start_its_detection_threads() -> None:
     # One knob keeps an in-process session on one core: its threads are every tool's starting `threads`
     # setting (capped at the hardware threads, the setting's range); bounds are refused with the field named.
-    import os
-
-    from surfeledit.local import LocalSession
-
     hardware = os.cpu_count() or 1
     for threads in (0, 1, hardware + 2):
         with LocalSession("t", threads=threads) as session:
