@@ -6,12 +6,12 @@
 #include <pthread.h>
 #include <signal.h>
 
-#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <string>
 #include <thread>
 
+#include "surfeledit/core/util.hpp"
 #include "surfeledit/service/service.hpp"
 
 namespace {
@@ -46,11 +46,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-model-surfels", config.max_model_surfels, "Surfels per model")
       ->capture_default_str()
       ->check(CLI::Range(std::uint64_t(1), std::uint64_t(INT32_MAX)));
-  const int hardware_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   app.add_option("--threads", config.threads,
                  "Worker threads per session for batch work, and every tool's starting threads setting (0: all cores)")
       ->capture_default_str()
-      ->check(CLI::Range(0, hardware_threads));
+      ->check(CLI::Range(0, surfeledit::hardware_threads()));
   app.add_option("--data-root", config.data_root,
                  "Directory below which OP_LOAD_FILE may read model files (symlinks and .. are resolved; "
                  "nothing outside it is read); without it, file loading is off")

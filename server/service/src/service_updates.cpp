@@ -4,17 +4,17 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "service_impl.hpp"
+#include "surfeledit/core/util.hpp"
 #include "surfeledit/service/log.hpp"
 #include "surfeledit/service/sample_views.hpp"
 
 namespace surfeledit::service {
 
 std::unique_ptr<UpdatePublisher> Service::Impl::make_publisher(const ServiceConfig& c) {
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned hw = static_cast<unsigned>(hardware_threads());
   const unsigned workers = c.threads == 0 ? hw : static_cast<unsigned>(c.threads);
   const bool on = c.update_thread == UpdateThread::On || (c.update_thread == UpdateThread::Auto && workers < hw);
   logger()->info("updates are written {} ({} core(s), {} worker thread(s) per session)",
