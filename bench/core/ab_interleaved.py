@@ -5,6 +5,9 @@
 # With `counters` (comma-separated user counters, e.g. detect_cpu_median_ms,detect_cpu_max_ms; cpu_time and
 # real_time count too, in the benchmark's unit) those counters of every benchmark run instead (ms when the name
 # ends in _ms or is a time). Pin it with `taskset -c 1 python3 ...` (the binaries inherit the mask).
+# "paired" is the median of the per-run ratios old/new (run k of each binary back to back): on a host whose speed
+# drifts between runs it is steadier than the ratio of the two medians; "min" is the ratio of the fastest runs (the
+# host's fast mode, when it switches between two speeds).
 import json, subprocess, sys, statistics, os
 old, new = sys.argv[1], sys.argv[2]
 runs = int(sys.argv[3]) if len(sys.argv) > 3 else 5
@@ -29,5 +32,7 @@ rnd = (lambda v: round(v, 3)) if counters else round
 for name in res[old]:
     a, b = statistics.median(res[old][name]), statistics.median(res[new][name])
     unit = " ms" if not counters or name.endswith(("_ms", "cpu_time", "real_time")) else ""
-    print(f"{name}: old {a:.{digits}f}{unit}, new {b:.{digits}f}{unit}, ratio {a/b:.2f}  "
+    paired = statistics.median(x / y for x, y in zip(res[old][name], res[new][name]))
+    print(f"{name}: old {a:.{digits}f}{unit}, new {b:.{digits}f}{unit}, ratio {a/b:.2f}, paired {paired:.2f}, "
+          f"min {min(res[old][name]) / min(res[new][name]):.2f}  "
           f"(old runs {[rnd(v) for v in res[old][name]]}, new {[rnd(v) for v in res[new][name]]})")

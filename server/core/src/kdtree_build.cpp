@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <utility>
 
@@ -123,32 +124,38 @@ class MortonBuilder {
 }  // namespace
 
 // LSD radix sort of (key, value) pairs on the low 3 * kBits key bits; all digit histograms are counted in
-// one read, and a pass whose digit is the same for every key is skipped.
+// one read, and a pass whose digit is the same for every key is skipped. Each pair travels as one 64-bit word
+// (key high, value low), so a pass scatters one stream per bucket instead of two.
 void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val) {
   const std::size_t n = key.size();
   constexpr std::uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
   std::vector<std::uint32_t> count(kPasses * kBuckets, 0u);
   for (std::size_t i = 0; i < n; ++i)
     for (int p = 0; p < kPasses; ++p) ++count[p * kBuckets + ((key[i] >> (p * kDigit)) & kMask)];
-  std::vector<std::uint32_t> k2(n);
-  std::vector<std::uint32_t> v2(n);
+  bool any = false;
+  for (int p = 0; p < kPasses; ++p) {
+    const std::uint32_t* c = &count[p * kBuckets];
+    any = any || *std::max_element(c, c + kBuckets) != n;
+  }
+  if (!any) return;
+  std::unique_ptr<std::uint64_t[]> a(new std::uint64_t[n]), b(new std::uint64_t[n]);  // not zero-filled
+  for (std::size_t i = 0; i < n; ++i) a[i] = (static_cast<std::uint64_t>(key[i]) << 32) | val[i];
   for (int p = 0; p < kPasses; ++p) {
     std::uint32_t* c = &count[p * kBuckets];
     if (*std::max_element(c, c + kBuckets) == n) continue;
     std::uint32_t sum = 0;
-    for (std::uint32_t b = 0; b < kBuckets; ++b) {
-      const std::uint32_t here = c[b];
-      c[b] = sum;
+    for (std::uint32_t k = 0; k < kBuckets; ++k) {
+      const std::uint32_t here = c[k];
+      c[k] = sum;
       sum += here;
     }
-    const int shift = p * kDigit;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t at = c[(key[i] >> shift) & kMask]++;
-      k2[at] = key[i];
-      v2[at] = val[i];
-    }
-    key.swap(k2);
-    val.swap(v2);
+    const int shift = 32 + p * kDigit;
+    for (std::size_t i = 0; i < n; ++i) b[c[(a[i] >> shift) & kMask]++] = a[i];
+    a.swap(b);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    key[i] = static_cast<std::uint32_t>(a[i] >> 32);
+    val[i] = static_cast<std::uint32_t>(a[i]);
   }
 }
 
