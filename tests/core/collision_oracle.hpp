@@ -167,7 +167,7 @@ class Oracle {
           rho2_[r] = shrunk(d2, s.radii[last_nearest_]);
         }
         break;
-      case CollisionAlgorithm::Robust: robust(s, previous); break;
+      case CollisionAlgorithm::Robust: robust(s); break;
       default: break;
     }
     IndexList out;
@@ -290,9 +290,8 @@ class Oracle {
     mean_dist2_ = tested ? sum / tested : 0.0;
   }
 
-  // Code 6.8, literally, but for the reach: a change counts only where the point's disc, swept from its position
-  // before the step, reaches the zero surfel's (docs/algorithms.md §4.4).
-  void robust(const TestScene& s, const Points& previous) {
+  // Code 6.8, literally.
+  void robust(const TestScene& s) {
     std::vector<Index> orig;
     for (std::size_t o = 0; o < orig_alive_.size(); ++o)
       if (orig_alive_[o]) orig.push_back(static_cast<Index>(o));
@@ -313,9 +312,7 @@ class Oracle {
         center_.row(r) = p1.transpose();
         rho2_[r] = shrunk((p1 - orig_pos_.row(k).transpose()).squaredNorm(), orig_rad_[k]);
         const bool now = (p1 - orig_pos_.row(k).transpose()).dot(orig_nrm_.row(k).transpose()) < p_.threshold;
-        const double reach = s.radii[r] + (p1 - previous.row(r).transpose()).norm() + orig_rad_[k];
-        const bool near = (p1 - orig_pos_.row(k).transpose()).squaredNorm() <= reach * reach;
-        if (orig_zero_[k] && now != inside_[r] && near) colliding_[r] = !colliding_[r];
+        if (orig_zero_[k] && now != inside_[r]) colliding_[r] = !colliding_[r];
         inside_[r] = now;
       }
       if (colliding_[r]) {

@@ -171,10 +171,7 @@ bool RobustKernelT<kHeld>::on_rigid_moved(const CollisionScene& scene, const Ind
   // A new tree over the rigid part where it is now (clones in history images share the old one, and read
   // the model as it was when they are brought back with it).
   orig_.tree = original_tree(original_points(scene));
-  for (Index r : hit) {
-    states[r].sphere.rho2 = 0.0;
-    states[r].flags |= kNearMoved;  // the surface came to it: its next test counts a change at any distance
-  }
+  for (Index r : hit) states[r].sphere.rho2 = 0.0;
   return true;
 }
 

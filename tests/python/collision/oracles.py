@@ -16,8 +16,7 @@ matters (Improved). Conventions (the definitions the session documents):
 - Temporal (§4.3): sphere (c, rho^2) per deformable surfel, initially its position and squared
   distance to the nearest zero surfel; strictly inside (``|p - c|^2 < rho^2``) -> skip; else
   re-centre on the nearest zero surfel and test as Simple.
-- Robust (§4.4, Code 6.8): against the original whole model, parity of counted inside changes (a change counts
-  only when the point's disc, swept from its position before the step, reaches the nearest zero surfel's),
+- Robust (§4.4, Code 6.8): against the original whole model, parity of counted inside changes,
   first-update re-evaluation at the old position, old position kept while not colliding.
 - Dynamic resampling: an inserted surfel (child B) has a parent (whose row became child A). B takes
   the parent's state (Simple/Improved: colliding; Robust: inside, colliding, first update, old
@@ -317,11 +316,7 @@ class RobustRef(Reference):
         o, d, now_in = self._classify(lpos)
         self.center[lid] = lpos
         self.rho2[lid] = self.sphere_rho2(d, self.rest_rad[o])
-        # A change counts only within reach: the point's disc, swept from its position before the step, reaches the
-        # zero surfel's (docs/algorithms.md §4.4; farther, the nearest surfel changed at a medial axis).
-        reach = rad[left] + np.linalg.norm(lpos - self.prev[lid], axis=1) + self.rest_rad[o]
-        near = np.einsum("ij,ij->i", d, d) <= reach * reach
-        flip = self.is_zero_rest[o] & (now_in != self.inside[lid]) & near
+        flip = self.is_zero_rest[o] & (now_in != self.inside[lid])
         self.colliding[lid[flip]] = ~self.colliding[lid[flip]]
         self.inside[lid] = now_in
         free = ~self.colliding[ids]

@@ -19,9 +19,9 @@
 // Temporal: detect() skips the broad phase for it. Robust has no step bound; a non-candidate did not
 // come within its step of the zero surface, so its parity cannot have changed by crossing it (its
 // inside state is re-derived once it is a candidate again, see RobustKernel::not_candidate in
-// collision/robust_kernel.hpp; nor does the detector without a tree count a change out of reach, docs/algorithms.md
-// §4.4 "far-field flips"); the tests check the equality on every step of the scenario scenes and on random
-// regions of the shared models.
+// collision/robust_kernel.hpp); the tests check the equality on every step of the scenario scenes. Not equal:
+// a classification that flips far from every surface, which only the detector without a tree counts
+// (docs/algorithms.md §4.4, "far-field flips").
 //
 // The idle step (docs/algorithms.md §5): a displacement bound in the detect input replaces the pass for the
 // step's largest displacement (shift_of); surfel/tree tests only the rows of a bounded filter tree's leaves

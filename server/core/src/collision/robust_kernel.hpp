@@ -29,7 +29,6 @@ struct RobustFlags {
   static constexpr std::uint8_t kFirstUpdate = 4;  // inside state to be re-derived at the old position
   static constexpr std::uint8_t kCrossed = 8;      // swept: the last step passed through the solid
   static constexpr std::uint8_t kOldHeld = 16;     // RobustHeldState::old_position holds the old position
-  static constexpr std::uint8_t kNearMoved = 32;   // another tool moved rigid rows near it since its last test
 };
 
 // A Robust state of a row detector's point (40 bytes; the row sweep reads every state every step and writes only
@@ -40,7 +39,7 @@ struct RobustFlags {
 // A point that collides never has its inside state forgotten, so its old position is never read.
 struct RobustState {
   Sphere sphere;                // holds no original surfel
-  std::uint8_t flags = 0;       // RobustFlags: kInside | kColliding | kFirstUpdate | kCrossed | kNearMoved (| kOldHeld)
+  std::uint8_t flags = 0;       // RobustFlags: kInside | kColliding | kFirstUpdate | kCrossed (| kOldHeld)
   std::uint8_t pad[3] = {};     // no padding bytes: the undo journal compares states bytewise (Journal::note)
   std::uint32_t leaf = 0;       // the original tree's leaf that held the last nearest: where the next test's search
                                 // starts (KdTree::nearest_from; a stale one costs time, not exactness)
@@ -84,7 +83,7 @@ class RobustKernelT : public RobustFlags {
   }
   [[gnu::always_inline]] Index update(State& s, const TestPoint& pt) const {
     Index made = 0;
-    if (leaves(s, pt)) made = test(s, pt.p, pt.previous(), pt.r);
+    if (leaves(s, pt)) made = test(s, pt.p, pt.previous());
     finish(s, pt);
     return made;
   }
@@ -109,7 +108,7 @@ class RobustKernelT : public RobustFlags {
     if (found) {
       s.flags &= static_cast<std::uint8_t>(~kCrossed);
       double r_near;
-      made = classify(s, pt.p, old(s, pt.prev), pt.r, *found, r_near);
+      made = classify(s, pt.p, old(s, pt.prev), *found, r_near);
     }
     finish(s, pt);
     return made;
@@ -253,11 +252,11 @@ class RobustKernelT : public RobustFlags {
   // Tests a point that left its sphere at p1: re-derives a forgotten inside state, counts a change
   // of it against a zero surfel, re-centres the sphere. Returns the queries made.
   // Out of line: most points of a step are not tested, and the sweep inlines update() around it.
-  [[gnu::noinline]] Index test(State& s, const Vec3& p1, const Vec3& p0, const double* r1) const {
+  [[gnu::noinline]] Index test(State& s, const Vec3& p1, const Vec3& p0) const {
     s.flags &= static_cast<std::uint8_t>(~kCrossed);
     double r_near = 0.0;  // radius of the reference surfel nearest to p1
     const double* prev = p0.data();
-    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, prev, r1, r_near)
+    Index made = params_.inside == InsideMode::Nearest ? test_original(s, p1, prev, r_near)
                                                        : test_zero(s, p1, prev, r_near);
     if (params_.swept && !s.colliding()) {
       if (InsideModel::may_cross(p1 - p0, r_near) && inside_->crossed(p0, p1, made)) {
@@ -286,9 +285,9 @@ class RobustKernelT : public RobustFlags {
   }
   // The thesis's test against the original model (Code 6.8): its searches (search()), then what they found
   // (classify()).
-  Index test_original(State& s, const Vec3& p1, const double* prev, const double* r1, double& r_near) const {
+  Index test_original(State& s, const Vec3& p1, const double* prev, double& r_near) const {
     const Vec3 p0 = old(s, prev);
-    return classify(s, p1, p0, r1, search(s, p1, p0), r_near);
+    return classify(s, p1, p0, search(s, p1, p0), r_near);
   }
   // The searches of a test at p1: the original surfel nearest to p1, from the state's leaf, and the one nearest
   // to the old position p0 when a forgotten inside state (kFirstUpdate) is to be re-derived there. That is only when
@@ -310,9 +309,8 @@ class RobustKernelT : public RobustFlags {
     // The old position is read only for a re-derivation (old() is cheap, and its value unused otherwise).
     return search(s, pt.p, old(s, pt.prev));
   }
-  // The state after a test at p1 (old position p0; r1 -> its disc radius, read only for a change) whose searches
-  // found `f`.
-  Index classify(State& s, const Vec3& p1, const Vec3& p0, const double* r1, const Probe& f, double& r_near) const {
+  // The state after a test at p1 (old position p0) whose searches found `f`.
+  Index classify(State& s, const Vec3& p1, const Vec3& p0, const Probe& f, double& r_near) const {
     const double w = params_.threshold;
     s.leaf = f.leaf;
     const Ref k = ref(f.near);
@@ -326,30 +324,12 @@ class RobustKernelT : public RobustFlags {
       const Ref k0 = ref(f.near_old);
       set_inside(s, (p0 - k0.p).dot(k0.n) < w);
     }
-    // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero), when
-    // the point came within reach of it (rare: a branch).
-    bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
-    if (flip) flip = within_reach(s, p1, p0, *r1, d, k.radius);
+    // Against a zero surfel a change of inside state flips the parity (by a select, not a branch on k.zero).
+    const bool flip = k.zero & (inside_now != static_cast<bool>(s.flags & kInside));
     s.flags ^= static_cast<std::uint8_t>(flip ? kColliding : 0);
-    s.flags &= static_cast<std::uint8_t>(~(kFirstUpdate | kNearMoved));
+    s.flags &= static_cast<std::uint8_t>(~kFirstUpdate);
     set_inside(s, inside_now);
     return made;
-  }
-  // Whether a change of the inside state at p1 against zero surfel k (p1 - k's position: d; its radius r_k) can be a
-  // crossing of the surface: the point's disc (radius r1), swept from its old position p0, reaches k's disc,
-  // |d| <= r1 + |p1 - p0| + r_k. Beyond that every surface is farther than the step, and the nearest surfel changed
-  // at a medial axis, not at a crossing (docs/algorithms.md §4.4, "far-field flips"); the hierarchies' broad phase
-  // never makes such a point a candidate, so with the rule they report what the detector without one does. Every
-  // change counts after the surface moved near the point (kNearMoved: another tool's rigid rows, on_rigid_moved) and
-  // from a held old position (the simplified detector's skipped steps): their paths are not the point's step.
-  [[gnu::cold, gnu::noinline]] static bool within_reach(const State& s, const Vec3& p1, const Vec3& p0, double r1, const Vec3& d,
-                                                       double r_k) {
-    if (s.flags & kNearMoved) return true;
-    if constexpr (kHeld) {
-      if (s.flags & kOldHeld) return true;
-    }
-    const double reach = r1 + (p1 - p0).norm() + r_k;
-    return d.squaredNorm() <= reach * reach;
   }
   // The inside model over the alive zero surfels, when `inside` or `swept` needs it.
   void build_inside();
