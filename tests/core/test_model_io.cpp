@@ -142,12 +142,78 @@ TEST_F(ModelIo, ErrorsAreTypedAndNameTheFile) {
   }
   expect_load_error(path("garbage.pcd"), ErrorCode::Io);
   {
-    std::ofstream(path("points.xyz")) << "1 2 3\n";
+    std::ofstream(path("points.stl")) << "1 2 3\n";
   }
-  expect_load_error(path("points.xyz"), ErrorCode::InvalidArgument);
+  expect_load_error(path("points.stl"), ErrorCode::InvalidArgument);
   testing_util::expect_error([&] { save_surfels(path("out.obj"), random_surfels(3, 1)); },
                              ErrorCode::InvalidArgument, "path");
   EXPECT_FALSE(fs::exists(path("out.obj")));
+}
+
+// A text point set (.xyz, .pwn): x y z [nx ny nz] per line, blanks or commas between, '#' comments and empty lines
+// skipped, CRLF endings; positions exact (printed with 17 digits), normals as given up to normalisation.
+TEST_F(ModelIo, TextPointSetsLoadWithOrWithoutNormals) {
+  const SurfelArrays a = random_surfels(50, 3);
+  {
+    std::ofstream out(path("cloud.pwn"));
+    out << "# x y z nx ny nz\r\n\n";
+    out.precision(17);
+    for (Index i = 0; i < a.positions.rows(); ++i) {
+      out << a.positions(i, 0) << (i % 2 ? ", " : " ") << a.positions(i, 1) << "\t" << a.positions(i, 2) << " "
+          << a.normals(i, 0) << " " << a.normals(i, 1) << " " << a.normals(i, 2) << (i % 3 ? "\n" : "\r\n");
+    }
+  }
+  const SurfelArrays b = load_surfels(path("cloud.pwn"));
+  EXPECT_EQ(b.positions, a.positions);
+  EXPECT_LT((b.normals - a.normals).cwiseAbs().maxCoeff(), 1e-12);
+  {
+    std::ofstream out(path("cloud.XYZ"));  // the extension in any case, positions only: normals estimated
+    out.precision(17);
+    for (Index i = 0; i < a.positions.rows(); ++i)
+      out << a.positions(i, 0) << " " << a.positions(i, 1) << " " << a.positions(i, 2) << "\n";
+  }
+  const SurfelArrays c = load_surfels(path("cloud.XYZ"));
+  EXPECT_EQ(c.positions, a.positions);
+  ASSERT_EQ(c.normals.rows(), a.positions.rows());
+  EXPECT_LT((c.normals.rowwise().norm().array() - 1.0).abs().maxCoeff(), 1e-9);
+}
+
+// Each malformed text point set is refused with its own typed error naming the file (and the line, where one is at
+// fault); a file of more lines than the point limit is refused before PCL's reader allocates for them.
+TEST_F(ModelIo, MalformedTextPointSetsAreRefused) {
+  struct Case {
+    const char* name;
+    std::string text;
+    ErrorCode code;
+    const char* says;
+  };
+  const std::vector<Case> cases = {
+      {"four.xyz", "0 0 0\n1 1 1\n1 2 3 4\n", ErrorCode::InvalidArgument, "line 3"},
+      {"first.xyz", "1 2\n", ErrorCode::InvalidArgument, "line 1"},
+      {"mixed.pwn", "0 0 0 0 0 1\n1 1 1\n", ErrorCode::InvalidArgument, "line 2"},
+      {"word.xyz", "0 0 0\n1 one 1\n2 2 2\n", ErrorCode::InvalidArgument, "not a number"},
+      {"empty.xyz", "# nothing\n\n", ErrorCode::InvalidArgument, "no points"},
+      {"nan.xyz", "0 0 0\nnan 1 1\n2 2 2\n", ErrorCode::InvalidArgument, "non-finite"},
+      {"nul.xyz", std::string("0 0 0\n1 1\0 1\n", 13), ErrorCode::Io, "NUL"},
+  };
+  for (const Case& k : cases) {
+    {
+      std::ofstream(path(k.name), std::ios::binary) << k.text;
+    }
+    const std::string msg = testing_util::expect_error([&] { load_surfels(path(k.name)); }, k.code, "path");
+    EXPECT_NE(msg.find(k.name), std::string::npos) << msg;
+    EXPECT_NE(msg.find(k.says), std::string::npos) << k.name << ": " << msg;
+  }
+  {
+    std::ofstream out(path("long.xyz"));
+    out << "0 0 0 0 0 1\n";
+    for (int i = 0; i < 2000; ++i) out << "\n";  // blank lines: PCL's reader would allocate a point for each
+  }
+  LoadParams limit;
+  limit.max_points = 1000;
+  testing_util::expect_error([&] { load_surfels(path("long.xyz"), limit); }, ErrorCode::TooLarge, "path");
+  limit.max_points = 5000;
+  EXPECT_EQ(load_surfels(path("long.xyz"), limit).positions.rows(), 1);
 }
 
 }  // namespace

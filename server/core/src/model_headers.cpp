@@ -217,9 +217,48 @@ Announced check_pcd(const std::string& path, const Head& h, std::uint64_t max_po
   return a;
 }
 
+// A text point set: counts its data lines and their values (docs/hardening.md, "Files").
+Announced check_text_points(const std::string& path, std::uint64_t max_points) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) bad(path, "cannot be opened");
+  Announced a;
+  std::string line;
+  std::uint64_t number = 0;
+  auto refuse = [&](const std::string& what) {
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': line " + std::to_string(number) + " " + what);
+  };
+  while (std::getline(in, line)) {
+    // Every line counts: PCL's reader allocates a point for each before it skips comments and empty ones.
+    if (max_points > 0 && ++number > max_points) {
+      throw Error(ErrorCode::TooLarge, "path", "'" + path + "': more than " + std::to_string(max_points) +
+                                                   " lines, beyond the limit of " + std::to_string(max_points) + " points");
+    }
+    if (max_points == 0) ++number;
+    if (line.find('\0') != std::string::npos) bad(path, "not a text file (line " + std::to_string(number) + " holds NUL bytes)");
+    int values = 0;
+    bool in_value = false;
+    for (const char c : line) {
+      const bool separator = c == ' ' || c == '\t' || c == ',' || c == '\r';
+      if (!separator && !in_value) ++values;
+      in_value = !separator;
+    }
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (values == 0 || line[first] == '#') continue;  // empty, or a comment
+    if (a.columns == 0) {
+      if (values != 3 && values != 6) refuse("holds " + std::to_string(values) + " values, not 3 (x y z) or 6 (x y z nx ny nz)");
+      a.columns = values;
+    } else if (values != a.columns) {
+      refuse("holds " + std::to_string(values) + " values where the first point's line held " + std::to_string(a.columns));
+    }
+    ++a.points;
+  }
+  return a;
+}
+
 }  // namespace
 
 Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points) {
+  if (ext == ".xyz" || ext == ".pwn") return check_text_points(path, max_points);
   const Head h = read_head(path);
   if (ext == ".ply") return check_ply(path, h, max_points);
   if (ext == ".pcd") return check_pcd(path, h, max_points);

@@ -15,12 +15,17 @@ constexpr std::uint64_t kMaxPcdCompression = 128;
 
 // What a header announces.
 struct Announced {
-  std::uint64_t points = 0;  // vertices (PLY) / points (PCD)
+  std::uint64_t points = 0;  // vertices (PLY) / points (PCD) / data lines (XYZ, PWN)
+  int columns = 0;           // XYZ, PWN: numbers per data line, 3 (x y z) or 6 (x y z nx ny nz); else 0
 };
 
-// `ext` is ".ply", ".pcd" or ".obj" (lower case). Throws Error(Io, "path") naming the file when the
+// `ext` is ".ply", ".pcd", ".obj", ".xyz" or ".pwn" (lower case). Throws Error(Io, "path") naming the file when the
 // header is missing or malformed or announces more data than the file holds, Error(TooLarge, "path")
-// when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text.
+// when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text. XYZ and PWN
+// (text, a point per line, no header): the whole file is read once, line by line (bounded memory): every line that
+// is neither empty nor a '#' comment holds the same number of values, 3 or 6, separated by blanks or commas
+// (Error(InvalidArgument, "path") naming the first line that does not); every line, comments too, counts against
+// `max_points` (the reader allocates for each).
 Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points);
 
 }  // namespace surfeledit::model_headers

@@ -3,6 +3,7 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/PolygonMesh.h>
 #include <pcl/features/normal_3d_omp.h>
+#include <pcl/io/ascii_io.h>
 #include <pcl/io/obj_io.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -194,7 +195,11 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
   if (!read_fields(path, c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
   a.positions = m;
   if (a.positions.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
-  require_finite(a.positions, "path '" + path + "' positions");
+  try {
+    require_finite(a.positions, "positions");
+  } catch (const Error& e) {
+    throw Error(e.code(), "path", "'" + path + "': " + e.what());
+  }
   if (read_fields(path, c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(path, c, {"nx", "ny", "nz"}, m)) {
     a.normals = m;
   } else {
@@ -252,7 +257,46 @@ SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   return a;
 }
 
+// A text point set (.xyz, .pwn) whose lines model_headers::check counted: x y z, or x y z nx ny nz, per line, read by
+// PCL's ASCII reader as float64 fields. It skips a line it cannot parse (a value that is not a number) and leaves the
+// cloud's width at the file's line count, so both are checked here against the counted data lines.
+pcl::PCLPointCloud2 read_text_points(const std::string& path, const model_headers::Announced& announced) {
+  if (announced.points == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
+  static const char* const kNames[] = {"x", "y", "z", "normal_x", "normal_y", "normal_z"};
+  std::vector<pcl::PCLPointField> fields;
+  for (int k = 0; k < announced.columns; ++k) {
+    pcl::PCLPointField f;
+    f.name = kNames[k];
+    f.offset = static_cast<std::uint32_t>(8 * k);
+    f.datatype = pcl::PCLPointField::FLOAT64;
+    f.count = 1;
+    fields.push_back(f);
+  }
+  pcl::ASCIIReader reader;
+  reader.setInputFields(fields);
+  reader.setSepChars(" \t,\r\n");
+  reader.setExtension(fs::path(path).extension().string());  // it compares the name's own spelling
+  pcl::PCLPointCloud2 cloud;
+  if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable text point file");
+  const std::uint64_t read = cloud.point_step ? cloud.data.size() / cloud.point_step : 0;
+  if (read != announced.points) {
+    throw Error(ErrorCode::InvalidArgument, "path",
+                "'" + path + "': " + std::to_string(announced.points - read) + " of its " + std::to_string(announced.points) +
+                    " point lines hold a value that is not a number");
+  }
+  cloud.width = static_cast<std::uint32_t>(read);
+  cloud.height = 1;
+  cloud.row_step = cloud.width * cloud.point_step;
+  return cloud;
+}
+
 }  // namespace
+
+bool loadable_extension(const std::string& ext) {
+  return ext == ".ply" || ext == ".pcd" || ext == ".obj" || ext == ".xyz" || ext == ".pwn";
+}
+
+const char* loadable_formats() { return "use .ply, .pcd, .obj, or .xyz / .pwn: text, a point per line, x y z [nx ny nz]"; }
 
 SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   std::error_code ec;
@@ -260,11 +304,11 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   if (fs::is_directory(path, ec)) throw io_error(path, "is a directory");
   if (!fs::is_regular_file(path, ec)) throw io_error(path, "not a regular file");  // a FIFO would block
   const std::string ext = extension_of(path);
-  if (ext != ".obj" && ext != ".ply" && ext != ".pcd") {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply, .pcd or .obj)");
+  if (!loadable_extension(ext)) {
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
   // Counts the header announces against the file's size and the point limit, before any reader allocates.
-  model_headers::check(path, ext, params.max_points);
+  const model_headers::Announced announced = model_headers::check(path, ext, params.max_points);
   SurfelArrays a;
   // PCL reports problems on its console; we report them as exceptions instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
@@ -298,8 +342,10 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
     cloud = pcl::PCLPointCloud2();
     if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
+  } else if (ext == ".xyz" || ext == ".pwn") {
+    a = from_cloud(read_text_points(path, announced), path, params);
   } else {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply, .pcd or .obj)");
+    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
   try {
     validate_arrays(a);

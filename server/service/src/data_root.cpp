@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "surfeledit/core/model_io.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit::service {
@@ -61,9 +62,9 @@ std::string DataRoot::resolve(const std::string& requested) const {
                 "file loading is off: the server runs without --data-root (upload the model instead)");
   }
   const std::string ext = lower_extension(requested);
-  if (ext != ".ply" && ext != ".pcd" && ext != ".obj") {
+  if (!loadable_extension(ext)) {
     throw Error(ErrorCode::InvalidArgument, kField,
-                "'" + requested + "': unsupported extension '" + ext + "' (use .ply, .pcd or .obj)");
+                "'" + requested + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
   const Error hidden(ErrorCode::NotFound, kField,
                      "'" + requested + "': no such file below the server's data root");

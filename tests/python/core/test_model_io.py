@@ -81,6 +81,17 @@ def test_estimated_normals_are_consistently_oriented(tmp_path: Path) -> None:
     assert aligned >= 0.8
 
 
+def test_a_point_set_with_normals_loads_as_written() -> None:
+    # elephant.pwn: x y z nx ny nz per line (read here by numpy, independently of PCL's reader).
+    path = _need("elephant.pwn")
+    truth = np.loadtxt(path)
+    d = core.load_file(str(path))
+    np.testing.assert_array_equal(d["positions"], truth[:, :3])
+    unit = truth[:, 3:] / np.linalg.norm(truth[:, 3:], axis=1)[:, None]
+    np.testing.assert_allclose(d["normals"], unit, atol=1e-12)
+    assert d["radii"].shape == (len(truth),) and (d["radii"] > 0).all()
+
+
 def test_errors_name_the_file(tmp_path: Path) -> None:
     with pytest.raises(NotFoundError, match="nope.ply"):
         core.load_file(str(tmp_path / "nope.ply"))
@@ -89,7 +100,7 @@ def test_errors_name_the_file(tmp_path: Path) -> None:
     with pytest.raises(ServerIOError, match="bad.pcd"):
         core.load_file(str(bad))
     with pytest.raises(InvalidArgumentError, match="unsupported extension"):
-        core.load_file(str(bad.with_suffix(".xyz").resolve()) if bad.with_suffix(".xyz").write_text("1 2 3") else "")
+        core.load_file(str(bad.with_suffix(".stl").resolve()) if bad.with_suffix(".stl").write_text("1 2 3") else "")
     nan = tmp_path / "nan.pcd"
     nan.write_text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\n"
                    "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n0 0 0\nnan 0 0\n1 1 1\n")

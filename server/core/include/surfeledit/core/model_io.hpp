@@ -23,6 +23,10 @@ struct LoadParams {
 // files are read; the counts a PLY/PCD header announces are checked against the file's size (and
 // max_points) before anything is allocated for them (model_headers.hpp in src/).
 SurfelArrays load_surfels(const std::string& path, LoadParams params = {});
+// Whether load_surfels reads files of extension `ext` (lower case, with its dot: ".ply", ".pcd", ".obj", ".xyz",
+// ".pwn"), and the list as an error message's hint. XYZ and PWN are text, a point per line: x y z, or x y z nx ny nz.
+bool loadable_extension(const std::string& ext);
+const char* loadable_formats();
 void save_surfels(const std::string& path, const SurfelArrays& arrays);
 
 }  // namespace surfeledit
