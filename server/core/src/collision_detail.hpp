@@ -20,8 +20,22 @@ namespace surfeledit::detail {
 
 // A detector whose per-surfel test can be limited to candidate rows: the narrow phase of the
 // hierarchies (bvh/hierarchical_detector.hpp) runs the very same code as the detector without a hierarchy.
+// A ball of the zero region's open boundary (an inside model's hole, collision/inside_model.hpp): across the cap that
+// spans it the inside state of `inside` = winding | vote and the swept test changes far from every zero surfel.
+struct ZeroBall {
+  Vec3 center;
+  double radius = 0.0;
+};
+
 class NarrowDetector : public CollisionDetector {
  public:
+  // The open boundary's balls of the zero region as the next detect_candidates() of `scene` sees it (its inside
+  // model then bound: a removal of zero rows rebuilds it first); none without an inside model. A broad phase makes
+  // every row whose ball reaches one a candidate (bvh/hierarchical_detector.hpp).
+  virtual std::vector<ZeroBall> open_boundary(const CollisionScene& scene) {
+    (void)scene;
+    return {};
+  }
   // detect() where only rows with candidate[r] != 0 are tested (`candidate`: one flag per row;
   // nullptr = every row). The other deformable rows keep their collision state; what happens to
   // their spheres is each kernel's not_candidate() (collision/kernel.hpp).

@@ -136,6 +136,7 @@ CollisionResult HierarchicalDetector::detect(const CollisionScene& scene, const 
     candidates = surfel_tree(scene, previous, counters);
     counters.np = candidates;
   }
+  if (broad && !extended_) candidates += near_open_boundary(scene, previous);
   CollisionResult result;
   if (extended_) {
     extended_->begin_step(++step_, scene.positions, previous);
@@ -202,6 +203,26 @@ Index HierarchicalDetector::surfel_tree(const CollisionScene& scene, const Point
       },
       zero_);
   return candidates;
+}
+
+Index HierarchicalDetector::near_open_boundary(const CollisionScene& scene, const Points& previous) {
+  const std::vector<ZeroBall> balls = narrow_->open_boundary(scene);
+  if (balls.empty()) return 0;
+  Index marked = 0;
+  for (Index r : deformable_) {
+    if (candidate_[static_cast<std::size_t>(r)]) continue;
+    const Vec3 p = row3(scene.positions, r);
+    const double reach = (scene.radii[r] + (p - row3(previous, r)).norm()) * (1.0 + 1e-9);
+    for (const ZeroBall& b : balls) {
+      if ((p - b.center).norm() <= reach + b.radius) {
+        candidate_[static_cast<std::size_t>(r)] = 1;
+        marked_.push_back(r);
+        ++marked;
+        break;
+      }
+    }
+  }
+  return marked;
 }
 
 StepShift HierarchicalDetector::shift_of(const CollisionScene& scene, const Points& previous) {

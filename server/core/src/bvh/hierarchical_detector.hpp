@@ -23,6 +23,11 @@
 // a classification that flips far from every surface, which only the detector without a tree counts
 // (docs/algorithms.md §4.4, "far-field flips").
 //
+// Robust with `inside` = winding | vote or `swept`: the inside state also changes across the caps of the zero region's
+// open boundary (where the deformable part is attached), far from every zero surfel; a row whose ball (p, r + |t|)
+// reaches one of the boundary's balls (NarrowDetector::open_boundary) is a candidate too (one pass over the
+// deformable rows per step, only when there are such balls).
+//
 // The idle step (docs/algorithms.md §5): a displacement bound in the detect input replaces the pass for the
 // step's largest displacement (shift_of); surfel/tree tests only the rows of a bounded filter tree's leaves
 // that reach the box of all zero balls (surfel_tree); tree/tree with OBB or sphere zero trees prunes
@@ -127,6 +132,9 @@ class HierarchicalDetector final : public CollisionDetector {
   // Surfel/tree: marks the candidates among the deformable rows, each ball (p, r + reach) tested against
   // zero_bounds_ and then down the zero tree; only the rows in filter_'s leaves that reach zero_hull_.
   Index surfel_tree(const CollisionScene& scene, const Points& previous, bvh::BvhCounters& counters);
+  // Marks the rows (not yet candidates) whose ball (p, r + |t|) reaches a ball of the narrow phase's open boundary;
+  // returns how many.
+  Index near_open_boundary(const CollisionScene& scene, const Points& previous);
   // The step's shift and reach (step_shift.hpp): the scene's displacement bound when it has one (validated;
   // checked against the measured values in a debug build), else measured.
   StepShift shift_of(const CollisionScene& scene, const Points& previous);

@@ -53,6 +53,7 @@ class InsideModel {
   double radius(Index k) const { return radii_[k]; }
   std::size_t memory_bytes() const;
   std::size_t holes() const { return holes_.size(); }
+  const std::vector<ZeroBall>& hole_balls() const { return holes_; }
 
  private:
   bool classify(const Vec3& p, Index k, double dist2) const;
@@ -60,10 +61,7 @@ class InsideModel {
   double clearance(const Vec3& p) const;  // distance to the nearest open-boundary ball (inf: none)
   void find_holes();
 
-  struct Ball {
-    Vec3 center;
-    double radius;
-  };
+  using Ball = ZeroBall;
 
   CollisionParams params_;
   Points positions_;  // #Z by 3

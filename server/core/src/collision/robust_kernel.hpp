@@ -115,6 +115,8 @@ class RobustKernelT : public RobustFlags {
   }
   // Unprobed, only finish() may write: when it drops a held old position.
   [[gnu::always_inline]] static bool keeps(const State& s) { return !(s.flags & kOldHeld); }
+  // The inside model's open-boundary balls (none without one); after bind(), which builds a pending one.
+  std::vector<ZeroBall> open_boundary() const { return inside_ ? inside_->hole_balls() : std::vector<ZeroBall>{}; }
   // Not a candidate: nor is anything of not_candidate() written but finish()'s, once its sphere is empty and its
   // inside state forgotten (or while it collides, or stays in its sphere).
   [[gnu::always_inline]] static bool keeps_not_candidate(const State& s, const TestPoint& pt) {

@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <type_traits>
+#include <utility>
 
 #include "kernel_rows.hpp"
 #include "parallel_sweep.hpp"
@@ -30,6 +31,12 @@ CollisionDetector::ResetRows kernel_reset_rows(const K&, long) {
   return {};
 }
 
+// Whether a kernel has open_boundary() (Robust).
+template <typename K, typename = void>
+struct HasOpenBoundary : std::false_type {};
+template <typename K>
+struct HasOpenBoundary<K, std::void_t<decltype(std::declval<const K&>().open_boundary())>> : std::true_type {};
+
 template <typename Kernel, typename Sweep = ParallelSweep>
 class RowDetector final : public NarrowDetector {
  public:
@@ -44,6 +51,16 @@ class RowDetector final : public NarrowDetector {
     size_sleep();
     journal_.on = false;
     preprocess_ms_ = ms_since(start);
+  }
+
+  std::vector<ZeroBall> open_boundary(const CollisionScene& scene) override {
+    if constexpr (HasOpenBoundary<Kernel>::value) {
+      rows_.kernel.bind(scene);  // builds the inside model a removal of zero rows left pending
+      return rows_.kernel.open_boundary();
+    } else {
+      (void)scene;
+      return {};
+    }
   }
 
   CollisionResult detect_candidates(const CollisionScene& scene, const Points& previous,
