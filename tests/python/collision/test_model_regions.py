@@ -1,7 +1,9 @@
 """Random regions and motions on the shared test models (not generated scenes): every algorithm equals its
 from-scratch oracle (oracles.py) on a model without equidistant neighbours; each detector behind a hierarchy
 equals it without one, except Robust's far-field flips (docs/algorithms.md §4.4), which are checked to be
-that: the surfels the two first disagree on lie beyond every zero surfel's reach."""
+that: the surfels the two first disagree on lie beyond every zero surfel's reach; and Robust with an inside model
+(winding, vote, swept) behind a hierarchy equals it without one where points cross the hole the deformable part
+left (§4.6)."""
 
 from __future__ import annotations
 
