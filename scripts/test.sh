@@ -10,8 +10,36 @@ BUILD="${SURFELEDIT_BUILD_DIR:-$ROOT/build}"
 export SURFELEDIT_SERVER="$BUILD/server/app/surfeledit-server"
 export SURFELEDIT_PROTO_ECHO="$BUILD/tests/surfeledit-proto-echo"
 export SURFELEDIT_SECURE_PROBE="$BUILD/tests/surfeledit-secure-probe"
+# Every test runs under a time limit, so a hang fails the run naming itself and the stacks it is stuck in, long before
+# CI's own limit ends the job with nothing to read. ctest: 600 s per test (the slowest takes under 10 s here).
 stage "C++ tests"
-ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)"
+ctest --test-dir "$BUILD" --output-on-failure -j "$(nproc)" --timeout 600
+# with_deadline SECONDS LOG CMD...: runs CMD with its output in LOG. Still running after SECONDS: prints every
+# thread's stack (gdb) and LOG's last lines, kills it and fails. A watcher process sleeps beside it; nothing polls.
+with_deadline() {
+  local limit="$1" log="$2" pid watcher rc=0
+  shift 2
+  "$@" >"$log" 2>&1 &
+  pid="$!"
+  (
+    # The sleep's output goes nowhere and the watcher ends it when it is itself ended: no process left holding CI's
+    # output open.
+    sleep "$limit" >/dev/null 2>&1 &
+    local sleeper="$!"
+    trap 'kill "$sleeper" 2>/dev/null; exit 0' TERM
+    wait "$sleeper"
+    kill -0 "$pid" 2>/dev/null || exit 0
+    echo "'$*' still runs after ${limit} s: its threads' stacks, then the end of $log"
+    gdb -p "$pid" -batch -ex "thread apply all bt" 2>&1 | grep -E "^(Thread|#)" | head -n 400
+    tail -n 40 "$log"
+    kill -9 "$pid"
+  ) &
+  watcher="$!"
+  wait "$pid" || rc="$?"
+  kill "$watcher" 2>/dev/null || true
+  wait "$watcher" 2>/dev/null || true
+  return "$rc"
+}
 # sanitizer_build NAME DIR CMAKE_OPTION TARGETS [EXTRA_CMAKE_ARGS...]: a separate instrumented build (no Python
 # module, no benchmarks) of the given test targets in DIR; logs in $BUILD/setup-NAME-*.log. A unity build (CMake
 # compiles up to eight sources of a target as one file; sources with flags of their own stay alone): about a third
@@ -40,9 +68,10 @@ stage "ThreadSanitizer: background hierarchy rebuilds while steps run"
 TSAN_BUILD="${SURFELEDIT_TSAN_BUILD_DIR:-$ROOT/build-tsan}"
 export TSAN_OPTIONS="suppressions=$ROOT/tests/tsan_suppressions.txt halt_on_error=1"
 sanitizer_build tsan "$TSAN_BUILD" SURFELEDIT_TSAN surfeledit_tsan_tests "${SANITIZER_FLAGS[@]}"
-"$TSAN_BUILD/tests/surfeledit_tsan_tests" \
+with_deadline 600 "$TSAN_BUILD/tsan-tests.log" "$TSAN_BUILD/tests/surfeledit_tsan_tests" \
   --gtest_filter='BvhRebuild.*:BvhUpdate.StatusFreshRefitRebuilding:CollisionBvh.BackgroundRebuildWhileStepsArrive' \
-  --gtest_brief=1
+  || { tail -n 60 "$TSAN_BUILD/tsan-tests.log"; exit 1; }
+grep -E "^\[ rebuild \]|tests? from .* ran|PASSED" "$TSAN_BUILD/tsan-tests.log"
 unset TSAN_OPTIONS
 
 # AddressSanitizer and UndefinedBehaviorSanitizer in one build (they combine; one instrumented build instead of
@@ -69,7 +98,7 @@ run_sharded() {
   [ "$shards" -le 8 ] || shards=8
   local pids=()
   for ((k = 0; k < shards; k++)); do
-    GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$k" "$@" >"$log-$k.log" 2>&1 &
+    GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$k" with_deadline 1200 "$log-$k.log" "$@" &
     pids+=("$!")
   done
   for ((k = 0; k < shards; k++)); do
@@ -83,10 +112,10 @@ run_sharded() {
   done
   return "$failed"
 }
-run_sanitized() {  # run_sanitized DIR: both test binaries, brief output
-  run_sharded "$1/core-tests" "$1/tests/surfeledit_core_tests" --gtest_brief=1 --gtest_filter="-$SANITIZER_SKIP" || exit 1
-  "$1/tests/surfeledit_service_tests" --gtest_brief=1 >"$1/service-tests.log" 2>&1 \
-    || { tail -n 60 "$1/service-tests.log"; exit 1; }
+run_sanitized() {  # run_sanitized DIR: both test binaries, each test's name in the logs (a hang's log ends with it)
+  run_sharded "$1/core-tests" "$1/tests/surfeledit_core_tests" --gtest_filter="-$SANITIZER_SKIP" || exit 1
+  with_deadline 900 "$1/service-tests.log" "$1/tests/surfeledit_service_tests" \
+    || { grep -E "^\[ +(RUN|FAILED) +\]" "$1/service-tests.log" | tail -n 3; tail -n 60 "$1/service-tests.log"; exit 1; }
 }
 stage "AddressSanitizer + UndefinedBehaviorSanitizer: service tests, core tests but the slowest sweeps"
 SAN_BUILD="${SURFELEDIT_ASAN_BUILD_DIR:-$ROOT/build-asan}"
@@ -103,12 +132,14 @@ cd "$ROOT"
 # the 2-core host 4 workers take 178 s where 2 took 272 s.
 WORKERS="$((2 * $(nproc)))"
 [ "$WORKERS" -le 4 ] || WORKERS=4
-"$ROOT/.venv/bin/python" -m pytest tests/python -q -rs -n "$WORKERS" "$@"
+# 600 s per test (the slowest, the request fuzzer, takes ~50 s); past it the worker prints every thread's stack and ends, and the test fails.
+PYTEST_LIMIT=(--timeout 600 --timeout-method thread)
+"$ROOT/.venv/bin/python" -m pytest tests/python -q -rs -n "$WORKERS" "${PYTEST_LIMIT[@]}" "$@"
 
 # The secured Python client (connect(security=...)) runs on the cyclonedds 0.10.2 binding of
 # .venv-secure (scripts/setup.sh); under .venv those tests are skipped.
 if [ -x "$ROOT/.venv-secure/bin/python" ]; then
   stage "Python tests with DDS Security (.venv-secure)"
-  "$ROOT/.venv-secure/bin/python" -m pytest tests/python/security -q -rs
+  "$ROOT/.venv-secure/bin/python" -m pytest tests/python/security -q -rs "${PYTEST_LIMIT[@]}"
 fi
 stage "all tests passed"

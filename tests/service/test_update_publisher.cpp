@@ -36,12 +36,15 @@ struct RecordingWriter {
   std::mutex mutex;
   std::condition_variable cv;
   bool hold = false;
+  std::size_t entered = 0;  // calls of the writer so far, held ones included
   std::vector<std::pair<std::string, std::uint64_t>> written;
   std::thread::id thread;
 
   UpdatePublisher::Writer writer() {
     return [this](const PreparedUpdate& u) {
       std::unique_lock<std::mutex> lock(mutex);
+      ++entered;
+      cv.notify_all();
       cv.wait(lock, [&] { return !hold; });
       thread = std::this_thread::get_id();
       if (u.cause == "boom") throw std::runtime_error("write failed");
@@ -55,6 +58,18 @@ struct RecordingWriter {
     }
     cv.notify_all();
   }
+  // Whether the publisher's thread has called the writer `n` times within 10 s.
+  bool wait_entered(std::size_t n) {
+    std::unique_lock<std::mutex> lock(mutex);
+    return cv.wait_for(lock, std::chrono::seconds(10), [&] { return entered >= n; });
+  }
+};
+
+// Releases a held writer when the test leaves its scope, by a failed assertion too: declared after the publisher, it
+// runs before the publisher's destructor, which joins the writer's thread.
+struct ReleaseAtExit {
+  RecordingWriter& w;
+  ~ReleaseAtExit() { w.set_hold(false); }
 };
 
 }  // namespace
@@ -85,8 +100,11 @@ TEST(UpdatePublisher, RefusesBeyondTheBoundAndHandsBackContiguousIncrementalUpda
   w.set_hold(true);
   const std::size_t one = small_update("s", 1, "deform").bytes();
   UpdatePublisher pub(w.writer(), 3 * one);
+  const ReleaseAtExit release{w};
   PreparedUpdate first = small_update("s", 1, "deform");
-  ASSERT_TRUE(pub.push(first));  // taken by the (held) writer thread, or still queued
+  ASSERT_TRUE(pub.push(first));
+  // The writer's thread holds the first update: from here on the queue changes only by this test's calls.
+  ASSERT_TRUE(w.wait_entered(1));
   // Fill the queue until it refuses; the refused update is left intact.
   std::uint64_t v = 2;
   for (;; ++v) {
@@ -129,6 +147,7 @@ TEST(UpdatePublisher, ShutdownDrainsWithinTheDeadlineAndDropsTheRest) {
     RecordingWriter w;
     w.set_hold(true);
     UpdatePublisher pub(w.writer(), 1 << 20);
+    const ReleaseAtExit release_at_exit{w};
     for (std::uint64_t v = 1; v <= 5; ++v) ASSERT_TRUE(pub.push_anyway(small_update("s", v, "deform")));
     std::thread release([&] {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
