@@ -129,6 +129,15 @@ TEST_F(ModelIo, ObjOctahedronGivesVertexSurfelsWithAnalyticNormals) {
   }
 }
 
+// A mesh vertex that is not finite is refused under the field "path", naming the file and the vertex.
+TEST_F(ModelIo, ObjWithANonFiniteVertexIsRefusedNamingTheFile) {
+  const std::string file = path("infinite.obj");
+  std::ofstream(file) << "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n";
+  const std::string msg = testing_util::expect_error([&] { load_surfels(file); }, ErrorCode::InvalidArgument, "path");
+  EXPECT_NE(msg.find("infinite.obj"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("vertices"), std::string::npos) << msg;
+}
+
 void expect_load_error(const std::string& file, ErrorCode code) {
   const std::string msg = testing_util::expect_error([&] { load_surfels(file); }, code, "path");
   EXPECT_NE(msg.find(fs::path(file).filename().string()), std::string::npos) << msg;

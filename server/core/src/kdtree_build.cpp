@@ -132,17 +132,17 @@ void radix_sort(std::vector<std::uint32_t>& key, std::vector<std::uint32_t>& val
   std::vector<std::uint32_t> count(kPasses * kBuckets, 0u);
   for (std::size_t i = 0; i < n; ++i)
     for (int p = 0; p < kPasses; ++p) ++count[p * kBuckets + ((key[i] >> (p * kDigit)) & kMask)];
-  bool any = false;
+  // A pass whose digit is the same for every key would leave the order as it is: only the others run.
+  std::vector<int> passes;
   for (int p = 0; p < kPasses; ++p) {
     const std::uint32_t* c = &count[p * kBuckets];
-    any = any || *std::max_element(c, c + kBuckets) != n;
+    if (*std::max_element(c, c + kBuckets) != n) passes.push_back(p);
   }
-  if (!any) return;
+  if (passes.empty()) return;
   std::unique_ptr<std::uint64_t[]> a(new std::uint64_t[n]), b(new std::uint64_t[n]);  // not zero-filled
   for (std::size_t i = 0; i < n; ++i) a[i] = (static_cast<std::uint64_t>(key[i]) << 32) | val[i];
-  for (int p = 0; p < kPasses; ++p) {
+  for (const int p : passes) {
     std::uint32_t* c = &count[p * kBuckets];
-    if (*std::max_element(c, c + kBuckets) == n) continue;
     std::uint32_t sum = 0;
     for (std::uint32_t k = 0; k < kBuckets; ++k) {
       const std::uint32_t here = c[k];

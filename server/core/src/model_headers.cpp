@@ -229,11 +229,11 @@ Announced check_text_points(const std::string& path, std::uint64_t max_points) {
   };
   while (std::getline(in, line)) {
     // Every line counts: PCL's reader allocates a point for each before it skips comments and empty ones.
-    if (max_points > 0 && ++number > max_points) {
+    ++number;
+    if (max_points > 0 && number > max_points) {
       throw Error(ErrorCode::TooLarge, "path", "'" + path + "': more than " + std::to_string(max_points) +
                                                    " lines, beyond the limit of " + std::to_string(max_points) + " points");
     }
-    if (max_points == 0) ++number;
     if (line.find('\0') != std::string::npos) bad(path, "not a text file (line " + std::to_string(number) + " holds NUL bytes)");
     int values = 0;
     bool in_value = false;
@@ -258,7 +258,7 @@ Announced check_text_points(const std::string& path, std::uint64_t max_points) {
 }  // namespace
 
 Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points) {
-  if (ext == ".xyz" || ext == ".pwn") return check_text_points(path, max_points);
+  if (text_point_extension(ext)) return check_text_points(path, max_points);
   const Head h = read_head(path);
   if (ext == ".ply") return check_ply(path, h, max_points);
   if (ext == ".pcd") return check_pcd(path, h, max_points);

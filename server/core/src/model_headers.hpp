@@ -19,6 +19,9 @@ struct Announced {
   int columns = 0;           // XYZ, PWN: numbers per data line, 3 (x y z) or 6 (x y z nx ny nz); else 0
 };
 
+// Whether `ext` (lower case, with its dot) names a text point set: ".xyz" or ".pwn", a point per line, no header.
+inline bool text_point_extension(const std::string& ext) { return ext == ".xyz" || ext == ".pwn"; }
+
 // `ext` is ".ply", ".pcd", ".obj", ".xyz" or ".pwn" (lower case). Throws Error(Io, "path") naming the file when the
 // header is missing or malformed or announces more data than the file holds, Error(TooLarge, "path")
 // when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text. XYZ and PWN

@@ -28,6 +28,17 @@ Error io_error(const std::string& path, const std::string& what) {
   return Error(ErrorCode::Io, "path", "'" + path + "': " + what);
 }
 
+// Runs `check` (an array validation) and reports what it throws under the field "path", naming the file: the
+// arrays came from that file, so the file is what the caller must fix.
+template <class Check>
+void checked_in_file(const std::string& path, Check&& check) {
+  try {
+    check();
+  } catch (const Error& e) {
+    throw Error(e.code(), "path", "'" + path + "': " + e.what());
+  }
+}
+
 std::string extension_of(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -195,11 +206,7 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
   if (!read_fields(path, c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
   a.positions = m;
   if (a.positions.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
-  try {
-    require_finite(a.positions, "positions");
-  } catch (const Error& e) {
-    throw Error(e.code(), "path", "'" + path + "': " + e.what());
-  }
+  checked_in_file(path, [&] { require_finite(a.positions, "positions"); });
   if (read_fields(path, c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(path, c, {"nx", "ny", "nz"}, m)) {
     a.normals = m;
   } else {
@@ -222,7 +229,7 @@ SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
   if (!read_fields(path, mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
   const Points v = m;
-  require_finite(v, "path '" + path + "' vertices");
+  checked_in_file(path, [&] { require_finite(v, "vertices"); });
   Points acc = Points::Zero(v.rows(), 3);
   std::vector<bool> used(v.rows(), false);
   for (std::size_t fi = 0; fi < mesh.polygons.size(); ++fi) {
@@ -293,7 +300,7 @@ pcl::PCLPointCloud2 read_text_points(const std::string& path, const model_header
 }  // namespace
 
 bool loadable_extension(const std::string& ext) {
-  return ext == ".ply" || ext == ".pcd" || ext == ".obj" || ext == ".xyz" || ext == ".pwn";
+  return ext == ".ply" || ext == ".pcd" || ext == ".obj" || model_headers::text_point_extension(ext);
 }
 
 const char* loadable_formats() { return "use .ply, .pcd, .obj, or .xyz / .pwn: text, a point per line, x y z [nx ny nz]"; }
@@ -342,16 +349,12 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
     cloud = pcl::PCLPointCloud2();
     if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
-  } else if (ext == ".xyz" || ext == ".pwn") {
+  } else if (model_headers::text_point_extension(ext)) {
     a = from_cloud(read_text_points(path, announced), path, params);
   } else {
     throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
-  try {
-    validate_arrays(a);
-  } catch (const Error& e) {
-    throw Error(e.code(), "path", "'" + path + "': " + e.what());
-  }
+  checked_in_file(path, [&] { validate_arrays(a); });
   return a;
 }
 

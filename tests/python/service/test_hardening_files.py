@@ -89,12 +89,40 @@ def test_outside_symlink_dotdot_and_missing_get_one_error(client: surfeledit.Cli
 
 def test_fifo_and_directory_are_refused_without_stalling(client: surfeledit.Client, data_root: Path) -> None:
     os.mkfifo(data_root / "x.ply")
+    os.mkfifo(data_root / "x.xyz")  # a text point set is read line by line to its end: a FIFO would never end
     (data_root / "d.ply").mkdir()
     s = client.open_session("fifo")
-    for name in ("x.ply", "d.ply"):
+    for name in ("x.ply", "x.xyz", "d.ply"):
         e = expect_error(lambda: s.load_file(name), errors.InvalidArgumentError, within=2.0)
         assert "regular file" in e.message
     assert client.info().version  # still answering
+
+
+def test_text_point_sets_load_as_written_and_malformed_ones_name_their_line(client: surfeledit.Client,
+                                                                           data_root: Path) -> None:
+    rng = np.random.default_rng(11)
+    pos = rng.normal(size=(120, 3))
+    nrm = pos / np.linalg.norm(pos, axis=1, keepdims=True)
+    np.savetxt(data_root / "cloud.pwn", np.hstack([pos, nrm]), fmt="%.17g")
+    np.savetxt(data_root / "plain.xyz", pos, fmt="%.17g", header="x y z")  # a '#' comment line first
+    s = client.open_session("text")
+    assert s.load_file("cloud.pwn").surfels == len(pos)
+    st = s.state()
+    order = np.argsort(st.positions[:, 0])
+    truth = np.argsort(pos[:, 0])
+    np.testing.assert_allclose(st.positions[order], pos[truth], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(st.normals[order], nrm[truth], rtol=0, atol=1e-12)
+    assert s.load_file("plain.xyz").surfels == len(pos)  # normals estimated: only the count is checked here
+    (data_root / "bad.xyz").write_text("0 0 0\n1 1 1 1\n2 2 2\n")
+    (data_root / "nul.pwn").write_bytes(b"0 0 0 0 0 1\n1 1\x00 1 0 0 1\n")
+    before = client.request(surfeledit.proto.Op.OP_INFO, "text")
+    e = expect_error(lambda: s.load_file("bad.xyz"), errors.InvalidArgumentError)
+    assert "line 2" in e.message and "bad.xyz" in e.message and str(data_root) not in e.message, e.message
+    e = expect_error(lambda: s.load_file("nul.pwn"), errors.ServerIOError)
+    assert "NUL" in e.message, e.message
+    after = client.request(surfeledit.proto.Op.OP_INFO, "text")
+    assert after.version == before.version  # refused: nothing changed
+    assert after.session_info[0].state_hash == before.session_info[0].state_hash
 
 
 def test_lying_headers_and_a_huge_sparse_file_fail_fast_with_bounded_memory(
