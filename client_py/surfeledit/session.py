@@ -240,9 +240,9 @@ class Session(BlendOps, PresenceOps, ToolOps, StateOps, StateArrays):
                 radii=seq(rad[off:end]) if rad is not None else []))
 
     def load_file(self, path: Union[str, Path]) -> "proto.SessionInfo":
-        """Loads a file on the server (.ply, .pcd, .obj; .xyz or .pwn: text, x y z [nx ny nz] per line) as the
-        new model: a path below the server's ``--data-root`` (relative paths are taken from there; file loading is
-        off without it). The file is read off the server's request thread: other clients are served meanwhile."""
+        """Loads a file on the server (.ply, .pcd, .obj, ASCII .off, .stl; .xyz or .pwn: text, x y z [nx ny nz] per
+        line) as the new model: a path below the server's ``--data-root`` (relative paths are taken from there; file
+        loading is off without it). The file is read off the server's request thread: other clients are served meanwhile."""
         self._request(proto.Op.OP_LOAD_FILE, load_file=proto.LoadFile(path=str(path)))
         self._cache = None
         return self._info

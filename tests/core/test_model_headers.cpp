@@ -12,6 +12,7 @@
 #include <string>
 
 #include "expect_error.hpp"
+#include "temp_dir_test.hpp"
 #include "surfeledit/core/model_io.hpp"
 
 namespace surfeledit {
@@ -19,22 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ModelHeaders : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("surfeledit_headers_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string write(const std::string& name, const std::string& bytes) const {
-    const std::string p = (dir_ / name).string();
-    std::ofstream(p, std::ios::binary) << bytes;
-    return p;
-  }
-  fs::path dir_;
-};
+class ModelHeaders : public testing_util::TempDirTest {};
 
 long peak_rss_kb() {
   rusage u{};

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "expect_error.hpp"
+#include "temp_dir_test.hpp"
 #include "surfeledit/core/model_io.hpp"
 
 namespace surfeledit {
@@ -19,20 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh directory per test, removed afterwards.
-class ModelIo : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("surfeledit_model_io_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  fs::path dir_;
-};
+class ModelIo : public testing_util::TempDirTest {};
 
 SurfelArrays random_surfels(int n, unsigned seed) {
   std::mt19937 rng(seed);
@@ -151,9 +139,9 @@ TEST_F(ModelIo, ErrorsAreTypedAndNameTheFile) {
   }
   expect_load_error(path("garbage.pcd"), ErrorCode::Io);
   {
-    std::ofstream(path("points.stl")) << "1 2 3\n";
+    std::ofstream(path("points.vtk")) << "1 2 3\n";
   }
-  expect_load_error(path("points.stl"), ErrorCode::InvalidArgument);
+  expect_load_error(path("points.vtk"), ErrorCode::InvalidArgument);
   testing_util::expect_error([&] { save_surfels(path("out.obj"), random_surfels(3, 1)); },
                              ErrorCode::InvalidArgument, "path");
   EXPECT_FALSE(fs::exists(path("out.obj")));

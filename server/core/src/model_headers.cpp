@@ -1,6 +1,8 @@
 #include "model_headers.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -255,6 +257,85 @@ Announced check_text_points(const std::string& path, std::uint64_t max_points) {
   return a;
 }
 
+// ASCII OFF: "[ST][C][N][4]OFF", then the vertex, face and edge counts ('#' comments anywhere). CGAL's reader sizes
+// its arrays by the counts before it reads a line, so each vertex must have its 6 bytes ("0 0 0\n") and each face
+// its 4 ("1 0\n") in the file.
+Announced check_off(const std::string& path, const Head& h, std::uint64_t max_points) {
+  std::vector<std::string> tokens;  // the first five, comments skipped
+  bool binary = false;
+  std::uint64_t end = 0;            // the offset after the fourth token (the edge count)
+  std::size_t pos = 0;
+  while (pos < h.bytes.size() && tokens.size() < 4) {
+    const char c = h.bytes[pos];
+    if (c == '#') {
+      const std::size_t nl = h.bytes.find('\n', pos);
+      pos = nl == std::string::npos ? h.bytes.size() : nl + 1;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++pos;
+    } else {
+      const std::size_t stop = h.bytes.find_first_of(" \t\r\n#", pos);
+      tokens.push_back(h.bytes.substr(pos, stop == std::string::npos ? std::string::npos : stop - pos));
+      pos = stop == std::string::npos ? h.bytes.size() : stop;
+      if (tokens.size() == 2 && tokens[1] == "BINARY") {
+        binary = true;
+        tokens.pop_back();
+      }
+      end = pos;
+    }
+  }
+  if (h.bytes.find('\0') != std::string::npos) bad(path, "not a text OFF file (holds NUL bytes)");
+  const std::string magic = tokens.empty() ? std::string() : tokens[0];
+  const std::size_t prefix = magic.size() >= 3 ? magic.size() - 3 : 0;
+  if (magic.size() < 3 || magic.compare(prefix, 3, "OFF") != 0 ||
+      magic.find_first_not_of("STCN4n") < prefix) {
+    bad(path, "not an OFF file (no OFF keyword first)");
+  }
+  if (magic.find('n') < prefix) bad(path, "'" + magic + "': an OFF file of another dimension than 3 is not supported");
+  if (binary) bad(path, "binary OFF is not supported (save it as ASCII OFF)");
+  if (tokens.size() < 4) bad(path, "no vertex, face and edge counts within the first " + std::to_string(kMaxHeaderBytes) + " bytes");
+  const std::uint64_t vertices = parse_count(path, tokens[1], "the vertex count");
+  const std::uint64_t faces = parse_count(path, tokens[2], "the face count");
+  parse_count(path, tokens[3], "the edge count");
+  check_points(path, vertices, max_points);
+  const std::uint64_t need = plus(times(vertices, 6), times(faces, 4));
+  check_fits(path, need > 0 ? need - 1 : 0, h.size - end,
+             std::to_string(vertices) + " vertices and " + std::to_string(faces) + " faces");
+  Announced a;
+  a.points = vertices;
+  return a;
+}
+
+// STL: binary when the size is exactly 84 bytes plus 50 per triangle the header's count announces (then every
+// vertex coordinate must be finite: CGAL's reader merges equal corners with an ordered map, which a NaN breaks);
+// otherwise ASCII, which must start with "solid". Both readers allocate as they read, bounded by the file's size.
+Announced check_stl(const std::string& path, const Head& h, std::uint64_t max_points) {
+  (void)max_points;  // the distinct vertices are counted after reading (mesh_files::read_stl)
+  const bool solid = h.bytes.compare(0, 5, "solid") == 0;
+  std::uint32_t triangles = 0;
+  if (h.bytes.size() >= 84) std::memcpy(&triangles, h.bytes.data() + 80, 4);  // little-endian, as x86 and ARM are
+  if (h.size >= 84 && h.size == plus(84, times(triangles, 50))) {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(84);
+    char facet[50];
+    for (std::uint32_t t = 0; t < triangles; ++t) {
+      if (!in.read(facet, sizeof facet)) bad(path, "cannot read triangle " + std::to_string(t));
+      for (int k = 3; k < 12; ++k) {
+        float x = 0.0f;
+        std::memcpy(&x, facet + 4 * k, 4);
+        if (!std::isfinite(x)) bad(path, "triangle " + std::to_string(t) + " has a non-finite vertex coordinate");
+      }
+    }
+    return {};
+  }
+  if (!solid) {
+    bad(path, "not an STL file: neither ASCII (\"solid\" first) nor binary (84 bytes + 50 per triangle: " +
+                  std::to_string(plus(84, times(triangles, 50))) + " bytes for the " + std::to_string(triangles) +
+                  " the header announces; the file has " + std::to_string(h.size) + ")");
+  }
+  if (h.bytes.find('\0') != std::string::npos) bad(path, "not a text STL file (holds NUL bytes)");
+  return {};
+}
+
 }  // namespace
 
 Announced check(const std::string& path, const std::string& ext, std::uint64_t max_points) {
@@ -262,6 +343,8 @@ Announced check(const std::string& path, const std::string& ext, std::uint64_t m
   const Head h = read_head(path);
   if (ext == ".ply") return check_ply(path, h, max_points);
   if (ext == ".pcd") return check_pcd(path, h, max_points);
+  if (ext == ".off") return check_off(path, h, max_points);
+  if (ext == ".stl") return check_stl(path, h, max_points);
   if (h.bytes.find('\0') != std::string::npos) bad(path, "not a text OBJ file (holds NUL bytes)");
   return {};
 }

@@ -22,9 +22,11 @@ struct Announced {
 // Whether `ext` (lower case, with its dot) names a text point set: ".xyz" or ".pwn", a point per line, no header.
 inline bool text_point_extension(const std::string& ext) { return ext == ".xyz" || ext == ".pwn"; }
 
-// `ext` is ".ply", ".pcd", ".obj", ".xyz" or ".pwn" (lower case). Throws Error(Io, "path") naming the file when the
-// header is missing or malformed or announces more data than the file holds, Error(TooLarge, "path")
-// when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text. XYZ and PWN
+// `ext` is ".ply", ".pcd", ".obj", ".off", ".stl", ".xyz" or ".pwn" (lower case). Throws Error(Io, "path") naming the
+// file when the header is missing or malformed or announces more data than the file holds, Error(TooLarge, "path")
+// when it announces more than `max_points` points (0: no limit). OBJ: only that the start is text. OFF: ASCII
+// only, its counts against the file's size (6 bytes per vertex, 4 per face at least). STL: binary when its size is
+// what the triangle count announces (every coordinate finite), else ASCII ("solid" first, no NUL). XYZ and PWN
 // (text, a point per line, no header): the whole file is read once, line by line (bounded memory): every line that
 // is neither empty nor a '#' comment holds the same number of values, 3 or 6, separated by blanks or commas
 // (Error(InvalidArgument, "path") naming the first line that does not); every line, comments too, counts against

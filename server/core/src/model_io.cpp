@@ -14,8 +14,8 @@
 #include <cstring>
 #include <filesystem>
 #include <queue>
-#include <sstream>
 
+#include "mesh_files.hpp"
 #include "model_headers.hpp"
 #include "surfeledit/core/kdtree.hpp"
 
@@ -223,45 +223,15 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
   return a;
 }
 
-// Mesh: one surfel per referenced vertex, normal = sum of the incident faces' unnormalised
-// normals (area-weighted), triangulating polygons as fans.
+// A PCL mesh (OBJ, PLY with faces) as a soup for mesh_files::surfels_of.
 SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
   if (!read_fields(path, mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
-  const Points v = m;
-  checked_in_file(path, [&] { require_finite(v, "vertices"); });
-  Points acc = Points::Zero(v.rows(), 3);
-  std::vector<bool> used(v.rows(), false);
-  for (std::size_t fi = 0; fi < mesh.polygons.size(); ++fi) {
-    const auto& idx = mesh.polygons[fi].vertices;
-    for (auto i : idx) {
-      if (i < 0 || static_cast<Eigen::Index>(i) >= v.rows()) {
-        std::ostringstream msg;
-        msg << "face " << fi << " refers to vertex " << i << " but there are only " << v.rows();
-        throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': " + msg.str());
-      }
-    }
-    for (std::size_t k = 1; k + 1 < idx.size(); ++k) {
-      const Vec3 a = v.row(idx[0]), b = v.row(idx[k]), c = v.row(idx[k + 1]);
-      const Eigen::RowVector3d fn = (b - a).cross(c - a).transpose();
-      acc.row(idx[0]) += fn;
-      acc.row(idx[k]) += fn;
-      acc.row(idx[k + 1]) += fn;
-    }
-    for (auto i : idx) used[i] = true;
-  }
-  IndexList keep;
-  for (Eigen::Index i = 0; i < v.rows(); ++i)
-    if (used[i] && acc.row(i).squaredNorm() > 0.0) keep.push_back(static_cast<Index>(i));
-  if (keep.empty()) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the mesh has no usable vertex");
-  SurfelArrays a;
-  a.positions.resize(static_cast<Eigen::Index>(keep.size()), 3);
-  a.normals.resize(static_cast<Eigen::Index>(keep.size()), 3);
-  for (std::size_t k = 0; k < keep.size(); ++k) {
-    a.positions.row(k) = v.row(keep[k]);
-    a.normals.row(k) = acc.row(keep[k]).normalized();
-  }
-  return a;
+  mesh_files::Soup soup;
+  soup.vertices = m;
+  soup.faces.reserve(mesh.polygons.size());
+  for (const pcl::Vertices& f : mesh.polygons) soup.faces.emplace_back(f.vertices.begin(), f.vertices.end());
+  return mesh_files::surfels_of(soup, path);
 }
 
 // A text point set (.xyz, .pwn) whose lines model_headers::check counted: x y z, or x y z nx ny nz, per line, read by
@@ -300,10 +270,13 @@ pcl::PCLPointCloud2 read_text_points(const std::string& path, const model_header
 }  // namespace
 
 bool loadable_extension(const std::string& ext) {
-  return ext == ".ply" || ext == ".pcd" || ext == ".obj" || model_headers::text_point_extension(ext);
+  return ext == ".ply" || ext == ".pcd" || ext == ".obj" || ext == ".off" || ext == ".stl" ||
+         model_headers::text_point_extension(ext);
 }
 
-const char* loadable_formats() { return "use .ply, .pcd, .obj, or .xyz / .pwn: text, a point per line, x y z [nx ny nz]"; }
+const char* loadable_formats() {
+  return "use .ply, .pcd, .obj, .off (ASCII), .stl, or .xyz / .pwn: text, a point per line, x y z [nx ny nz]";
+}
 
 SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   std::error_code ec;
@@ -349,6 +322,10 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
     cloud = pcl::PCLPointCloud2();
     if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
+  } else if (ext == ".off") {
+    a = mesh_files::surfels_of(mesh_files::read_off(path), path);
+  } else if (ext == ".stl") {
+    a = mesh_files::surfels_of(mesh_files::read_stl(path, params.max_points), path);
   } else if (model_headers::text_point_extension(ext)) {
     a = from_cloud(read_text_points(path, announced), path, params);
   } else {

@@ -100,7 +100,7 @@ def test_errors_name_the_file(tmp_path: Path) -> None:
     with pytest.raises(ServerIOError, match="bad.pcd"):
         core.load_file(str(bad))
     with pytest.raises(InvalidArgumentError, match="unsupported extension"):
-        core.load_file(str(bad.with_suffix(".stl").resolve()) if bad.with_suffix(".stl").write_text("1 2 3") else "")
+        core.load_file(str(bad.with_suffix(".vtk").resolve()) if bad.with_suffix(".vtk").write_text("1 2 3") else "")
     nan = tmp_path / "nan.pcd"
     nan.write_text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\n"
                    "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n0 0 0\nnan 0 0\n1 1 1\n")

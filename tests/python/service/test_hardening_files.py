@@ -125,6 +125,32 @@ def test_text_point_sets_load_as_written_and_malformed_ones_name_their_line(clie
     assert after.session_info[0].state_hash == before.session_info[0].state_hash
 
 
+OCTAHEDRON_FACES = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+
+
+def test_meshes_in_off_and_stl_load_with_their_analytic_normals(client: surfeledit.Client, data_root: Path) -> None:
+    # An octahedron around c: at vertex c + s e the area-weighted normal is e.
+    c, scale = np.array([0.5, -2.0, 3.25]), 0.75
+    axes = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    verts = c + scale * axes
+    off = ["OFF", f"{len(verts)} {len(OCTAHEDRON_FACES)} 0"] + [" ".join(f"{x:.17g}" for x in v) for v in verts]
+    off += [f"3 {a} {b} {d}" for a, b, d in OCTAHEDRON_FACES]
+    (data_root / "octahedron.off").write_text("\n".join(off) + "\n")
+    tri = np.zeros(len(OCTAHEDRON_FACES), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    tri["v"] = verts[OCTAHEDRON_FACES]  # float32: exact for these coordinates
+    (data_root / "octahedron.stl").write_bytes(b"\0" * 80 + np.uint32(len(tri)).tobytes() + tri.tobytes())
+    s = client.open_session("meshes")
+    for name in ("octahedron.off", "octahedron.stl"):
+        assert s.load_file(name).surfels == len(verts), name
+        st = s.state()
+        order = np.lexsort(st.positions.T)
+        truth = np.lexsort(verts.T)
+        np.testing.assert_allclose(st.positions[order], verts[truth], rtol=0, atol=1e-12, err_msg=name)
+        np.testing.assert_allclose(st.normals[order], axes[truth], rtol=0, atol=1e-12, err_msg=name)
+    (data_root / "lying.off").write_text("OFF\n2000000000 1 0\n0 0 0\n")
+    expect_error(lambda: s.load_file("lying.off"), (errors.TooLargeError, errors.ServerIOError))
+
+
 def test_lying_headers_and_a_huge_sparse_file_fail_fast_with_bounded_memory(
         server: ServerProcess, client: surfeledit.Client, data_root: Path) -> None:
     (data_root / "lying.pcd").write_text(LYING_PCD)
