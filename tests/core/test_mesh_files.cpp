@@ -4,7 +4,9 @@
 // file, before anything is allocated for what the file cannot hold.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -95,6 +97,43 @@ TEST_F(MeshFiles, OffCoordinatesKeepFloat64) {
   EXPECT_EQ(a.positions(0, 0), x);
   EXPECT_EQ(a.positions(0, 1), y);
   EXPECT_EQ(a.positions(0, 2), z);
+}
+
+// OBJ goes through CGAL's reader first: float64, so a small model 1e6 from the origin keeps its shape (PCL's float32
+// would move every vertex by up to 0.03 here, 30 times the model's size).
+TEST_F(MeshFiles, ObjKeepsFloat64FarFromTheOrigin) {
+  const double c[3] = {1e6, -2e6, 3e6}, s = 1e-3;
+  char line[128];
+  std::string text;
+  std::vector<Vec3> written;
+  for (const auto& v : kOctahedron) {
+    const Vec3 p(c[0] + s * v[0], c[1] + s * v[1], c[2] + s * v[2]);
+    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", p.x(), p.y(), p.z());
+    text += line;
+    written.push_back(p);
+  }
+  for (const auto& f : kOctahedronFaces) text += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " + std::to_string(f[2] + 1) + "\n";
+  const SurfelArrays a = load_surfels(write("far.obj", text));
+  ASSERT_EQ(a.positions.rows(), 6);
+  for (Eigen::Index i = 0; i < 6; ++i) {
+    EXPECT_EQ(a.positions.row(i).transpose(), written[static_cast<std::size_t>(i)]) << "vertex " << i;
+    const Vec3 axis(kOctahedron[i][0], kOctahedron[i][1], kOctahedron[i][2]);
+    EXPECT_LT((a.normals.row(i).transpose() - axis).norm(), 1e-9) << "vertex " << i;
+  }
+}
+
+// What CGAL's OBJ reader does not take goes to PCL's: a point set without faces, faces with tab-separated indices.
+TEST_F(MeshFiles, ObjWithoutFacesOrWithTabsStillLoads) {
+  std::string grid;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) grid += "v " + std::to_string(0.1 * i) + " " + std::to_string(0.1 * j) + " 0\n";
+  const SurfelArrays points = load_surfels(write("grid.obj", grid));
+  ASSERT_EQ(points.positions.rows(), 36);
+  for (Eigen::Index i = 0; i < 36; ++i) EXPECT_NEAR(std::abs(points.normals(i, 2)), 1.0, 1e-9) << "point " << i;
+  std::string tabs;
+  for (const auto& v : kOctahedron) tabs += "v " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
+  for (const auto& f : kOctahedronFaces) tabs += "f\t" + std::to_string(f[0] + 1) + "\t" + std::to_string(f[1] + 1) + "\t" + std::to_string(f[2] + 1) + "\n";
+  expect_octahedron(load_surfels(write("tabs.obj", tabs)), "OBJ with tabs");
 }
 
 TEST_F(MeshFiles, BrokenFilesAreRefusedNamingTheFile) {

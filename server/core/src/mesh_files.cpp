@@ -1,5 +1,6 @@
 #include "mesh_files.hpp"
 
+#include <CGAL/IO/OBJ.h>
 #include <CGAL/IO/OFF.h>
 #include <CGAL/IO/STL.h>
 #include <CGAL/Simple_cartesian.h>
@@ -106,6 +107,20 @@ Soup read_off(const std::string& path) {
     mesh_error(ErrorCode::Io, path, std::string("not a readable OFF file: ") + e.what());
   }
   if (!ok) mesh_error(ErrorCode::Io, path, "not a readable OFF file (a vertex or face line is missing or malformed)");
+  return soup_of(points, faces);
+}
+
+std::optional<Soup> read_obj(const std::string& path) {
+  std::vector<CgalPoint> points;
+  std::vector<std::vector<std::int64_t>> faces;
+  std::ifstream in(path);
+  try {
+    if (!CGAL::IO::read_OBJ(in, points, faces, CGAL::parameters::verbose(false))) return std::nullopt;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  for (const std::vector<std::int64_t>& f : faces)
+    if (f.size() < 3) return std::nullopt;
   return soup_of(points, faces);
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ SurfelArrays surfels_of(const Soup& soup, const std::string& path);
 // An ASCII OFF file whose header model_headers::check accepted. Coordinates as float64. Throws Error(Io, "path")
 // when CGAL's reader fails, Error(InvalidArgument, "path") for a face of more than kMaxFaceVertices vertices.
 Soup read_off(const std::string& path);
+
+// An OBJ mesh in float64 (PCL's OBJ reader keeps float32, which loses a model 1e6 from the origin), or nothing when
+// CGAL's reader does not take the file (no face, a statement it does not know, such as `l`) or gives a face of
+// fewer than three vertices (it reads only blank-separated indices): the caller then reads it with PCL.
+std::optional<Soup> read_obj(const std::string& path);
 
 // An STL file, ASCII or binary (float32), whose size model_headers::check accepted; CGAL merges the triangles'
 // corners at equal coordinates into one vertex. Throws Error(Io, "path") when CGAL's reader fails,

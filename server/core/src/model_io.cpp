@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <queue>
 
 #include "mesh_files.hpp"
@@ -293,10 +294,14 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   // PCL reports problems on its console; we report them as exceptions instead.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   if (ext == ".obj") {
-    // Note: PCL's OBJ reader stores coordinates as float32.
-    pcl::PolygonMesh mesh;
-    if (pcl::io::loadOBJFile(path, mesh) < 0) throw io_error(path, "not a readable OBJ file");
-    a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
+    // CGAL's reader keeps float64; PCL's (float32) reads what CGAL's does not: points without faces, lines, ...
+    if (std::optional<mesh_files::Soup> soup = mesh_files::read_obj(path)) {
+      a = mesh_files::surfels_of(*soup, path);
+    } else {
+      pcl::PolygonMesh mesh;
+      if (pcl::io::loadOBJFile(path, mesh) < 0) throw io_error(path, "not a readable OBJ file");
+      a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
+    }
   } else if (ext == ".ply") {
     pcl::PolygonMesh mesh;
     pcl::PLYReader reader;
