@@ -39,7 +39,8 @@ COUNTS = [0, 1, 2, 3, 5, 64, 2**31 - 1, 2**32, 2**63, 2**64 - 1]
 INT32S = [0, 1, 2, 3, 7, 9, 17, 18, 99, -1, 2**31 - 1, -(2**31)]
 SESSIONS = ["f0", "f1", ""]
 PATHS = ["", "ok.ply", "lying.pcd", "fifo.ply", "zeros.ply", "../outside.ply", "/etc/passwd.ply",
-         "sub/../../x.ply", "a" * 4096 + ".ply", "dir.ply", "ok.PLY", "notes.txt", "/dev/zero.ply"]
+         "sub/../../x.ply", "a" * 4096 + ".ply", "dir.ply", "ok.PLY", "notes.txt", "/dev/zero.ply",
+         "lying.off", "face.off", "zeros.stl", "lying.stl", "fifo.xyz"]
 BLENDS = ["smooth", "linear", "quadratic", "", "bogus", "SMOOTH"]
 
 
@@ -157,7 +158,7 @@ class Fuzzer:
 
 
 def make_data_root(root: Path) -> None:
-    """Files for the load_file paths: a valid cloud, a lying PCD, a sparse GiB of zeros, a FIFO, a directory."""
+    """Files for the load_file paths: a valid cloud, lying headers, sparse GiBs of zeros, FIFOs, a directory."""
     rng = np.random.default_rng(0)
     pos = rng.normal(size=(100, 3))
     core.save_file(str(root / "ok.ply"), pos, pos / np.linalg.norm(pos, axis=1, keepdims=True), np.full(100, 0.1))
@@ -166,7 +167,15 @@ def make_data_root(root: Path) -> None:
     with open(root / "zeros.ply", "wb") as f:
         f.truncate(1 << 30)
     os.mkfifo(root / "fifo.ply")
+    os.mkfifo(root / "fifo.xyz")
     (root / "dir.ply").mkdir()
+    # Meshes read by CGAL: counts beyond the file, a face's size beyond any mesh, a sparse GiB, a binary STL header
+    # announcing 2^32 - 1 triangles in 84 bytes.
+    (root / "lying.off").write_text("OFF\n2000000000 2000000000 0\n0 0 0\n")
+    (root / "face.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n")
+    with open(root / "zeros.stl", "wb") as f:
+        f.truncate(1 << 30)
+    (root / "lying.stl").write_bytes(b"\0" * 80 + (0xFFFFFFFF).to_bytes(4, "little"))
 
 
 def rss_mb(pid: int) -> float:
