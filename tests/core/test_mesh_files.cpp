@@ -15,12 +15,12 @@
 
 #include "expect_error.hpp"
 #include "surfeledit/core/model_io.hpp"
-#include "temp_dir_test.hpp"
+#include "model_file_test.hpp"
 
 namespace surfeledit {
 namespace {
 
-class MeshFiles : public testing_util::TempDirTest {};
+class MeshFiles : public testing_util::ModelFileTest {};
 
 const double kOctahedron[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 // Counter-clockwise seen from outside (0-based).
@@ -137,18 +137,12 @@ TEST_F(MeshFiles, ObjWithoutFacesOrWithTabsStillLoads) {
 }
 
 TEST_F(MeshFiles, BrokenFilesAreRefusedNamingTheFile) {
-  struct Case {
-    const char* name;
-    std::string bytes;
-    ErrorCode code;
-    const char* says;
-  };
   std::string nan_stl = binary_stl(octahedron_triangles());
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(&nan_stl[84 + 50 * 3 + 12 + 4], &nan, 4);  // triangle 3, first corner's y
   std::string short_stl = binary_stl(octahedron_triangles());
   short_stl.pop_back();
-  const std::vector<Case> cases = {
+  expect_refused({
       {"lying.off", "OFF\n2000000000 1 0\n0 0 0\n", ErrorCode::Io, "2000000000 vertices"},
       {"faces.off", "OFF\n3 2000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", ErrorCode::Io, "faces"},
       {"huge_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2000000000 0 1 2\n", ErrorCode::InvalidArgument, "a face of"},
@@ -161,13 +155,7 @@ TEST_F(MeshFiles, BrokenFilesAreRefusedNamingTheFile) {
       {"nan.stl", nan_stl, ErrorCode::Io, "non-finite"},
       {"short.stl", short_stl, ErrorCode::Io, "neither ASCII"},
       {"cut.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0", ErrorCode::Io, "STL"},
-  };
-  for (const Case& k : cases) {
-    const std::string file = write(k.name, k.bytes);
-    const std::string msg = testing_util::expect_error([&] { load_surfels(file); }, k.code, "path");
-    EXPECT_NE(msg.find(k.name), std::string::npos) << msg;
-    EXPECT_NE(msg.find(k.says), std::string::npos) << k.name << ": " << msg;
-  }
+  });
 }
 
 // 4OFF: homogeneous coordinates, divided by w. A w of 0 is refused: by CGAL's assertion where assertions are on (Io),

@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "expect_error.hpp"
-#include "temp_dir_test.hpp"
+#include "model_file_test.hpp"
 #include "surfeledit/core/model_io.hpp"
 
 namespace surfeledit {
@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ModelIo : public testing_util::TempDirTest {};
+class ModelIo : public testing_util::ModelFileTest {};
 
 SurfelArrays random_surfels(int n, unsigned seed) {
   std::mt19937 rng(seed);
@@ -178,13 +178,7 @@ TEST_F(ModelIo, TextPointSetsLoadWithOrWithoutNormals) {
 // Each malformed text point set is refused with its own typed error naming the file (and the line, where one is at
 // fault); a file of more lines than the point limit is refused before PCL's reader allocates for them.
 TEST_F(ModelIo, MalformedTextPointSetsAreRefused) {
-  struct Case {
-    const char* name;
-    std::string text;
-    ErrorCode code;
-    const char* says;
-  };
-  const std::vector<Case> cases = {
+  expect_refused({
       {"four.xyz", "0 0 0\n1 1 1\n1 2 3 4\n", ErrorCode::InvalidArgument, "line 3"},
       {"first.xyz", "1 2\n", ErrorCode::InvalidArgument, "line 1"},
       {"mixed.pwn", "0 0 0 0 0 1\n1 1 1\n", ErrorCode::InvalidArgument, "line 2"},
@@ -192,15 +186,7 @@ TEST_F(ModelIo, MalformedTextPointSetsAreRefused) {
       {"empty.xyz", "# nothing\n\n", ErrorCode::InvalidArgument, "no points"},
       {"nan.xyz", "0 0 0\nnan 1 1\n2 2 2\n", ErrorCode::InvalidArgument, "non-finite"},
       {"nul.xyz", std::string("0 0 0\n1 1\0 1\n", 13), ErrorCode::Io, "NUL"},
-  };
-  for (const Case& k : cases) {
-    {
-      std::ofstream(path(k.name), std::ios::binary) << k.text;
-    }
-    const std::string msg = testing_util::expect_error([&] { load_surfels(path(k.name)); }, k.code, "path");
-    EXPECT_NE(msg.find(k.name), std::string::npos) << msg;
-    EXPECT_NE(msg.find(k.says), std::string::npos) << k.name << ": " << msg;
-  }
+  });
   {
     std::ofstream out(path("long.xyz"));
     out << "0 0 0 0 0 1\n";
