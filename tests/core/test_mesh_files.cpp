@@ -70,6 +70,12 @@ std::vector<std::array<float, 9>> octahedron_triangles() {
   return out;
 }
 
+// `text` with Windows line ends.
+std::string crlf(std::string text) {
+  for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at + 2)) text.insert(at, "\r");
+  return text;
+}
+
 void expect_octahedron(const SurfelArrays& a, const std::string& what) {
   ASSERT_EQ(a.positions.rows(), 6) << what;
   for (Eigen::Index i = 0; i < 6; ++i) {
@@ -83,6 +89,9 @@ TEST_F(MeshFiles, AnOctahedronInOffAndStlGivesItsAnalyticNormals) {
   expect_octahedron(load_surfels(write("o.off", octahedron_off())), "OFF");
   expect_octahedron(load_surfels(write("o.stl", octahedron_ascii_stl())), "ASCII STL");
   expect_octahedron(load_surfels(write("b.stl", binary_stl(octahedron_triangles()))), "binary STL");
+  // Windows line ends.
+  expect_octahedron(load_surfels(write("crlf.off", crlf(octahedron_off()))), "OFF with CRLF");
+  expect_octahedron(load_surfels(write("crlf.stl", crlf(octahedron_ascii_stl()))), "ASCII STL with CRLF");
   // A binary STL whose 80-byte header starts with "solid" is still binary: its size says so.
   std::string solid = binary_stl(octahedron_triangles());
   solid.replace(0, 6, "solid ");
@@ -113,7 +122,7 @@ TEST_F(MeshFiles, ObjKeepsFloat64FarFromTheOrigin) {
     written.push_back(p);
   }
   for (const auto& f : kOctahedronFaces) text += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " + std::to_string(f[2] + 1) + "\n";
-  const SurfelArrays a = load_surfels(write("far.obj", text));
+  const SurfelArrays a = load_surfels(write("far.obj", crlf(text)));  // with Windows line ends
   ASSERT_EQ(a.positions.rows(), 6);
   for (Eigen::Index i = 0; i < 6; ++i) {
     EXPECT_EQ(a.positions.row(i).transpose(), written[static_cast<std::size_t>(i)]) << "vertex " << i;

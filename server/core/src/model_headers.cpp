@@ -261,9 +261,9 @@ Announced check_text_points(const std::string& path, std::uint64_t max_points) {
 // its arrays by the counts before it reads a line, so each vertex must have its 6 bytes ("0 0 0\n") and each face
 // its 4 ("1 0\n") in the file.
 Announced check_off(const std::string& path, const Head& h, std::uint64_t max_points) {
-  std::vector<std::string> tokens;  // the first five, comments skipped
+  std::vector<std::string> tokens;  // the keyword and the three counts, comments skipped
   bool binary = false;
-  std::uint64_t end = 0;            // the offset after the fourth token (the edge count)
+  std::uint64_t end = 0;            // the offset after the last token read (the edge count)
   std::size_t pos = 0;
   while (pos < h.bytes.size() && tokens.size() < 4) {
     const char c = h.bytes[pos];
