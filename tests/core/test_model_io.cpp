@@ -1,4 +1,4 @@
-// Model I/O (PCL hidden in model_io.cpp): float64 round trips through .ply and .pcd, an OBJ mesh whose
+// Model I/O (PCL hidden in src/): float64 round trips through .ply and .pcd, an OBJ mesh whose
 // area-weighted vertex normals are known analytically (an octahedron: the normal at vertex +-e_i is
 // +-e_i), and the typed errors naming the file. The Python tests add real meshes and normal estimation.
 #include <gtest/gtest.h>
