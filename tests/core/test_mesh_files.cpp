@@ -145,6 +145,28 @@ TEST_F(MeshFiles, ObjWithoutFacesOrWithTabsStillLoads) {
   expect_octahedron(load_surfels(write("tabs.obj", tabs)), "OBJ with tabs");
 }
 
+// An OFF file without faces is a point set: NOFF's normals as written, else estimated from the neighbours.
+TEST_F(MeshFiles, OffWithoutFacesIsAPointSet) {
+  std::string noff = "NOFF\n4 0 0\n";
+  const double normals[4][3] = {{0, 0, 1}, {0.6, 0, 0.8}, {0, -1, 0}, {-0.28, 0.96, 0}};
+  for (int i = 0; i < 4; ++i)
+    noff += std::to_string(i) + " 0.5 -1 " + std::to_string(normals[i][0]) + " " + std::to_string(normals[i][1]) + " " +
+            std::to_string(normals[i][2]) + "\n";
+  const SurfelArrays written = load_surfels(write("n.off", noff));
+  ASSERT_EQ(written.positions.rows(), 4);
+  for (Eigen::Index i = 0; i < 4; ++i) {
+    EXPECT_EQ(written.positions.row(i), Eigen::RowVector3d(static_cast<double>(i), 0.5, -1.0));
+    EXPECT_LT((written.normals.row(i) - Eigen::RowVector3d(normals[i][0], normals[i][1], normals[i][2])).norm(), 1e-12);
+  }
+  std::string grid = "OFF\n36 0 0\n";
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) grid += std::to_string(0.1 * i) + " " + std::to_string(0.1 * j) + " 2\n";
+  const SurfelArrays estimated = load_surfels(write("grid.off", grid));
+  ASSERT_EQ(estimated.positions.rows(), 36);
+  for (Eigen::Index i = 0; i < 36; ++i) EXPECT_NEAR(std::abs(estimated.normals(i, 2)), 1.0, 1e-9) << "point " << i;
+  expect_refused({{"none.off", "OFF\n0 0 0\n", ErrorCode::InvalidArgument, "no points"}});
+}
+
 TEST_F(MeshFiles, BrokenFilesAreRefusedNamingTheFile) {
   std::string nan_stl = binary_stl(octahedron_triangles());
   const float nan = std::numeric_limits<float>::quiet_NaN();

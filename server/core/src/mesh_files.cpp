@@ -8,11 +8,13 @@
 #include <array>
 #include <exception>
 #include <fstream>
+#include <iterator>
 
 namespace surfeledit::mesh_files {
 namespace {
 
 using CgalPoint = CGAL::Simple_cartesian<double>::Point_3;
+using CgalVector = CGAL::Simple_cartesian<double>::Vector_3;
 
 [[noreturn]] void mesh_error(ErrorCode code, const std::string& path, const std::string& what) {
   throw Error(code, "path", "'" + path + "': " + what);
@@ -97,17 +99,26 @@ SurfelArrays surfels_of(const Soup& soup, const std::string& path) {
 Soup read_off(const std::string& path) {
   std::vector<CgalPoint> points;
   std::vector<BoundedFace> faces;
+  std::vector<CgalVector> normals;
   std::ifstream in(path);
   bool ok = false;
   try {
-    ok = CGAL::IO::read_OFF(in, points, faces, CGAL::parameters::verbose(false));
+    ok = CGAL::IO::read_OFF(
+        in, points, faces,
+        CGAL::parameters::verbose(false).vertex_normal_output_iterator(std::back_inserter(normals)));
   } catch (const Error& e) {
     mesh_error(e.code(), path, e.what());
   } catch (const std::exception& e) {  // a CGAL assertion (a 4OFF vertex with w = 0), a failed allocation
     mesh_error(ErrorCode::Io, path, std::string("not a readable OFF file: ") + e.what());
   }
   if (!ok) mesh_error(ErrorCode::Io, path, "not a readable OFF file (a vertex or face line is missing or malformed)");
-  return soup_of(points, faces);
+  Soup soup = soup_of(points, faces);
+  if (!normals.empty() && normals.size() == points.size()) {
+    soup.normals.resize(static_cast<Eigen::Index>(normals.size()), 3);
+    for (std::size_t i = 0; i < normals.size(); ++i)
+      soup.normals.row(static_cast<Eigen::Index>(i)) << normals[i].x(), normals[i].y(), normals[i].z();
+  }
+  return soup;
 }
 
 std::optional<Soup> read_obj(const std::string& path) {

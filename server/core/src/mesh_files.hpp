@@ -16,6 +16,7 @@ namespace surfeledit::mesh_files {
 struct Soup {
   Points vertices;
   std::vector<std::vector<std::int64_t>> faces;
+  Points normals;  // #V by 3 where the file states vertex normals (NOFF), else empty
 };
 
 // One surfel per vertex some face refers to, its normal the normalised sum of the incident triangles' unnormalised
@@ -23,7 +24,8 @@ struct Soup {
 // `path`, for a non-finite vertex, a face referring to a vertex the soup does not have, or no usable vertex.
 SurfelArrays surfels_of(const Soup& soup, const std::string& path);
 
-// An ASCII OFF file whose header model_headers::check accepted. Coordinates as float64. Throws Error(Io, "path")
+// An ASCII OFF file whose header model_headers::check accepted: a mesh, or a point set when it has no face.
+// Coordinates as float64. Throws Error(Io, "path")
 // when CGAL's reader fails, Error(InvalidArgument, "path") for a face of more than kMaxFaceVertices vertices.
 Soup read_off(const std::string& path);
 

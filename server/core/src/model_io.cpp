@@ -255,7 +255,16 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
     if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
   } else if (ext == ".off") {
-    a = mesh_files::surfels_of(mesh_files::read_off(path), path);
+    mesh_files::Soup soup = mesh_files::read_off(path);
+    if (!soup.faces.empty()) {
+      a = mesh_files::surfels_of(soup, path);
+    } else {  // a point set: its normals from the file (NOFF), else estimated
+      if (soup.vertices.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
+      a.positions = std::move(soup.vertices);
+      checked_in_file(path, [&] { require_finite(a.positions, "positions"); });
+      a.normals = soup.normals.rows() == a.positions.rows() ? std::move(soup.normals)
+                                                             : estimate_normals(a.positions, params.normal_k, path);
+    }
   } else if (ext == ".stl") {
     a = mesh_files::surfels_of(mesh_files::read_stl(path, params.max_points), path);
   } else if (model_headers::text_point_extension(ext)) {

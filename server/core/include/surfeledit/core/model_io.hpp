@@ -22,7 +22,8 @@ struct LoadParams {
 // Throws Error(Io | InvalidArgument | NotFound | TooLarge) naming the file and the problem. Only regular
 // files are read; the counts a PLY/PCD/OFF header announces are checked against the file's size (and
 // max_points) before anything is allocated for them (model_headers.hpp in src/). Meshes (OBJ, PLY with faces, OFF,
-// STL) give one surfel per vertex a face uses, with area-weighted face normals (mesh_files.hpp in src/).
+// STL) give one surfel per vertex a face uses, with area-weighted face normals (mesh_files.hpp in src/); an OFF file
+// without faces is a point set, like a PLY, PCD or OBJ without faces (the file's normals, else estimated ones).
 SurfelArrays load_surfels(const std::string& path, LoadParams params = {});
 // Whether load_surfels reads files of extension `ext` (lower case, with its dot: ".ply", ".pcd", ".obj", ".off",
 // ".stl", ".xyz", ".pwn"), and the list as an error message's hint. OFF: ASCII only. XYZ and PWN are text, a point per line: x y z, or x y z nx ny nz.
