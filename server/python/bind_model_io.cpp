@@ -22,9 +22,9 @@ void bind_model_io(pyb::module_& m) {
         return d;
       },
       pyb::arg("path"), pyb::kw_only(), pyb::arg("normal_k") = 16,
-      R"(Loads .ply / .pcd / .obj into a dict of positions (P, 3), normals (P, 3), radii (P,)
-[, colors (P, 3) uint8]. Meshes give one surfel per vertex with area-weighted normals;
-clouds without normals get estimated, consistently oriented ones.)");
+      R"(Loads .ply / .pcd / .obj / ASCII .off / .stl, or a text point set (.xyz / .pwn: x y z [nx ny nz] per
+line), into a dict of positions (P, 3), normals (P, 3), radii (P,) [, colors (P, 3) uint8]. Meshes give one surfel
+per vertex with area-weighted normals; clouds without normals get estimated, consistently oriented ones.)");
   m.def(
       "save_file",
       [](const std::string& path, const pyb::handle& positions, const pyb::handle& normals, const pyb::handle& radii) {
