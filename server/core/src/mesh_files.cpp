@@ -10,15 +10,13 @@
 #include <fstream>
 #include <iterator>
 
+#include "file_error.hpp"
+
 namespace surfeledit::mesh_files {
 namespace {
 
 using CgalPoint = CGAL::Simple_cartesian<double>::Point_3;
 using CgalVector = CGAL::Simple_cartesian<double>::Vector_3;
-
-[[noreturn]] void mesh_error(ErrorCode code, const std::string& path, const std::string& what) {
-  throw Error(code, "path", "'" + path + "': " + what);
-}
 
 // A face as CGAL's OFF reader fills it. The reader resizes a face to the count its line states before it reads the
 // indices, so a lying count ("2000000000 0 1 2") would allocate for all of them: this face throws instead.
@@ -42,12 +40,18 @@ class BoundedFace {
   std::vector<std::size_t> v_;
 };
 
+// CGAL's points or vectors as rows (#N by 3).
+template <class Xyz>
+Points rows_of(const std::vector<Xyz>& xyz) {
+  Points out(static_cast<Eigen::Index>(xyz.size()), 3);
+  for (std::size_t i = 0; i < xyz.size(); ++i) out.row(static_cast<Eigen::Index>(i)) << xyz[i].x(), xyz[i].y(), xyz[i].z();
+  return out;
+}
+
 template <class Faces>
 Soup soup_of(const std::vector<CgalPoint>& points, const Faces& faces) {
   Soup s;
-  s.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
-  for (std::size_t i = 0; i < points.size(); ++i)
-    s.vertices.row(static_cast<Eigen::Index>(i)) << points[i].x(), points[i].y(), points[i].z();
+  s.vertices = rows_of(points);
   s.faces.reserve(faces.size());
   for (const auto& f : faces) s.faces.emplace_back(f.begin(), f.end());
   return s;
@@ -57,20 +61,16 @@ Soup soup_of(const std::vector<CgalPoint>& points, const Faces& faces) {
 
 SurfelArrays surfels_of(const Soup& soup, const std::string& path) {
   const Points& v = soup.vertices;
-  try {
-    require_finite(v, "vertices");
-  } catch (const Error& e) {
-    mesh_error(e.code(), path, e.what());
-  }
+  checked_in_file(path, [&] { require_finite(v, "vertices"); });
   Points acc = Points::Zero(v.rows(), 3);
   std::vector<bool> used(static_cast<std::size_t>(v.rows()), false);
   for (std::size_t fi = 0; fi < soup.faces.size(); ++fi) {
     const std::vector<std::int64_t>& idx = soup.faces[fi];
     for (const std::int64_t i : idx) {
       if (i < 0 || i >= v.rows()) {
-        mesh_error(ErrorCode::InvalidArgument, path,
-             "face " + std::to_string(fi) + " refers to vertex " + std::to_string(i) + " but there are only " +
-                 std::to_string(v.rows()));
+        throw file_error(ErrorCode::InvalidArgument, path,
+                         "face " + std::to_string(fi) + " refers to vertex " + std::to_string(i) +
+                             " but there are only " + std::to_string(v.rows()));
       }
     }
     for (std::size_t k = 1; k + 1 < idx.size(); ++k) {
@@ -85,7 +85,7 @@ SurfelArrays surfels_of(const Soup& soup, const std::string& path) {
   IndexList keep;
   for (Eigen::Index i = 0; i < v.rows(); ++i)
     if (used[static_cast<std::size_t>(i)] && acc.row(i).squaredNorm() > 0.0) keep.push_back(static_cast<Index>(i));
-  if (keep.empty()) mesh_error(ErrorCode::InvalidArgument, path, "the mesh has no usable vertex");
+  if (keep.empty()) throw file_error(ErrorCode::InvalidArgument, path, "the mesh has no usable vertex");
   SurfelArrays a;
   a.positions.resize(static_cast<Eigen::Index>(keep.size()), 3);
   a.normals.resize(static_cast<Eigen::Index>(keep.size()), 3);
@@ -106,18 +106,14 @@ Soup read_off(const std::string& path) {
     ok = CGAL::IO::read_OFF(
         in, points, faces,
         CGAL::parameters::verbose(false).vertex_normal_output_iterator(std::back_inserter(normals)));
-  } catch (const Error& e) {
-    mesh_error(e.code(), path, e.what());
+  } catch (const Error& e) {  // a face beyond kMaxFaceVertices
+    throw file_error(e.code(), path, e.what());
   } catch (const std::exception& e) {  // a CGAL assertion (a 4OFF vertex with w = 0), a failed allocation
-    mesh_error(ErrorCode::Io, path, std::string("not a readable OFF file: ") + e.what());
+    throw file_error(ErrorCode::Io, path, std::string("not a readable OFF file: ") + e.what());
   }
-  if (!ok) mesh_error(ErrorCode::Io, path, "not a readable OFF file (a vertex or face line is missing or malformed)");
+  if (!ok) throw file_error(ErrorCode::Io, path, "not a readable OFF file (a vertex or face line is missing or malformed)");
   Soup soup = soup_of(points, faces);
-  if (!normals.empty() && normals.size() == points.size()) {
-    soup.normals.resize(static_cast<Eigen::Index>(normals.size()), 3);
-    for (std::size_t i = 0; i < normals.size(); ++i)
-      soup.normals.row(static_cast<Eigen::Index>(i)) << normals[i].x(), normals[i].y(), normals[i].z();
-  }
+  if (!normals.empty() && normals.size() == points.size()) soup.normals = rows_of(normals);
   return soup;
 }
 
@@ -143,14 +139,14 @@ Soup read_stl(const std::string& path, std::uint64_t max_points) {
   try {
     ok = CGAL::IO::read_STL(path, points, triangles, CGAL::parameters::verbose(false));
   } catch (const std::exception& e) {
-    mesh_error(ErrorCode::Io, path, std::string("not a readable STL file: ") + e.what());
+    throw file_error(ErrorCode::Io, path, std::string("not a readable STL file: ") + e.what());
   }
   if (!ok || triangles.empty()) {
-    mesh_error(ErrorCode::Io, path, "not a readable STL file (a facet is missing or malformed, or there is none)");
+    throw file_error(ErrorCode::Io, path, "not a readable STL file (a facet is missing or malformed, or there is none)");
   }
   if (max_points > 0 && points.size() > max_points) {
-    mesh_error(ErrorCode::TooLarge, path,
-         std::to_string(points.size()) + " vertices, beyond the limit of " + std::to_string(max_points) + " points");
+    throw file_error(ErrorCode::TooLarge, path,
+                     std::to_string(points.size()) + " vertices, beyond the limit of " + std::to_string(max_points) + " points");
   }
   return soup_of(points, triangles);
 }

@@ -9,15 +9,14 @@
 #include <sstream>
 #include <vector>
 
+#include "file_error.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit::model_headers {
 
 namespace {
 
-[[noreturn]] void bad(const std::string& path, const std::string& what) {
-  throw Error(ErrorCode::Io, "path", "'" + path + "': " + what);
-}
+[[noreturn]] void bad(const std::string& path, const std::string& what) { throw file_error(ErrorCode::Io, path, what); }
 
 // The file's size and its first kMaxHeaderBytes bytes.
 struct Head {
@@ -76,9 +75,9 @@ std::uint64_t plus(std::uint64_t a, std::uint64_t b) { return b > UINT64_MAX - a
 
 void check_points(const std::string& path, std::uint64_t points, std::uint64_t max_points) {
   if (max_points > 0 && points > max_points) {
-    throw Error(ErrorCode::TooLarge, "path",
-                "'" + path + "': the header announces " + std::to_string(points) + " points, beyond the limit of " +
-                    std::to_string(max_points));
+    throw file_error(ErrorCode::TooLarge, path,
+                     "the header announces " + std::to_string(points) + " points, beyond the limit of " +
+                         std::to_string(max_points));
   }
 }
 
@@ -227,13 +226,13 @@ Announced check_text_points(const std::string& path, std::uint64_t max_points) {
   std::string line;
   std::uint64_t number = 0;
   auto refuse = [&](const std::string& what) {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': line " + std::to_string(number) + " " + what);
+    throw file_error(ErrorCode::InvalidArgument, path, "line " + std::to_string(number) + " " + what);
   };
   while (std::getline(in, line)) {
     // Every line counts: PCL's reader allocates a point for each before it skips comments and empty ones.
     ++number;
     if (max_points > 0 && number > max_points) {
-      throw Error(ErrorCode::TooLarge, "path", "'" + path + "': more than " + std::to_string(max_points) +
+      throw file_error(ErrorCode::TooLarge, path, "more than " + std::to_string(max_points) +
                                                    " lines, beyond the limit of " + std::to_string(max_points) + " points");
     }
     if (line.find('\0') != std::string::npos) bad(path, "not a text file (line " + std::to_string(number) + " holds NUL bytes)");

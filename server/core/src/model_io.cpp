@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "file_error.hpp"
 #include "mesh_files.hpp"
 #include "model_headers.hpp"
 #include "point_normals.hpp"
@@ -22,21 +23,6 @@ namespace surfeledit {
 namespace {
 
 namespace fs = std::filesystem;
-
-Error io_error(const std::string& path, const std::string& what) {
-  return Error(ErrorCode::Io, "path", "'" + path + "': " + what);
-}
-
-// Runs `check` (an array validation) and reports what it throws under the field "path", naming the file: the
-// arrays came from that file, so the file is what the caller must fix.
-template <class Check>
-void checked_in_file(const std::string& path, Check&& check) {
-  try {
-    check();
-  } catch (const Error& e) {
-    throw Error(e.code(), "path", "'" + path + "': " + e.what());
-  }
-}
 
 std::string extension_of(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
@@ -78,7 +64,7 @@ std::size_t scalar_size(std::uint8_t datatype) {
 void check_layout(const std::string& path, const pcl::PCLPointCloud2& c, const pcl::PCLPointField& f) {
   const std::uint64_t n = std::uint64_t(c.width) * c.height;
   if (std::uint64_t(f.offset) + scalar_size(f.datatype) > c.point_step || c.data.size() / std::max<std::uint32_t>(c.point_step, 1) < n) {
-    throw io_error(path, "the data does not match the header (field '" + f.name + "')");
+    throw file_error(ErrorCode::Io, path, "the data does not match the header (field '" + f.name + "')");
   }
 }
 
@@ -128,24 +114,33 @@ Colors read_colors(const std::string& path, const pcl::PCLPointCloud2& c) {
 const std::vector<std::string> kClipPointFields = {"clip_px", "clip_py", "clip_pz"};
 const std::vector<std::string> kClipDirFields = {"clip_dx", "clip_dy", "clip_dz"};
 
-SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, const LoadParams& params) {
+// A point set's surfels: `positions` (#P by 3, at least one, finite) and `normals`, the file's (#P by 3) or, when
+// the file has none (empty), estimated ones.
+SurfelArrays point_set(Points positions, Points normals, const std::string& path, const LoadParams& params) {
+  if (positions.rows() == 0) throw file_error(ErrorCode::InvalidArgument, path, "the file holds no points");
+  checked_in_file(path, [&] { require_finite(positions, "positions"); });
   SurfelArrays a;
+  a.normals = normals.rows() == positions.rows() ? std::move(normals) : estimate_normals(positions, params.normal_k, path);
+  a.positions = std::move(positions);
+  return a;
+}
+
+SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, const LoadParams& params) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
-  if (!read_fields(path, c, {"x", "y", "z"}, m)) throw io_error(path, "no x, y, z fields");
-  a.positions = m;
-  if (a.positions.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
-  checked_in_file(path, [&] { require_finite(a.positions, "positions"); });
-  if (read_fields(path, c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(path, c, {"nx", "ny", "nz"}, m)) {
-    a.normals = m;
-  } else {
-    a.normals = estimate_normals(a.positions, params.normal_k, path);
+  if (!read_fields(path, c, {"x", "y", "z"}, m)) throw file_error(ErrorCode::Io, path, "no x, y, z fields");
+  Points positions = m;
+  Points normals;  // the normal fields are read only for a non-empty set, which point_set refuses first
+  if (positions.rows() > 0 &&
+      (read_fields(path, c, {"normal_x", "normal_y", "normal_z"}, m) || read_fields(path, c, {"nx", "ny", "nz"}, m))) {
+    normals = m;
   }
+  SurfelArrays a = point_set(std::move(positions), std::move(normals), path, params);
   if (read_fields(path, c, {"radius"}, m)) a.radii = m.col(0);
   a.colors = read_colors(path, c);
   // Clip lines of a merge's crease (extra vertex properties written by save_surfels).
   if (read_fields(path, c, kClipPointFields, m)) {
     a.clip_points = m;
-    if (!read_fields(path, c, kClipDirFields, m)) throw io_error(path, "clip line points without directions");
+    if (!read_fields(path, c, kClipDirFields, m)) throw file_error(ErrorCode::Io, path, "clip line points without directions");
     a.clip_dirs = m;
   }
   return a;
@@ -154,7 +149,7 @@ SurfelArrays from_cloud(const pcl::PCLPointCloud2& c, const std::string& path, c
 // A PCL mesh (OBJ, PLY with faces) as a soup for mesh_files::surfels_of.
 SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m;
-  if (!read_fields(path, mesh.cloud, {"x", "y", "z"}, m)) throw io_error(path, "no vertex coordinates");
+  if (!read_fields(path, mesh.cloud, {"x", "y", "z"}, m)) throw file_error(ErrorCode::Io, path, "no vertex coordinates");
   mesh_files::Soup soup;
   soup.vertices = m;
   soup.faces.reserve(mesh.polygons.size());
@@ -166,7 +161,7 @@ SurfelArrays from_mesh(const pcl::PolygonMesh& mesh, const std::string& path) {
 // PCL's ASCII reader as float64 fields. It skips a line it cannot parse (a value that is not a number) and leaves the
 // cloud's width at the file's line count, so both are checked here against the counted data lines.
 pcl::PCLPointCloud2 read_text_points(const std::string& path, const model_headers::Announced& announced) {
-  if (announced.points == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
+  if (announced.points == 0) throw file_error(ErrorCode::InvalidArgument, path, "the file holds no points");
   static const char* const kNames[] = {"x", "y", "z", "normal_x", "normal_y", "normal_z"};
   std::vector<pcl::PCLPointField> fields;
   for (int k = 0; k < announced.columns; ++k) {
@@ -182,12 +177,12 @@ pcl::PCLPointCloud2 read_text_points(const std::string& path, const model_header
   reader.setSepChars(" \t,\r\n");
   reader.setExtension(fs::path(path).extension().string());  // it compares the name's own spelling
   pcl::PCLPointCloud2 cloud;
-  if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable text point file");
+  if (reader.read(path, cloud) < 0) throw file_error(ErrorCode::Io, path, "not a readable text point file");
   const std::uint64_t read = cloud.point_step ? cloud.data.size() / cloud.point_step : 0;
   if (read != announced.points) {
-    throw Error(ErrorCode::InvalidArgument, "path",
-                "'" + path + "': " + std::to_string(announced.points - read) + " of its " + std::to_string(announced.points) +
-                    " point lines hold a value that is not a number");
+    throw file_error(ErrorCode::InvalidArgument, path,
+                     std::to_string(announced.points - read) + " of its " + std::to_string(announced.points) +
+                         " point lines hold a value that is not a number");
   }
   cloud.width = static_cast<std::uint32_t>(read);
   cloud.height = 1;
@@ -208,12 +203,12 @@ const char* loadable_formats() {
 
 SurfelArrays load_surfels(const std::string& path, LoadParams params) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(ErrorCode::NotFound, "path", "'" + path + "': no such file");
-  if (fs::is_directory(path, ec)) throw io_error(path, "is a directory");
-  if (!fs::is_regular_file(path, ec)) throw io_error(path, "not a regular file");  // a FIFO would block
+  if (!fs::exists(path, ec)) throw file_error(ErrorCode::NotFound, path, "no such file");
+  if (fs::is_directory(path, ec)) throw file_error(ErrorCode::Io, path, "is a directory");
+  if (!fs::is_regular_file(path, ec)) throw file_error(ErrorCode::Io, path, "not a regular file");  // a FIFO would block
   const std::string ext = extension_of(path);
   if (!loadable_extension(ext)) {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
+    throw file_error(ErrorCode::InvalidArgument, path, "unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
   // Counts the header announces against the file's size and the point limit, before any reader allocates.
   const model_headers::Announced announced = model_headers::check(path, ext, params.max_points);
@@ -226,13 +221,13 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
       a = mesh_files::surfels_of(*soup, path);
     } else {
       pcl::PolygonMesh mesh;
-      if (pcl::io::loadOBJFile(path, mesh) < 0) throw io_error(path, "not a readable OBJ file");
+      if (pcl::io::loadOBJFile(path, mesh) < 0) throw file_error(ErrorCode::Io, path, "not a readable OBJ file");
       a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
     }
   } else if (ext == ".ply") {
     pcl::PolygonMesh mesh;
     pcl::PLYReader reader;
-    if (reader.read(path, mesh) < 0) throw io_error(path, "not a readable PLY file");
+    if (reader.read(path, mesh) < 0) throw file_error(ErrorCode::Io, path, "not a readable PLY file");
     a = mesh.polygons.empty() ? from_cloud(mesh.cloud, path, params) : from_mesh(mesh, path);
   } else if (ext == ".pcd") {
     pcl::PCLPointCloud2 cloud;
@@ -244,33 +239,29 @@ SurfelArrays load_surfels(const std::string& path, LoadParams params) {
     unsigned int data_offset = 0;
     if (reader.readHeader(path, cloud, origin, orientation, pcd_version, data_type, data_offset) < 0 ||
         cloud.fields.empty() || cloud.point_step == 0 || std::uint64_t(cloud.width) * cloud.height == 0) {
-      throw io_error(path, "not a readable PCD file (no valid header with fields and points)");
+      throw file_error(ErrorCode::Io, path, "not a readable PCD file (no valid header with fields and points)");
     }
     const std::uint64_t need = std::uint64_t(data_offset) + std::uint64_t(cloud.width) * cloud.height * cloud.point_step;
     if (data_type == 1 && fs::file_size(path, ec) < need) {  // binary: the data must all be there
-      throw io_error(path, "truncated: the header announces " + std::to_string(need) + " bytes, the file has " +
+      throw file_error(ErrorCode::Io, path, "truncated: the header announces " + std::to_string(need) + " bytes, the file has " +
                                std::to_string(fs::file_size(path, ec)));
     }
     cloud = pcl::PCLPointCloud2();
-    if (reader.read(path, cloud) < 0) throw io_error(path, "not a readable PCD file");
+    if (reader.read(path, cloud) < 0) throw file_error(ErrorCode::Io, path, "not a readable PCD file");
     a = from_cloud(cloud, path, params);
   } else if (ext == ".off") {
     mesh_files::Soup soup = mesh_files::read_off(path);
     if (!soup.faces.empty()) {
       a = mesh_files::surfels_of(soup, path);
     } else {  // a point set: its normals from the file (NOFF), else estimated
-      if (soup.vertices.rows() == 0) throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': the file holds no points");
-      a.positions = std::move(soup.vertices);
-      checked_in_file(path, [&] { require_finite(a.positions, "positions"); });
-      a.normals = soup.normals.rows() == a.positions.rows() ? std::move(soup.normals)
-                                                             : estimate_normals(a.positions, params.normal_k, path);
+      a = point_set(std::move(soup.vertices), std::move(soup.normals), path, params);
     }
   } else if (ext == ".stl") {
     a = mesh_files::surfels_of(mesh_files::read_stl(path, params.max_points), path);
   } else if (model_headers::text_point_extension(ext)) {
     a = from_cloud(read_text_points(path, announced), path, params);
   } else {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (" + loadable_formats() + ")");
+    throw file_error(ErrorCode::InvalidArgument, path, "unsupported extension '" + ext + "' (" + loadable_formats() + ")");
   }
   checked_in_file(path, [&] { validate_arrays(a); });
   return a;
@@ -280,7 +271,7 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
   validate_arrays(a);
   const std::string ext = extension_of(path);
   if (ext != ".ply" && ext != ".pcd") {
-    throw Error(ErrorCode::InvalidArgument, "path", "'" + path + "': unsupported extension '" + ext + "' (use .ply or .pcd)");
+    throw file_error(ErrorCode::InvalidArgument, path, "unsupported extension '" + ext + "' (use .ply or .pcd)");
   }
   const Eigen::Index n = a.positions.rows();
   const bool radii = a.radii.size() == n;
@@ -355,7 +346,7 @@ void save_surfels(const std::string& path, const SurfelArrays& a) {
     pcl::PCDWriter w;
     rc = w.writeBinary(path, c);
   }
-  if (rc < 0) throw io_error(path, "could not be written");
+  if (rc < 0) throw file_error(ErrorCode::Io, path, "could not be written");
 }
 
 }  // namespace surfeledit
