@@ -15,7 +15,7 @@ log() { printf '[setup %s s] %s\n' "$SECONDS" "$*"; }
 APT_PACKAGES=(build-essential cmake git pkg-config python3 python3-venv python3-dev
   libeigen3-dev libpcl-dev cyclonedds-dev cyclonedds-tools
   libgtest-dev libspdlog-dev libcli11-dev libbenchmark-dev libcgal-dev ccache openssl zlib1g-dev
-  gdb)  # gdb: scripts/test.sh prints a hung test's stacks with it
+  gdb libboost-dev)  # gdb: scripts/test.sh prints a hung test's stacks with it; Boost: Asio's thread pool
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

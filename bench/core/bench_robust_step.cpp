@@ -111,11 +111,11 @@ struct Piercing {
     return frame.isIdentity(0.0) ? down : (frame * down).eval();
   }
   // A session with the scene loaded, its regions set and Robust configured (one thread).
-  std::unique_ptr<EditSession> session(bool history, bool hierarchy) const {
-    auto s = std::make_unique<EditSession>("bench", SessionParams{1});
+  std::unique_ptr<EditSession> session(bool history, bool hierarchy, int threads = 1) const {
+    auto s = std::make_unique<EditSession>("bench", SessionParams{threads});
     s->load(SurfelModel::from_arrays(arrays));
     s->set_regions({zero, {}}, {one, {}});
-    std::vector<NamedSetting> set = {{"algorithm", std::string("robust")}, {"threads", std::int64_t{1}}};
+    std::vector<NamedSetting> set = {{"algorithm", std::string("robust")}, {"threads", std::int64_t{threads}}};
     if (!history) set.push_back({"history_mb", 0.0});
     if (hierarchy) {
       set.push_back({"zero_hierarchy", std::string("aabb")});
@@ -190,6 +190,27 @@ void BM_IdleDrag(benchmark::State& state) {
   const double h0 = history_bytes();
   for (int k = 0; k < 16; ++k, step.translation = -step.translation) session->deform(step);
   state.counters["history_kb_per_step"] = (history_bytes() - h0) / 16.0 / 1024.0;
+}
+
+// BM_IdleTurn/<threads>: BM_IdleDrag's step turned by +-1e-6 rad about the ball's centre as well, so that the step
+// has no displacement bound and every row is checked against its sphere (none leaves it), at 1 or 2 threads.
+void BM_IdleTurn(benchmark::State& state) {
+  const Piercing& scene = Piercing::get();
+  auto session = scene.session(true, false, static_cast<int>(state.range(0)));
+  DeformParams step;
+  step.translation = Vec3(1e-4, 0.0, 0.0);
+  step.angle = 1e-6;
+  std::vector<double> detect, deform;
+  for (auto _ : state) {
+    const StepResult r = session->deform(step);
+    if (r.stats.tested != 0) throw std::runtime_error("idle turn re-tested surfels");
+    detect.push_back(r.stats.detect_ms);
+    deform.push_back(r.deform_ms);
+    step.translation = -step.translation;
+    step.angle = -step.angle;
+  }
+  state.counters["detect_median_ms"] = median(detect);
+  state.counters["deform_median_ms"] = median(deform);
 }
 
 void preprocess(benchmark::State& state, const char* algorithm, std::int64_t threads = 1) {
@@ -341,6 +362,7 @@ BENCHMARK(BM_DetectRunTwoTilts)->Arg(0)->Arg(12)->Unit(benchmark::kMillisecond)-
 BENCHMARK(BM_DetectIdle)->DenseRange(0, kConfigCount - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PiercingRun)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_IdleDrag)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IdleTurn)->DenseRange(1, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Preprocess)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PreprocessTemporal)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PreprocessThreads)->DenseRange(0, 1)->Unit(benchmark::kMillisecond)->UseRealTime();

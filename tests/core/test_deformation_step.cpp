@@ -163,7 +163,7 @@ TEST(Deformation, NormalsStayUnitOverManySteps) {
 }
 
 TEST(Deformation, ThreadsGiveIdenticalResults) {
-  Model a = make_model(0.006);  // fine enough that the step runs on two threads (deformation.cpp kParallelMinMoved)
+  Model a = make_model(0.0034);  // fine enough that the step runs on two threads (kStepParallelMinMoved)
   Model b = a;
   const DeformationFields f = compute_fields(a.positions, a.regions);
   DeformParams p;
@@ -172,7 +172,7 @@ TEST(Deformation, ThreadsGiveIdenticalResults) {
   p.axis = Vec3(0, 1, 0);
   const DeformResult ra = apply_step(f, p, a.positions, a.normals, &a.tu, &a.tv, 1);
   const DeformResult rb = apply_step(f, p, b.positions, b.normals, &b.tu, &b.tv, 2);
-  EXPECT_GE(ra.moved.size(), 50000u);
+  EXPECT_GE(ra.moved.size(), kStepParallelMinMoved);
   EXPECT_EQ(ra.moved, rb.moved);
   EXPECT_TRUE(a.positions == b.positions);
   EXPECT_TRUE(a.normals == b.normals);

@@ -2,8 +2,6 @@
 // normals and tangent axes of the rows the fields (deformation.cpp) let move.
 #include "surfeledit/core/deformation.hpp"
 
-#include <omp.h>
-
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -13,6 +11,7 @@
 #include "deformation_checks.hpp"
 #include "deformation_kernel.hpp"
 #include "deformation_scan.hpp"
+#include "share_chunks.hpp"
 #include "surfeledit/core/util.hpp"
 
 namespace surfeledit {
@@ -246,16 +245,25 @@ DeformResult apply_step(const DeformationFields& fields, const DeformParams& par
     const int count = static_cast<int>(std::min<Eigen::Index>(detail::kStepBlock, n_moved - k0));
     return block(sc, rows, F, fs, consecutive ? nullptr : ks.data() + k0, k0, count, P, N, U, V);
   };
-  // Several threads only for about a millisecond of one-thread work or more (~20 ns a row with a
-  // rotation, RESULTS §24): below that, on a busy machine, waking a descheduled worker costs a scheduler
-  // tick, more than the whole loop (RESULTS §35; the detector's rule is the same, row_detector.hpp).
-  constexpr Eigen::Index kParallelMinMoved = 50000;
+  // Several threads only for about a millisecond of one-thread work or more (~5 ns a row with a rotation
+  // since RESULTS §70): below that, on a busy machine, waking a descheduled worker costs a scheduler tick,
+  // more than the whole loop (RESULTS §35; the detector's rule is the same, parallel_sweep.hpp). And rows
+  // one thread moves and another then reads cross between the cores' caches: a 60k step split over two
+  // threads made the detector's one-thread sweep after it 3.3x slower (RESULTS §89).
   bool finite = true;
-  if (nthreads == 1 || n_moved < kParallelMinMoved) {
+  if (nthreads == 1 || n_moved < static_cast<Eigen::Index>(kStepParallelMinMoved)) {
     for (Eigen::Index b = 0; b < n_blocks; ++b) finite &= run(b);
   } else {
-#pragma omp parallel for schedule(static) num_threads(nthreads) reduction(&& : finite)
-    for (Eigen::Index b = 0; b < n_blocks; ++b) finite = run(b) && finite;
+    // Chunks of 64 blocks (4096 rows, tens of microseconds), shared without waiting for a descheduled helper.
+    constexpr Eigen::Index kBlocksPerChunk = 64;
+    const Eigen::Index chunks = (n_blocks + kBlocksPerChunk - 1) / kBlocksPerChunk;
+    std::vector<std::uint8_t> chunk_finite(static_cast<std::size_t>(chunks), 1);
+    detail::share_chunks(nthreads, chunks, [&](Index c) {
+      bool ok = true;
+      for (Eigen::Index b = c * kBlocksPerChunk; b < std::min(n_blocks, (c + 1) * kBlocksPerChunk); ++b) ok &= run(b);
+      chunk_finite[static_cast<std::size_t>(c)] = ok;
+    });
+    for (const std::uint8_t ok : chunk_finite) finite &= ok != 0;
   }
   result.finite = finite;
   return result;

@@ -6,12 +6,12 @@
 // is not).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <vector>
 
-#include <omp.h>
-
+#include "share_chunks.hpp"
 #include "surfeledit/core/types.hpp"
 
 namespace surfeledit::detail {
@@ -48,8 +48,8 @@ inline void copy_range(const RowCopy& c, std::size_t k0, std::size_t k1) {
 // thread's work, as for the deformation's loop (deformation_step.cpp).
 constexpr std::size_t kParallelMinRowCopies = 200000;
 
-// Runs the copies; with `threads` > 1 and enough rows, each copy's rows are split in equal consecutive
-// parts, one a thread (every row is written by exactly one thread: the same bytes either way).
+// Runs the copies; with `threads` > 1 and enough rows, each copy's rows are split in parts of consecutive rows
+// that the threads share (every row is written by exactly one thread: the same bytes either way).
 inline void run_row_copies(const std::vector<RowCopy>& copies, int threads = 1) {
   std::size_t total = 0;
   for (const RowCopy& c : copies) total += c.rows->size();
@@ -57,15 +57,21 @@ inline void run_row_copies(const std::vector<RowCopy>& copies, int threads = 1) 
     for (const RowCopy& c : copies) copy_range(c, 0, c.rows->size());
     return;
   }
-#pragma omp parallel num_threads(threads)
-  {
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
-    for (const RowCopy& c : copies) {
-      const std::size_t n = c.rows->size();
-      copy_range(c, n * t / nt, n * (t + 1) / nt);
-    }
+  // Parts of kRowsPerPart rows of each copy in turn (~0.1 ms each), shared without waiting for a descheduled helper.
+  constexpr std::size_t kRowsPerPart = 16384;
+  std::vector<std::size_t> first_part;  // copies[i]'s parts start at first_part[i]
+  std::size_t parts = 0;
+  for (const RowCopy& c : copies) {
+    first_part.push_back(parts);
+    parts += (c.rows->size() + kRowsPerPart - 1) / kRowsPerPart;
   }
+  share_chunks(threads, static_cast<Index>(parts), [&](Index part) {
+    const std::size_t p = static_cast<std::size_t>(part);
+    const std::size_t i = static_cast<std::size_t>(std::upper_bound(first_part.begin(), first_part.end(), p) -
+                                                   first_part.begin()) - 1;
+    const std::size_t k0 = (p - first_part[i]) * kRowsPerPart;
+    copy_range(copies[i], k0, std::min(copies[i].rows->size(), k0 + kRowsPerPart));
+  });
 }
 
 }  // namespace surfeledit::detail

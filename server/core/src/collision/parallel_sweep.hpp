@@ -1,16 +1,16 @@
-// The row detector's sweep over independent points (row_detector.hpp): serial or in OpenMP chunks, by the
-// previous step's estimated work; results do not depend on either.
+// The row detector's sweep over independent points (row_detector.hpp): serial or in chunks shared among threads
+// (share_chunks.hpp), by the previous step's estimated work; results do not depend on either.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "../share_chunks.hpp"
 #include "kernel_rows.hpp"
 #include "row_journal.hpp"
 
@@ -79,16 +79,18 @@ struct SleepingBlocks {
 };
 
 // The points of a step are independent: each row goes through update() (not_candidate() when the
-// broad phase ruled it out), in OpenMP dynamic chunks of Kernel::kChunk rows when the step's work is
-// large enough to pay for waking the other threads, else serially. Results do not depend on either.
+// broad phase ruled it out), in chunks of Kernel::kChunk rows shared among threads (share_chunks) when the
+// step's work is large enough to pay for waking the other threads, else serially. Results do not depend on
+// either.
 // Every sweep also fills hit[q] (#rows): 1 when rows[q] collides after the step.
 //
 // The work is not known before the step, so the previous step's stands for it (steps of one drag are
 // alike): `rows` x kRowNs + its nearest-neighbour queries x kQueryNs, from one-thread profiles of the
 // Robust step (RESULTS §23: ~5 ns a row that stays in its sphere, ~0.37 us a query). Below kParallelNs a
-// step runs on one thread: a parallel region costs little on an idle machine, but on a busy one a worker
-// that is not running waits for the scheduler's next tick (steps of 0.3 ms took 4, 8 or 16 ms), which
-// only work of a millisecond or more can hide (RESULTS §35). The threshold is the setting parallel_min_ms.
+// step runs on one thread: waking a helper costs little on an idle machine, but on a busy one a helper that
+// is descheduled holding a chunk makes the step wait for the scheduler's next tick (an OpenMP region waited so
+// for every worker: steps of 0.3 ms took 4, 8 or 16 ms, RESULTS §35), which only work of a millisecond or more
+// can hide. The threshold is the setting parallel_min_ms.
 struct ParallelSweep {
   static constexpr double kRowNs = 5.0;      // per row of the sweep (estimate, one thread)
   static constexpr double kQueryNs = 400.0;  // per nearest-neighbour query (estimate, one thread)
@@ -171,32 +173,18 @@ struct ParallelSweep {
       } else {
         const Index chunks = (n + Kernel::kChunk - 1) / Kernel::kChunk;
         const std::size_t base = journal ? journal->begin_sweep(static_cast<std::size_t>(chunks)) : 0;
-        auto chunk = [&](Index c, Index& t, Index& m, Index& a) {
-          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c), t, m,
-                a);
-        };
-        if constexpr (kChecked) {
-          // The check below throws, and an exception must not leave an OpenMP region (std::terminate): the lowest
-          // chunk's is kept and thrown after it, the same one whatever the threads. A release build's sweep throws
-          // nothing (its inputs are checked before), so its loop stays as it was.
-          std::exception_ptr error;
-          Index error_chunk = chunks;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries, asleep)
-          for (Index c = 0; c < chunks; ++c) {
-            try {
-              chunk(c, tested, queries, asleep);
-            } catch (...) {
-#pragma omp critical(surfeledit_sweep_error)
-              if (c < error_chunk) {
-                error_chunk = c;
-                error = std::current_exception();
-              }
-            }
-          }
-          if (error) std::rethrow_exception(error);
-        } else {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : tested, queries, asleep)
-          for (Index c = 0; c < chunks; ++c) chunk(c, tested, queries, asleep);
+        // Each chunk's counts apart (summed below in chunk order); a release build's sweep throws nothing (its
+        // inputs are checked before); a checked build's lowest throwing chunk is rethrown (share_chunks).
+        std::vector<Tally> counts(static_cast<std::size_t>(chunks));
+        share_chunks(threads, chunks, [&](Index c) {
+          Tally& t = counts[static_cast<std::size_t>(c)];
+          range(c * Kernel::kChunk, std::min(n, (c + 1) * Kernel::kChunk), base + static_cast<std::size_t>(c),
+                t.tested, t.queries, t.asleep);
+        });
+        for (const Tally& t : counts) {
+          tested += t.tested;
+          queries += t.queries;
+          asleep += t.asleep;
         }
       }
       return Tally{tested, queries, asleep};

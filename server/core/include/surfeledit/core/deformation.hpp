@@ -5,6 +5,7 @@
 // Normals and tangent axes follow the Jacobian J = dF/dp.
 #pragma once
 
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
@@ -116,8 +117,13 @@ enum class StepKernel : std::uint8_t { Auto = 0, Baseline = 1, Avx2 = 2 };
 // Whether `kernel` runs on this CPU and build (Auto and Baseline always).
 bool step_kernel_available(StepKernel kernel);
 
+// A step that moves fewer rows runs on one thread whatever `threads` says: about a millisecond of one
+// thread's work (deformation_step.cpp says why).
+constexpr std::size_t kStepParallelMinMoved = 200000;
+
 // Applies one step in place to `positions`, `normals` (#P by 3) and, when non-empty,
-// the tangent axes `tangent_u`, `tangent_v` (#P by 3, lengths = radii along them).
+// the tangent axes `tangent_u`, `tangent_v` (#P by 3, lengths = radii along them), on up to `threads` threads
+// (the same bits whatever the count).
 // `only`, when given, restricts the step to those rows (a subset of fields.deformable, ascending); the
 // others keep their state. Validates everything before touching any array (InvalidArgument naming
 // "kernel" for a kernel that is not available).

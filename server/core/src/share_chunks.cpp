@@ -1,0 +1,88 @@
+// share_chunks (share_chunks.hpp): a shared chunk counter; the helpers are tasks posted to one process-wide
+// Boost.Asio thread pool. Asio is header-only, so ThreadSanitizer sees its hand-over of a task (oneTBB, tried first,
+// is a compiled library that Debian does not instrument: TSan reported every hand-over as a race).
+#include "share_chunks.hpp"
+
+#include <boost/asio/post.hpp>
+#include <boost/asio/thread_pool.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+namespace surfeledit::detail {
+namespace {
+
+// The helpers' threads, made on first use.
+boost::asio::thread_pool& helper_pool() {
+  static boost::asio::thread_pool pool(static_cast<std::size_t>(helper_threads()));
+  return pool;
+}
+
+// One loop. A helper joins only while the loop is open; the caller closes it once its own claims ran out and waits
+// for the helpers that joined. A helper task that runs later finds it closed and touches nothing of the caller's
+// (the job outlives the call through the tasks' shared pointers).
+struct Job {
+  std::atomic<Index> next{0};
+  Index chunks = 0;
+  const std::function<void(Index)>* chunk = nullptr;
+  std::mutex mutex;
+  std::condition_variable idle;
+  bool open = true;
+  int joined = 0;  // helpers inside take()
+  std::exception_ptr error;
+  Index error_chunk = 0;
+
+  // Claims chunks one at a time until none is left.
+  void take() {
+    for (Index c = next.fetch_add(1, std::memory_order_relaxed); c < chunks;
+         c = next.fetch_add(1, std::memory_order_relaxed)) {
+      try {
+        (*chunk)(c);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (c < error_chunk) {
+          error_chunk = c;
+          error = std::current_exception();
+        }
+      }
+    }
+  }
+
+  void help() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!open) return;
+      ++joined;
+    }
+    take();
+    std::lock_guard<std::mutex> lock(mutex);
+    if (--joined == 0) idle.notify_one();
+  }
+};
+
+}  // namespace
+
+int helper_threads() {
+  const unsigned hardware = std::thread::hardware_concurrency();
+  return hardware > 1 ? static_cast<int>(hardware) - 1 : 1;
+}
+
+void share_chunks(int threads, Index chunks, const std::function<void(Index)>& chunk) {
+  auto job = std::make_shared<Job>();
+  job->chunks = chunks;
+  job->chunk = &chunk;
+  job->error_chunk = chunks;
+  const Index helpers = std::min<Index>(threads, chunks) - 1;
+  for (Index h = 0; h < helpers; ++h) boost::asio::post(helper_pool(), [job] { job->help(); });
+  job->take();
+  std::unique_lock<std::mutex> lock(job->mutex);
+  job->open = false;
+  job->idle.wait(lock, [&] { return job->joined == 0; });
+  if (job->error) std::rethrow_exception(job->error);
+}
+
+}  // namespace surfeledit::detail
