@@ -7,13 +7,16 @@
 //
 //   taskset -c 1 build/bench/surfeledit_bench_host --benchmark_counters_tabular=true
 //
-// Counters: `ns_per_op` (chain: one multiply-add; walk: one cache line reached), `gbytes` per second (stream).
+// Counters: `ns_per_op` (chain: one multiply-add; walk: one cache line reached), `gbytes` per second (stream). The
+// context printed first names the CPU (vendor, family, model, AVX-512 or not).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <fstream>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -73,6 +76,33 @@ void BM_Stream(benchmark::State& state) {
 }
 BENCHMARK(BM_Stream)->Unit(benchmark::kMillisecond)->MinTime(0.3);
 
+// The CPU's vendor, family and model and whether it has AVX-512 (/proc/cpuinfo's first processor), for the
+// benchmark's context: hosts of one name have differed in these.
+void add_cpu_context() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line, family, model, vendor;
+  bool avx512 = false;
+  while (std::getline(in, line)) {
+    const auto value = [&] { return line.substr(line.find(':') + 2); };
+    if (line.rfind("vendor_id", 0) == 0 && vendor.empty()) vendor = value();
+    if (line.rfind("cpu family", 0) == 0 && family.empty()) family = value();
+    if (line.rfind("model\t", 0) == 0 && model.empty()) model = value();
+    if (line.rfind("flags", 0) == 0) {
+      avx512 = line.find(" avx512f") != std::string::npos;
+      break;
+    }
+  }
+  benchmark::AddCustomContext("cpu", vendor + " family " + family + " model " + model +
+                                         (avx512 ? ", AVX-512" : ", no AVX-512"));
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  add_cpu_context();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

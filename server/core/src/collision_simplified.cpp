@@ -10,6 +10,7 @@
 #include "collision/kernel_rows.hpp"
 #include "collision/robust_kernel.hpp"
 #include "collision/temporal_kernel.hpp"
+#include "share_chunks.hpp"
 #include "surfeledit/core/simplify/approximate_detector.hpp"
 #include "surfeledit/core/simplify/clustering.hpp"
 
@@ -185,14 +186,16 @@ class SimplifiedDetector final : public ApproximateDetector {
     if (threads == 1 || nc < 256) {
       for (Index c = 0; c < nc; ++c) one(c, total);
     } else {
-#pragma omp parallel num_threads(threads)
-      {
-        Counts mine;
-#pragma omp for schedule(dynamic, 64)
-        for (Index c = 0; c < nc; ++c) one(c, mine);
-#pragma omp critical(surfeledit_simplified_counts)
-        total.add(mine);
-      }
+      // Chunks of 64 clusters shared without waiting for a descheduled helper (share_chunks.hpp); each chunk's
+      // counts apart, summed in chunk order.
+      constexpr Index kClustersPerChunk = 64;
+      const Index chunks = (nc + kClustersPerChunk - 1) / kClustersPerChunk;
+      std::vector<Counts> counts(static_cast<std::size_t>(chunks));
+      share_chunks(threads, chunks, [&](Index k) {
+        for (Index c = k * kClustersPerChunk; c < std::min(nc, (k + 1) * kClustersPerChunk); ++c)
+          one(c, counts[static_cast<std::size_t>(k)]);
+      });
+      for (const Counts& c : counts) total.add(c);
     }
     CollisionResult result;
     const double simplify_ms = approx_.simplify_ms;
