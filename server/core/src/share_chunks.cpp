@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -26,7 +27,7 @@ boost::asio::thread_pool& helper_pool() {
 // for the helpers that joined. A helper task that runs later finds it closed and touches nothing of the caller's
 // (the job outlives the call through the tasks' shared pointers).
 struct Job {
-  std::atomic<Index> next{0};
+  std::atomic<std::uint64_t> ends{0};  // the first unclaimed chunk (high 32 bits), one past the last (low 32 bits)
   Index chunks = 0;
   const std::function<void(Index)>* chunk = nullptr;
   std::mutex mutex;
@@ -36,10 +37,18 @@ struct Job {
   std::exception_ptr error;
   Index error_chunk = 0;
 
-  // Claims chunks one at a time until none is left.
-  void take() {
-    for (Index c = next.fetch_add(1, std::memory_order_relaxed); c < chunks;
-         c = next.fetch_add(1, std::memory_order_relaxed)) {
+  // Claims chunks one at a time until none is left: the caller from the front, helpers from the back, so that
+  // the loops of one step (deformation, sweep, copies over the same rows in the same order) give each thread
+  // mostly the rows it had in the loop before, still in its cache.
+  void take(bool front) {
+    for (;;) {
+      std::uint64_t e = ends.load(std::memory_order_relaxed);
+      Index c;
+      do {
+        const std::uint64_t lo = e >> 32, hi = e & 0xffffffffu;
+        if (lo >= hi) return;
+        c = static_cast<Index>(front ? lo : hi - 1);
+      } while (!ends.compare_exchange_weak(e, front ? e + (std::uint64_t{1} << 32) : e - 1, std::memory_order_relaxed));
       try {
         (*chunk)(c);
       } catch (...) {
@@ -58,7 +67,7 @@ struct Job {
       if (!open) return;
       ++joined;
     }
-    take();
+    take(false);
     std::lock_guard<std::mutex> lock(mutex);
     if (--joined == 0) idle.notify_one();
   }
@@ -72,13 +81,15 @@ int helper_threads() {
 }
 
 void share_chunks(int threads, Index chunks, const std::function<void(Index)>& chunk) {
+  if (chunks <= 0) return;
   auto job = std::make_shared<Job>();
   job->chunks = chunks;
+  job->ends = static_cast<std::uint64_t>(chunks);
   job->chunk = &chunk;
   job->error_chunk = chunks;
   const Index helpers = std::min<Index>(threads, chunks) - 1;
   for (Index h = 0; h < helpers; ++h) boost::asio::post(helper_pool(), [job] { job->help(); });
-  job->take();
+  job->take(true);
   std::unique_lock<std::mutex> lock(job->mutex);
   job->open = false;
   job->idle.wait(lock, [&] { return job->joined == 0; });
