@@ -1,4 +1,4 @@
-// share_chunks (share_chunks.hpp): a shared chunk counter; the helpers are tasks posted to one process-wide
+// share_chunks (share_chunks.hpp): a shared range of chunks; the helpers are tasks posted to one process-wide
 // Boost.Asio thread pool. Asio is header-only, so ThreadSanitizer sees its hand-over of a task (oneTBB, tried first,
 // is a compiled library that Debian does not instrument: TSan reported every hand-over as a race).
 #include "share_chunks.hpp"
@@ -28,7 +28,6 @@ boost::asio::thread_pool& helper_pool() {
 // (the job outlives the call through the tasks' shared pointers).
 struct Job {
   std::atomic<std::uint64_t> ends{0};  // the first unclaimed chunk (high 32 bits), one past the last (low 32 bits)
-  Index chunks = 0;
   const std::function<void(Index)>* chunk = nullptr;
   std::mutex mutex;
   std::condition_variable idle;
@@ -83,7 +82,6 @@ int helper_threads() {
 void share_chunks(int threads, Index chunks, const std::function<void(Index)>& chunk) {
   if (chunks <= 0) return;
   auto job = std::make_shared<Job>();
-  job->chunks = chunks;
   job->ends = static_cast<std::uint64_t>(chunks);
   job->chunk = &chunk;
   job->error_chunk = chunks;
