@@ -12,7 +12,8 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
-#include <thread>
+
+#include "surfeledit/core/util.hpp"
 
 namespace surfeledit::detail {
 namespace {
@@ -74,10 +75,7 @@ struct Job {
 
 }  // namespace
 
-int helper_threads() {
-  const unsigned hardware = std::thread::hardware_concurrency();
-  return hardware > 1 ? static_cast<int>(hardware) - 1 : 1;
-}
+int helper_threads() { return std::max(1, hardware_threads() - 1); }
 
 void share_chunks(int threads, Index chunks, const std::function<void(Index)>& chunk) {
   if (chunks <= 0) return;
