@@ -102,5 +102,23 @@ TEST(ShareChunks, HelpersTakeChunksWhenTheyCanRun) {
   EXPECT_GT(elsewhere.load(), 0);
 }
 
+// Several callers at once (sessions stepping on their own threads) share the one pool: each loop still runs every
+// one of its chunks once, and none waits on another's.
+TEST(ShareChunks, CallersOnSeveralThreadsAtOnceEachRunTheirChunksOnce) {
+  constexpr int kCallers = 4, kLoops = 100;
+  constexpr Index kChunks = 300;
+  std::vector<int> wrong(kCallers, 0);
+  std::vector<std::thread> callers;
+  for (int t = 0; t < kCallers; ++t) {
+    callers.emplace_back([&, t] {
+      for (int loop = 0; loop < kLoops; ++loop) {
+        if (runs_of(2 + t % 2, kChunks) != std::vector<int>(static_cast<std::size_t>(kChunks), 1)) ++wrong[t];
+      }
+    });
+  }
+  for (std::thread& c : callers) c.join();
+  EXPECT_EQ(wrong, std::vector<int>(kCallers, 0));
+}
+
 }  // namespace
 }  // namespace surfeledit::detail
