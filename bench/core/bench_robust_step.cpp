@@ -13,6 +13,9 @@
 // BM_IdleDrag/<hierarchy>: one iteration = one step of +-1e-4 (a hundredth of the spacing) from the start
 //   state: no point leaves its sphere, nothing is re-tested (checked); counters detect_ms (mean) and
 //   history_kb_per_step (what 16 more such steps add to the undo history, per step).
+// BM_IdleTurn/<threads>: BM_IdleDrag's step (no hierarchy) also turned by +-1e-6 rad, at 1 or 2 threads: no
+//   displacement bound, so every row is checked against its sphere; counters deform_median_ms, detect_median_ms
+//   (RESULTS §89.3: on two threads the deformation's rows had crossed to the other core's cache).
 // BM_Preprocess/<tilted>: one iteration = configure(algorithm robust), i.e. one detector reset; tilted 1: the scene
 //   turned as BM_DetectRunTilted's. BM_PreprocessTemporal/<tilted>: the same with algorithm temporal.
 //   BM_PreprocessThreads/<tilted>, BM_PreprocessTemporalThreads/<tilted>: the same with the session's threads at 2
