@@ -21,13 +21,23 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def cpu_model() -> str:
+    """The CPU's model name, with its family and model numbers and whether it has AVX-512 (/proc/cpuinfo's first
+    processor): hosts of one model name have differed in these (bench/RESULTS.md §89)."""
+    fields: dict = {}
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
+            key, _, value = line.partition(":")
+            key = key.strip()
+            if key in ("model name", "cpu family", "model", "flags") and key not in fields:
+                fields[key] = value.strip()
+            if key == "flags":
+                break
     except OSError:
         pass
-    return platform.processor() or "unknown"
+    if "model name" not in fields:
+        return platform.processor() or "unknown"
+    avx512 = "AVX-512" if "avx512f" in fields.get("flags", "").split() else "no AVX-512"
+    return f"{fields['model name']} (family {fields.get('cpu family', '?')} model {fields.get('model', '?')}, {avx512})"
 
 
 def load_average() -> str:
