@@ -1,9 +1,9 @@
 // bench_host: what this machine gives one thread right now, so that a figure elsewhere in bench/ can be read
-// against the host's state (bench/RESULTS.md §89). The shared hosts these benchmarks run on have had a fast and
-// a slow mode, the same binary 2-2.5x apart from one session to the next; these four probes say which of the
-// machine's parts changed: the core's clock (a dependent chain of integer multiplies), the latency of each cache
-// level and of memory (a dependent walk of a random cycle of cache lines, each working set its own benchmark),
-// and the bandwidth of a streaming read. No surfeledit code is involved.
+// against the host it ran on (bench/RESULTS.md §89). Hosts of one name have given the same binary figures 2-2.5x
+// apart from one session to the next (§89: probably different hardware); these probes say which of the machine's
+// parts differ: the core's clock (a dependent chain of integer multiplies), the latency of each cache level and of
+// memory (a dependent walk of a random cycle of cache lines, each working set its own benchmark), and the bandwidth
+// of a streaming read. No surfeledit code is involved.
 //
 //   taskset -c 1 build/bench/surfeledit_bench_host --benchmark_counters_tabular=true
 //
